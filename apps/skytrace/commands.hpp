@@ -1,0 +1,28 @@
+// Subcommands of the skytrace command-line tool. Each registers itself on the CLI11 app and
+// returns its exit code through `exit_code` when selected.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "skytrace/core/error.hpp"
+
+namespace skytrace::cli {
+
+// Documented exit codes (README "Exit codes").
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitRuntime = 1,     // unexpected internal failure
+  kExitUsage = 2,       // bad command line
+  kExitInput = 3,       // bad or missing input file, bad scenario
+  kExitCoverage = 4,    // time or position outside what the data covers
+  kExitOutput = 5,      // outputs could not be written
+  kExitNetwork = 6,     // a download failed
+};
+
+// Maps a library error to the exit code and prints it on stderr.
+int report_error(const Error& error);
+
+void register_orbits_command(CLI::App& app, int& exit_code);
+void register_fetch_command(CLI::App& app, int& exit_code);
+
+}  // namespace skytrace::cli

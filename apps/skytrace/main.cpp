@@ -1,0 +1,46 @@
+// skytrace: GNSS receiver simulator for robotics.
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
+#include "commands.hpp"
+
+namespace skytrace::cli {
+
+int report_error(const Error& error) {
+  std::cerr << "skytrace: error: " << error.message << "\n";
+  switch (error.code) {
+    case ErrorCode::kInvalidArgument: return kExitUsage;
+    case ErrorCode::kParse:
+    case ErrorCode::kIo:
+    case ErrorCode::kNotFound:
+    case ErrorCode::kUnsupported: return kExitInput;
+    case ErrorCode::kOutOfRange: return kExitCoverage;
+    case ErrorCode::kNetwork: return kExitNetwork;
+  }
+  return kExitRuntime;
+}
+
+}  // namespace skytrace::cli
+
+int main(int argc, char** argv) {
+  using namespace skytrace::cli;
+  CLI::App app{"skytrace: simulates what a GNSS receiver records, from real ephemerides and a 3D world"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "skytrace 0.1.0");
+  int exit_code = kExitOk;
+  register_orbits_command(app, exit_code);
+  register_fetch_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  } catch (const skytrace::ErrorException& e) {
+    return report_error(e.error());
+  } catch (const std::exception& e) {
+    std::cerr << "skytrace: internal error: " << e.what() << "\n";
+    return kExitRuntime;
+  }
+  return exit_code;
+}

@@ -1,0 +1,93 @@
+// GNSS time. One continuous timeline (GPS time) inside the program; every other scale is a view
+// taken at the boundaries (parsing, file formats, ephemeris reference times).
+#pragma once
+
+#include <cstdint>
+#include <compare>
+#include <string>
+#include <string_view>
+
+#include "skytrace/core/error.hpp"
+
+namespace skytrace {
+
+enum class TimeScale {
+  kGpst,      // GPS time: continuous, TAI - 19 s, epoch 1980-01-06 00:00:00
+  kGst,       // Galileo System Time: aligned to GPST (offset GGTO of a few ns ignored), weeks from 1999-08-22
+  kBdt,       // BeiDou Time: GPST - 14 s, weeks from 2006-01-01 00:00:00 BDT
+  kGlonasst,  // GLONASS time: UTC(SU) + 3 h, with UTC's leap seconds
+  kQzsst,     // QZSS time: aligned to GPST, GPS weeks
+  kIrnwt,     // NavIC time: aligned to GPST, weeks from 1999-08-22 (GPS week 1024)
+  kUtc,       // Coordinated Universal Time, with leap seconds
+  kTai,       // International Atomic Time: GPST + 19 s
+};
+
+[[nodiscard]] std::string_view to_string(TimeScale scale);
+// Accepts the names above and common aliases (GPS, GAL, BDS, GLO, QZS, IRN), case-insensitive.
+[[nodiscard]] Result<TimeScale> parse_time_scale(std::string_view name);
+
+// A civil date and time of day in some time scale. second may be 60.x inside a UTC leap second.
+struct CalendarTime {
+  int year = 1980;
+  int month = 1;
+  int day = 6;
+  int hour = 0;
+  int minute = 0;
+  double second = 0.0;
+};
+
+struct WeekTow {
+  int week = 0;        // continuous week number of the scale's own numbering (no rollover)
+  double tow_s = 0.0;  // seconds of week [0, 604800)
+};
+
+// An instant, held as whole seconds of GPS time since 1980-01-06T00:00:00 GPST plus a fraction in
+// [0, 1): exact to far below a picosecond over centuries (a single double would lose microseconds).
+class GnssTime {
+ public:
+  constexpr GnssTime() = default;
+
+  // From whole and fractional seconds of GPST since the GPS epoch; any split is normalised.
+  [[nodiscard]] static GnssTime from_gpst_seconds(std::int64_t whole_s, double fraction_s = 0.0);
+  // From a week and time of week in the given scale's own week numbering.
+  [[nodiscard]] static GnssTime from_week_tow(TimeScale scale, int week, double tow_s);
+  [[nodiscard]] static GnssTime from_calendar(const CalendarTime& calendar, TimeScale scale);
+  // "YYYY-MM-DDThh:mm:ss[.fff]" (a space may replace T; a trailing Z is accepted for UTC).
+  [[nodiscard]] static Result<GnssTime> parse_iso8601(std::string_view text, TimeScale scale);
+
+  [[nodiscard]] std::int64_t whole_seconds() const { return whole_s_; }
+  [[nodiscard]] double fraction_s() const { return fraction_s_; }
+  // Seconds of GPST since the GPS epoch as a double (sub-microsecond only near the epoch: use for
+  // coarse purposes such as sorting keys and plots, never for physics).
+  [[nodiscard]] double gpst_seconds_approx() const { return static_cast<double>(whole_s_) + fraction_s_; }
+
+  [[nodiscard]] WeekTow to_week_tow(TimeScale scale) const;
+  [[nodiscard]] CalendarTime to_calendar(TimeScale scale) const;
+  [[nodiscard]] int day_of_year(TimeScale scale) const;
+  // ISO 8601 text in the given scale with the given number of decimals of the second.
+  [[nodiscard]] std::string to_iso8601(TimeScale scale, int decimals = 3) const;
+
+  GnssTime& operator+=(double dt_s);
+  GnssTime& operator-=(double dt_s) { return *this += -dt_s; }
+  [[nodiscard]] friend GnssTime operator+(GnssTime t, double dt_s) { return t += dt_s; }
+  [[nodiscard]] friend GnssTime operator-(GnssTime t, double dt_s) { return t -= dt_s; }
+  // Difference in seconds, exact to double precision of the difference itself.
+  [[nodiscard]] friend double operator-(const GnssTime& a, const GnssTime& b) {
+    return static_cast<double>(a.whole_s_ - b.whole_s_) + (a.fraction_s_ - b.fraction_s_);
+  }
+  friend auto operator<=>(const GnssTime&, const GnssTime&) = default;
+  friend bool operator==(const GnssTime&, const GnssTime&) = default;
+
+ private:
+  std::int64_t whole_s_ = 0;
+  double fraction_s_ = 0.0;
+};
+
+// GPS - UTC in whole seconds at the given instant (0 before 1981-07-01, 18 since 2017-01-01).
+[[nodiscard]] int gps_minus_utc_s(const GnssTime& t);
+
+// The full week number nearest to `reference` whose value modulo `modulus` (1024, 4096, 8192) is
+// `truncated_week`, for week fields broadcast with few bits.
+[[nodiscard]] int resolve_week_rollover(int truncated_week, int modulus, int reference_week);
+
+}  // namespace skytrace

@@ -1,0 +1,29 @@
+// Helpers shared by the tests: where the real data lives, temporary folders.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+namespace skytrace::test {
+
+// ../shared/data beside the checkout, or $SKYTRACE_SHARED_DATA.
+std::filesystem::path shared_data_dir();
+std::filesystem::path source_dir();
+std::filesystem::path binary_dir();
+// A fresh empty folder under the build tree for one test.
+std::filesystem::path make_temp_dir(const std::string& name);
+
+}  // namespace skytrace::test
+
+// Skips the current test when a shared-data file is missing: use as
+//   const auto path = SKYTRACE_SHARED_FILE("real/esbc_2020177/...");
+#define SKYTRACE_SHARED_FILE(relative)                                                  \
+  ([&]() {                                                                              \
+    const auto p = ::skytrace::test::shared_data_dir() / (relative);                    \
+    return p;                                                                           \
+  }());                                                                                 \
+  if (!std::filesystem::exists(::skytrace::test::shared_data_dir() / (relative)))      \
+  GTEST_SKIP() << "shared data file absent: " << (::skytrace::test::shared_data_dir() / (relative)) \
+               << " (set SKYTRACE_SHARED_DATA)"
