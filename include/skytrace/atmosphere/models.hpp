@@ -1,0 +1,32 @@
+// Reference atmosphere models: the exact variants common positioning engines (RTKLIB) apply, so a
+// noise-free simulation can be checked to the centimetre. Better models are further choices.
+#pragma once
+
+#include <optional>
+
+#include "skytrace/core/frames.hpp"
+#include "skytrace/core/time.hpp"
+#include "skytrace/orbits/ephemeris.hpp"
+
+namespace skytrace::atmosphere {
+
+// IS-GPS-200 20.3.3.5.2.5 Klobuchar model: vertical-to-slant ionospheric group delay on GPS L1 in
+// metres for a receiver at `receiver` looking at `direction` at GPS time t. Other frequencies scale
+// by (f_L1 / f)^2. nullopt below the horizon (never a silent 0).
+[[nodiscard]] std::optional<double> klobuchar_delay_l1_m(const orbits::KlobucharCoefficients& coefficients,
+                                                         const GnssTime& t, const Geodetic& receiver,
+                                                         const AzimuthElevation& direction);
+
+struct StandardAtmosphere {
+  double sea_level_pressure_hpa = 1013.25;
+  double sea_level_temperature_c = 15.0;
+  double relative_humidity = 0.7;  // fraction
+};
+
+// Saastamoinen zenith hydrostatic + wet delay from a standard atmosphere at the receiver's
+// ellipsoidal height, mapped by 1 / sin(elevation) (RTKLIB's tropmodel). Metres; nullopt below the
+// horizon or outside -100 m .. 10 km height, where the model does not apply.
+[[nodiscard]] std::optional<double> saastamoinen_delay_m(const Geodetic& receiver, double elevation_deg,
+                                                         const StandardAtmosphere& atmosphere = {});
+
+}  // namespace skytrace::atmosphere
