@@ -1,0 +1,100 @@
+// The scenario: everything a run needs, as typed values with defaults. Parsed from YAML; every key
+// is documented in docs/scenario.md. Unknown keys and bad values are errors naming the key path
+// and the line.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "skytrace/core/error.hpp"
+#include "skytrace/core/signal.hpp"
+#include "skytrace/core/time.hpp"
+
+namespace skytrace::sim {
+
+struct TimeSettings {
+  GnssTime start;
+  TimeScale scale = TimeScale::kGpst;  // the scale `start` was written in
+  double duration_s = 3600.0;
+  double interval_s = 30.0;
+};
+
+// A static receiver position in one of three forms.
+struct PositionSetting {
+  enum class Kind { kEcef, kLla, kWorldEnu };
+  Kind kind = Kind::kEcef;
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();  // m | (deg, deg, m) | m in the world frame
+};
+
+// A trajectory file: CSV rows of time and position (see docs/scenario.md).
+struct TrajectorySetting {
+  std::filesystem::path file;
+  PositionSetting::Kind frame = PositionSetting::Kind::kEcef;
+  TimeScale time_scale = TimeScale::kGpst;
+};
+
+struct ReceiverSettings {
+  std::string name = "SKYT";  // marker name in RINEX
+  std::optional<PositionSetting> position;
+  std::optional<TrajectorySetting> trajectory;
+  double antenna_height_m = 0.0;  // antenna reference point above the marker (RINEX DELTA H)
+  Eigen::Vector2d antenna_offset_en_m = Eigen::Vector2d::Zero();  // RINEX DELTA E/N
+  double elevation_mask_deg = 5.0;
+  std::string profile = "ideal";
+  std::vector<Signal> signals;
+  std::string receiver_type = "SKYTRACE";
+  std::string antenna_type = "";
+};
+
+struct EphemerisSettings {
+  std::vector<std::filesystem::path> navigation;
+  std::vector<std::filesystem::path> precise_orbits;
+  std::vector<std::filesystem::path> precise_clocks;
+  bool nominal = false;  // the built-in nominal constellation (no file needed)
+};
+
+struct ModelSettings {
+  std::string ionosphere = "klobuchar";      // none | klobuchar
+  std::string troposphere = "saastamoinen";  // none | saastamoinen
+  std::string receiver_clock = "ideal";      // ideal | profile | tcxo | ocxo
+  bool noise = false;
+  bool multipath = false;
+};
+
+struct WorldSettings {
+  std::optional<std::filesystem::path> sdf;
+  std::vector<std::filesystem::path> model_paths;
+  // Overrides of the world's <spherical_coordinates>.
+  std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
+};
+
+struct OutputSettings {
+  std::string rinex_version = "3.04";  // 3.04 | 4.00
+};
+
+struct Scenario {
+  std::filesystem::path source;  // the YAML file (empty when built in code)
+  std::string name = "scenario";
+  TimeSettings time;
+  std::vector<ReceiverSettings> receivers;  // at least one
+  EphemerisSettings ephemeris;
+  ModelSettings models;
+  WorldSettings world;
+  OutputSettings output;
+  std::uint64_t seed = 1;
+};
+
+// Reads a scenario file; relative paths inside are resolved against the file's folder.
+[[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path);
+// Parses scenario text; `name` is used in messages and `base_dir` resolves relative paths.
+[[nodiscard]] Result<Scenario> parse_scenario(const std::string& text, const std::string& name,
+                                              const std::filesystem::path& base_dir);
+// The effective configuration (defaults filled in) as YAML-compatible JSON text, for summary.json.
+[[nodiscard]] std::string scenario_to_json(const Scenario& scenario);
+
+}  // namespace skytrace::sim

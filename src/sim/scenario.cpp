@@ -1,0 +1,396 @@
+#include "skytrace/sim/scenario.hpp"
+
+#include <yaml-cpp/yaml.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "skytrace/core/text_file.hpp"
+
+namespace skytrace::sim {
+namespace {
+
+// Thrown inside the parser and turned into an Error at the boundary.
+struct ScenarioError {
+  std::string message;
+};
+
+// A YAML node with its key path, for messages like "file:12: receiver.signals[2]: ...".
+class Node {
+ public:
+  Node(YAML::Node node, std::string path, const std::string* file) : node_(std::move(node)), path_(std::move(path)), file_(file) {}
+
+  [[nodiscard]] const std::string& path() const { return path_; }
+  [[nodiscard]] bool is_map() const { return node_.IsMap(); }
+  [[nodiscard]] bool is_sequence() const { return node_.IsSequence(); }
+  [[nodiscard]] bool is_scalar() const { return node_.IsScalar(); }
+
+  [[noreturn]] void fail(const std::string& what) const {
+    const int line = node_.Mark().line;
+    std::string where = *file_;
+    if (line >= 0) where += ":" + std::to_string(line + 1);
+    throw ScenarioError{where + ": " + (path_.empty() ? std::string("scenario") : path_) + ": " + what};
+  }
+
+  // Checks that a map holds only the allowed keys.
+  void expect_keys(std::initializer_list<const char*> allowed) const {
+    if (!node_.IsMap()) fail("expected a mapping of keys");
+    for (const auto& item : node_) {
+      const std::string key = item.first.as<std::string>();
+      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        Node(item.first, join(key), file_).fail("unknown key (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  [[nodiscard]] std::optional<Node> child(const std::string& key) const {
+    const YAML::Node c = node_[key];
+    if (!c || c.IsNull()) return std::nullopt;
+    return Node(c, join(key), file_);
+  }
+  [[nodiscard]] Node required(const std::string& key) const {
+    auto c = child(key);
+    if (!c) fail("missing required key '" + key + "'");
+    return *c;
+  }
+  [[nodiscard]] std::vector<Node> elements() const {
+    if (!node_.IsSequence()) fail("expected a list");
+    std::vector<Node> out;
+    for (size_t i = 0; i < node_.size(); ++i) out.emplace_back(node_[i], path_ + "[" + std::to_string(i) + "]", file_);
+    return out;
+  }
+
+  [[nodiscard]] std::string as_string() const {
+    if (!node_.IsScalar()) fail("expected a single value");
+    return node_.Scalar();
+  }
+  [[nodiscard]] double as_double() const {
+    const std::string text = as_string();
+    try {
+      size_t used = 0;
+      const double v = std::stod(text, &used);
+      if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
+      return v;
+    } catch (const std::exception&) {
+      fail("expected a number, got '" + text + "'");
+    }
+  }
+  [[nodiscard]] double as_double_in(double low, double high) const {
+    const double v = as_double();
+    if (v < low || v > high) {
+      std::ostringstream s;
+      s << "value " << v << " out of range [" << low << ", " << high << "]";
+      fail(s.str());
+    }
+    return v;
+  }
+  [[nodiscard]] bool as_bool() const {
+    const std::string text = as_string();
+    if (text == "true" || text == "yes" || text == "on") return true;
+    if (text == "false" || text == "no" || text == "off") return false;
+    fail("expected true or false, got '" + text + "'");
+  }
+  [[nodiscard]] std::string as_choice(std::initializer_list<const char*> choices) const {
+    const std::string text = as_string();
+    if (std::any_of(choices.begin(), choices.end(), [&](const char* c) { return text == c; })) return text;
+    std::string list;
+    for (const char* c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
+    fail("unknown value '" + text + "' (expected one of: " + list + ")");
+  }
+  [[nodiscard]] Eigen::Vector3d as_vector3() const {
+    auto items = elements();
+    if (items.size() != 3) fail("expected a list of 3 numbers");
+    return {items[0].as_double(), items[1].as_double(), items[2].as_double()};
+  }
+  [[nodiscard]] std::vector<Node> as_list_or_single() const {
+    if (node_.IsSequence()) return elements();
+    return {*this};
+  }
+
+ private:
+  [[nodiscard]] std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  YAML::Node node_;
+  std::string path_;
+  const std::string* file_;
+};
+
+std::filesystem::path resolve(const std::filesystem::path& base, const std::string& text) {
+  std::filesystem::path p(text);
+  if (p.is_relative()) p = base / p;
+  return p.lexically_normal();
+}
+
+std::filesystem::path existing_file(const Node& node, const std::filesystem::path& base) {
+  const auto p = resolve(base, node.as_string());
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(p, ec)) node.fail("file not found: " + p.string());
+  return p;
+}
+
+PositionSetting parse_position(const Node& node) {
+  node.expect_keys({"ecef_m", "lla_deg_m", "world_enu_m"});
+  PositionSetting position;
+  int forms = 0;
+  if (auto c = node.child("ecef_m")) {
+    position = {PositionSetting::Kind::kEcef, c->as_vector3()};
+    const double radius_m = position.value.norm();
+    if (radius_m < 6.3e6) c->fail("position is below the Earth's surface (|r| = " + std::to_string(radius_m) + " m)");
+    if (radius_m > 5e7) c->fail("position is farther than 50000 km from the Earth's centre");
+    ++forms;
+  }
+  if (auto c = node.child("lla_deg_m")) {
+    position = {PositionSetting::Kind::kLla, c->as_vector3()};
+    if (std::fabs(position.value.x()) > 90.0) c->fail("latitude must be within [-90, 90] degrees");
+    if (std::fabs(position.value.y()) > 360.0) c->fail("longitude must be within [-360, 360] degrees");
+    if (position.value.z() < -500.0) c->fail("height " + std::to_string(position.value.z()) + " m is below the Earth's surface");
+    ++forms;
+  }
+  if (auto c = node.child("world_enu_m")) {
+    position = {PositionSetting::Kind::kWorldEnu, c->as_vector3()};
+    ++forms;
+  }
+  if (forms != 1) node.fail("give exactly one of ecef_m, lla_deg_m, world_enu_m");
+  return position;
+}
+
+PositionSetting::Kind parse_frame(const Node& node) {
+  const std::string frame = node.as_choice({"ecef", "lla", "world_enu"});
+  if (frame == "ecef") return PositionSetting::Kind::kEcef;
+  if (frame == "lla") return PositionSetting::Kind::kLla;
+  return PositionSetting::Kind::kWorldEnu;
+}
+
+ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& base, const std::string& default_name) {
+  node.expect_keys({"name", "position", "trajectory", "antenna_height_m", "antenna_offset_en_m", "elevation_mask_deg",
+                    "profile", "signals", "receiver_type", "antenna_type"});
+  ReceiverSettings r;
+  r.name = default_name;
+  if (auto c = node.child("name")) r.name = c->as_string();
+  if (auto c = node.child("position")) r.position = parse_position(*c);
+  if (auto c = node.child("trajectory")) {
+    c->expect_keys({"file", "frame", "time_scale"});
+    TrajectorySetting t;
+    t.file = existing_file(c->required("file"), base);
+    if (auto f = c->child("frame")) t.frame = parse_frame(*f);
+    if (auto s = c->child("time_scale")) {
+      auto scale = parse_time_scale(s->as_string());
+      if (!scale) s->fail(scale.error().message);
+      t.time_scale = *scale;
+    }
+    r.trajectory = t;
+  }
+  if (!r.position && !r.trajectory) node.fail("give receiver.position or receiver.trajectory");
+  if (r.position && r.trajectory) node.fail("give either receiver.position or receiver.trajectory, not both");
+  if (auto c = node.child("antenna_height_m")) r.antenna_height_m = c->as_double_in(-100.0, 1000.0);
+  if (auto c = node.child("antenna_offset_en_m")) {
+    auto items = c->elements();
+    if (items.size() != 2) c->fail("expected [east_m, north_m]");
+    r.antenna_offset_en_m = {items[0].as_double(), items[1].as_double()};
+  }
+  if (auto c = node.child("elevation_mask_deg")) r.elevation_mask_deg = c->as_double_in(-10.0, 90.0);
+  if (auto c = node.child("profile")) r.profile = c->as_string();
+  const Node signals = node.required("signals");
+  for (const Node& s : signals.elements()) {
+    auto signal = Signal::parse(s.as_string());
+    if (!signal) s.fail(signal.error().message);
+    if (std::find(r.signals.begin(), r.signals.end(), *signal) != r.signals.end()) {
+      s.fail("signal " + signal->to_string() + " listed twice");
+    }
+    r.signals.push_back(*signal);
+  }
+  if (r.signals.empty()) signals.fail("list at least one signal");
+  if (auto c = node.child("receiver_type")) r.receiver_type = c->as_string();
+  if (auto c = node.child("antenna_type")) r.antenna_type = c->as_string();
+  return r;
+}
+
+Scenario parse_root(const Node& root, const std::filesystem::path& base) {
+  root.expect_keys({"name", "time", "receiver", "receivers", "ephemeris", "models", "world", "output", "seed"});
+  Scenario s;
+  if (auto c = root.child("name")) s.name = c->as_string();
+
+  const Node time = root.required("time");
+  time.expect_keys({"start", "scale", "duration_s", "interval_s"});
+  if (auto c = time.child("scale")) {
+    auto scale = parse_time_scale(c->as_string());
+    if (!scale) c->fail(scale.error().message);
+    s.time.scale = *scale;
+  }
+  {
+    const Node start = time.required("start");
+    auto t = GnssTime::parse_iso8601(start.as_string(), s.time.scale);
+    if (!t) start.fail(t.error().message);
+    s.time.start = *t;
+  }
+  if (auto c = time.child("duration_s")) s.time.duration_s = c->as_double_in(0.0, 366.0 * 86400.0);
+  if (auto c = time.child("interval_s")) s.time.interval_s = c->as_double_in(1e-3, 86400.0);
+
+  if (auto c = root.child("receiver")) s.receivers.push_back(parse_receiver(*c, base, s.name.substr(0, 4)));
+  if (auto c = root.child("receivers")) {
+    int index = 0;
+    for (const Node& r : c->elements()) s.receivers.push_back(parse_receiver(r, base, "RX" + std::to_string(++index)));
+  }
+  if (s.receivers.empty()) root.fail("missing required key 'receiver' (or 'receivers')");
+
+  const Node ephemeris = root.required("ephemeris");
+  ephemeris.expect_keys({"navigation", "precise_orbits", "precise_clocks", "nominal"});
+  if (auto c = ephemeris.child("navigation")) {
+    for (const Node& f : c->as_list_or_single()) s.ephemeris.navigation.push_back(existing_file(f, base));
+  }
+  if (auto c = ephemeris.child("precise_orbits")) {
+    for (const Node& f : c->as_list_or_single()) s.ephemeris.precise_orbits.push_back(existing_file(f, base));
+  }
+  if (auto c = ephemeris.child("precise_clocks")) {
+    for (const Node& f : c->as_list_or_single()) s.ephemeris.precise_clocks.push_back(existing_file(f, base));
+  }
+  if (auto c = ephemeris.child("nominal")) s.ephemeris.nominal = c->as_bool();
+  if (s.ephemeris.navigation.empty() && !s.ephemeris.nominal) {
+    ephemeris.fail("give ephemeris.navigation files or set ephemeris.nominal: true");
+  }
+  if (!s.ephemeris.navigation.empty() && s.ephemeris.nominal) {
+    ephemeris.fail("ephemeris.nominal cannot be combined with navigation files");
+  }
+  if (!s.ephemeris.precise_clocks.empty() && s.ephemeris.precise_orbits.empty()) {
+    ephemeris.fail("ephemeris.precise_clocks needs ephemeris.precise_orbits");
+  }
+
+  if (auto models = root.child("models")) {
+    models->expect_keys({"ionosphere", "troposphere", "receiver_clock", "noise", "multipath"});
+    if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar"});
+    if (auto c = models->child("troposphere")) s.models.troposphere = c->as_choice({"none", "saastamoinen"});
+    if (auto c = models->child("receiver_clock")) {
+      s.models.receiver_clock = c->as_choice({"ideal", "profile", "tcxo", "ocxo"});
+    }
+    if (auto c = models->child("noise")) s.models.noise = c->as_bool();
+    if (auto c = models->child("multipath")) s.models.multipath = c->as_bool();
+  }
+
+  if (auto world = root.child("world")) {
+    world->expect_keys({"sdf", "model_paths", "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
+    if (auto c = world->child("sdf")) s.world.sdf = existing_file(*c, base);
+    if (auto c = world->child("model_paths")) {
+      for (const Node& p : c->as_list_or_single()) s.world.model_paths.push_back(resolve(base, p.as_string()));
+    }
+    if (auto c = world->child("latitude_deg")) s.world.latitude_deg = c->as_double_in(-90.0, 90.0);
+    if (auto c = world->child("longitude_deg")) s.world.longitude_deg = c->as_double_in(-360.0, 360.0);
+    if (auto c = world->child("elevation_m")) s.world.elevation_m = c->as_double_in(-500.0, 10000.0);
+    if (auto c = world->child("heading_deg")) s.world.heading_deg = c->as_double_in(-360.0, 360.0);
+  }
+  for (const auto& r : s.receivers) {
+    const bool needs_world = (r.position && r.position->kind == PositionSetting::Kind::kWorldEnu) ||
+                             (r.trajectory && r.trajectory->frame == PositionSetting::Kind::kWorldEnu);
+    if (needs_world && !s.world.sdf && !(s.world.latitude_deg && s.world.longitude_deg)) {
+      root.fail("receiver '" + r.name + "' uses world_enu_m coordinates: give world.sdf or world.latitude_deg/longitude_deg");
+    }
+  }
+
+  if (auto output = root.child("output")) {
+    output->expect_keys({"rinex_version"});
+    if (auto c = output->child("rinex_version")) s.output.rinex_version = c->as_choice({"3.04", "4.00"});
+  }
+  if (auto c = root.child("seed")) {
+    const double seed = c->as_double_in(0.0, 1.8e19);
+    if (seed != std::floor(seed)) c->fail("expected a whole number");
+    s.seed = static_cast<std::uint64_t>(seed);
+  }
+  return s;
+}
+
+}  // namespace
+
+Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+  try {
+    Scenario s = parse_root(Node(root, "", &name), base_dir);
+    return s;
+  } catch (const ScenarioError& e) {
+    return make_error(ErrorCode::kParse, e.message);
+  } catch (const YAML::Exception& e) {
+    return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
+Result<Scenario> load_scenario(const std::filesystem::path& path) {
+  auto text = read_text_file(path);
+  if (!text) return text.error();
+  auto scenario = parse_scenario(*text, path.string(), path.parent_path());
+  if (scenario) scenario->source = path;
+  return scenario;
+}
+
+std::string scenario_to_json(const Scenario& s) {
+  using nlohmann::json;
+  auto kind_name = [](PositionSetting::Kind k) {
+    switch (k) {
+      case PositionSetting::Kind::kEcef: return "ecef_m";
+      case PositionSetting::Kind::kLla: return "lla_deg_m";
+      case PositionSetting::Kind::kWorldEnu: return "world_enu_m";
+    }
+    return "?";
+  };
+  auto paths = [](const std::vector<std::filesystem::path>& v) {
+    json a = json::array();
+    for (const auto& p : v) a.push_back(p.string());
+    return a;
+  };
+  json j;
+  j["name"] = s.name;
+  j["time"] = {{"start", s.time.start.to_iso8601(s.time.scale, 3)},
+               {"scale", std::string(to_string(s.time.scale))},
+               {"duration_s", s.time.duration_s},
+               {"interval_s", s.time.interval_s}};
+  j["receivers"] = json::array();
+  for (const auto& r : s.receivers) {
+    json jr;
+    jr["name"] = r.name;
+    if (r.position) jr["position"][kind_name(r.position->kind)] = {r.position->value.x(), r.position->value.y(), r.position->value.z()};
+    if (r.trajectory) {
+      jr["trajectory"] = {{"file", r.trajectory->file.string()},
+                          {"frame", kind_name(r.trajectory->frame)},
+                          {"time_scale", std::string(to_string(r.trajectory->time_scale))}};
+    }
+    jr["antenna_height_m"] = r.antenna_height_m;
+    jr["antenna_offset_en_m"] = {r.antenna_offset_en_m.x(), r.antenna_offset_en_m.y()};
+    jr["elevation_mask_deg"] = r.elevation_mask_deg;
+    jr["profile"] = r.profile;
+    jr["signals"] = json::array();
+    for (const auto& sig : r.signals) jr["signals"].push_back(sig.to_string());
+    jr["receiver_type"] = r.receiver_type;
+    jr["antenna_type"] = r.antenna_type;
+    j["receivers"].push_back(jr);
+  }
+  j["ephemeris"] = {{"navigation", paths(s.ephemeris.navigation)},
+                    {"precise_orbits", paths(s.ephemeris.precise_orbits)},
+                    {"precise_clocks", paths(s.ephemeris.precise_clocks)},
+                    {"nominal", s.ephemeris.nominal}};
+  j["models"] = {{"ionosphere", s.models.ionosphere},
+                 {"troposphere", s.models.troposphere},
+                 {"receiver_clock", s.models.receiver_clock},
+                 {"noise", s.models.noise},
+                 {"multipath", s.models.multipath}};
+  json w;
+  if (s.world.sdf) w["sdf"] = s.world.sdf->string();
+  w["model_paths"] = paths(s.world.model_paths);
+  if (s.world.latitude_deg) w["latitude_deg"] = *s.world.latitude_deg;
+  if (s.world.longitude_deg) w["longitude_deg"] = *s.world.longitude_deg;
+  if (s.world.elevation_m) w["elevation_m"] = *s.world.elevation_m;
+  if (s.world.heading_deg) w["heading_deg"] = *s.world.heading_deg;
+  j["world"] = w;
+  j["output"] = {{"rinex_version", s.output.rinex_version}};
+  j["seed"] = s.seed;
+  return j.dump(2);
+}
+
+}  // namespace skytrace::sim
