@@ -1,5 +1,100 @@
-// Placeholder replaced by the fetch implementation.
+// `skytrace fetch`: downloads a day's broadcast and precise products into the local cache and
+// prints one line per file: product, whether it was downloaded or already cached, local path.
+#include <iostream>
+#include <memory>
+#include <string>
+
 #include "commands.hpp"
+#include "skytrace/orbits/fetch.hpp"
+
 namespace skytrace::cli {
-void register_fetch_command(CLI::App& /*app*/, int& /*exit_code*/) {}
+
+namespace {
+
+struct FetchOptions {
+  std::string date;
+  std::string products = "brdc";
+  std::string cache_dir;
+  std::string base_url{orbits::kDefaultArchiveBaseUrl};
+  std::string analysis_center = "GRG";
+  std::string orbit_sample;
+  std::string clock_sample;
+  double timeout_s = 300.0;
+  int retries = 3;
+  double retry_delay_s = 2.0;
+  bool force = false;
+  bool quiet = false;
+};
+
+int run_fetch(const FetchOptions& options) {
+  auto day = orbits::parse_archive_day(options.date);
+  if (!day.ok()) return report_error(day.error());
+  auto kinds = orbits::parse_product_list(options.products);
+  if (!kinds.ok()) return report_error(kinds.error());
+
+  orbits::FetchRequest request;
+  request.day = *day;
+  request.products = *kinds;
+  request.cache_dir = options.cache_dir;
+  request.base_url = options.base_url;
+  request.options.analysis_center = options.analysis_center;
+  request.options.orbit_sample = options.orbit_sample;
+  request.options.clock_sample = options.clock_sample;
+  request.timeout_s = options.timeout_s;
+  request.retries = options.retries;
+  request.retry_delay_s = options.retry_delay_s;
+  request.force = options.force;
+  if (!options.quiet) {
+    request.on_note = [](const std::string& note) { std::cerr << "skytrace: fetch: " << note << "\n"; };
+  }
+
+  // Every product is attempted, so one missing product does not hide the others.
+  int exit_code = kExitOk;
+  for (const auto kind : request.products) {
+    auto fetched = orbits::fetch_product(request, kind);
+    if (!fetched.ok()) {
+      int code = report_error(fetched.error());
+      if (fetched.error().code == ErrorCode::kIo) code = kExitOutput;  // the cache could not be written
+      if (exit_code == kExitOk) exit_code = code;
+      continue;
+    }
+    for (const auto& product : *fetched) {
+      std::cout << orbits::to_string(product.kind) << ' ' << (product.from_cache ? "cached" : "downloaded") << ' '
+                << product.path.string() << '\n';
+    }
+  }
+  std::cout.flush();
+  return exit_code;
+}
+
+}  // namespace
+
+void register_fetch_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<FetchOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "fetch", "Download a day's broadcast navigation file and precise products (SP3, clock, IONEX) into the cache");
+  cmd->add_option("--date", options->date, "Day to fetch, YYYY-MM-DD (GPS time)")->required();
+  cmd->add_option("--products", options->products, "Comma-separated list of brdc, sp3, clk, ionex")
+      ->capture_default_str();
+  cmd->add_option("--cache", options->cache_dir, "Cache folder (default $XDG_CACHE_HOME/skytrace or ~/.cache/skytrace)");
+  cmd->add_option("--base-url", options->base_url, "Root of the IGS archive mirror")->capture_default_str();
+  cmd->add_option("--analysis-center", options->analysis_center,
+                  "Precise products: IGS, GRG, COD, GFZ, WUM, ESA, JAX or a full prefix such as GRG0MGXFIN")
+      ->capture_default_str();
+  cmd->add_option("--orbit-sample", options->orbit_sample, "SP3 interval in the file name, e.g. 05M (default: centre's)");
+  cmd->add_option("--clock-sample", options->clock_sample, "Clock interval in the file name, e.g. 30S (default: centre's)");
+  cmd->add_option("--timeout-s", options->timeout_s, "Time limit of one download attempt, seconds")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--retries", options->retries, "Extra attempts after a transient failure")
+      ->check(CLI::Range(0, 10))
+      ->capture_default_str();
+  cmd->add_option("--retry-delay-s", options->retry_delay_s, "First back-off delay, doubled per attempt (max 60 s)")
+      ->check(CLI::Range(0.0, 60.0))
+      ->capture_default_str();
+  cmd->add_flag("--force", options->force, "Download again even when the file is in the cache");
+  cmd->add_flag("--quiet", options->quiet, "No progress notes on stderr");
+  cmd->callback([options, &exit_code]() { exit_code = run_fetch(*options); });
+}
+
 }  // namespace skytrace::cli
