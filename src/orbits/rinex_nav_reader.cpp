@@ -34,6 +34,8 @@ constexpr int kBdtMinusUtcToGps_s = 14;  // GPS - UTC = (BDT - UTC) + 14 s
 // RINEX 3.05 marks an unknown value of the GLONASS fourth line with .999999999999E+09.
 constexpr double kUnknownMarker = 0.999999999e9;
 constexpr size_t kFieldWidth = 19;
+constexpr double kGlonassTbStep_s = 900.0;       // GLONASS t_b is counted in 15-minute steps
+constexpr double kGlonassTbSnapLimit_s = 30.0;  // larger offsets are left as written
 
 bool is_blank(std::string_view line) {
   for (const char c : line) {
@@ -865,6 +867,11 @@ class NavReader {
     GlonassEphemeris g;
     g.satellite = sat;
     g.toe = GnssTime::from_calendar(*epoch, TimeScale::kUtc);  // RINEX gives t_b in UTC
+    // t_b lies on a 15-minute grid of UTC; some writers put GPST in the field (e.g. 12:15:17 in
+    // a 2016 brdc file). Offsets up to 30 s are snapped back to the grid, as RTKLIB does.
+    const double second_of_day_s = epoch->hour * 3600.0 + epoch->minute * 60.0 + epoch->second;
+    const double off_grid_s = second_of_day_s - std::round(second_of_day_s / kGlonassTbStep_s) * kGlonassTbStep_s;
+    if (off_grid_s != 0.0 && std::fabs(off_grid_s) <= kGlonassTbSnapLimit_s) g.toe -= off_grid_s;
     g.minus_tau_n_s = f.required(0, 1, "SV clock bias (-TauN)");
     g.gamma_n = f.required(0, 2, "SV relative frequency bias (+GammaN)");
     // Seconds of the UTC day in RINEX 2, of the UTC week in RINEX 3.02+: reduced to the day.

@@ -486,6 +486,21 @@ TEST(RinexNavReader, Rinex2GlonassUtcEpochAndKilometres) {
   EXPECT_EQ(nav.leap_seconds, 17);
 }
 
+TEST(RinexNavReader, GlonassEpochWrittenInGpstIsSnappedToTheUtcGrid) {
+  // A 2016 brdc writer put "12 15 17.0" (GPST) in the UTC epoch field: t_b is 12:15:00 UTC.
+  std::string text(kGlonass201);
+  const std::string written = " 1 16  6  6  0 15  0.0";
+  text.replace(text.find(written), written.size(), " 1 16  6  6  0 15 17.0");
+  const auto nav = parse_ok("brdc.16g", text);
+  ASSERT_EQ(nav.glonass.size(), 1u);
+  EXPECT_DOUBLE_EQ(nav.glonass[0].toe - gpst(2016, 6, 6, 0, 15, 0), 17.0);
+  // Far off the grid (7 min 30 s) the epoch is kept as written.
+  text.replace(text.find(" 0 15 17.0"), 10, " 0 07 30.0");
+  const auto odd = parse_ok("brdc.16g", text);
+  ASSERT_EQ(odd.glonass.size(), 1u);
+  EXPECT_DOUBLE_EQ(odd.glonass[0].toe - gpst(2016, 6, 6, 0, 7, 30), 17.0);
+}
+
 TEST(RinexNavReader, Rinex2GeoFile) {
   const auto nav = parse_ok("geo.20h", kGeo211);
   ASSERT_EQ(nav.sbas.size(), 1u);
