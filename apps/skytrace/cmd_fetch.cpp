@@ -48,14 +48,21 @@ int run_fetch(const FetchOptions& options) {
     request.on_note = [](const std::string& note) { std::cerr << "skytrace: fetch: " << note << "\n"; };
   }
 
-  // Every product is attempted, so one missing product does not hide the others.
+  // A product missing from the archive does not hide the others; an unreachable or failing
+  // server ends the run (each further product would only wait through the same retries).
   int exit_code = kExitOk;
-  for (const auto kind : request.products) {
-    auto fetched = orbits::fetch_product(request, kind);
+  for (size_t i = 0; i < request.products.size(); ++i) {
+    auto fetched = orbits::fetch_product(request, request.products[i]);
     if (!fetched.ok()) {
-      int code = report_error(fetched.error());
-      if (fetched.error().code == ErrorCode::kIo) code = kExitOutput;  // the cache could not be written
+      const Error& error = fetched.error();
+      int code = report_error(error);
+      if (error.code == ErrorCode::kNotFound) code = kExitNetwork;  // HTTP 404: a download failed
+      if (error.code == ErrorCode::kIo) code = kExitOutput;         // the cache could not be written
       if (exit_code == kExitOk) exit_code = code;
+      if (error.code == ErrorCode::kNetwork && i + 1 < request.products.size()) {
+        std::cerr << "skytrace: error: remaining products not attempted\n";
+        break;
+      }
       continue;
     }
     for (const auto& product : *fetched) {

@@ -274,8 +274,8 @@ HttpResult http_get(const std::string& url, const FetchRequest& request) {
   curl_easy_cleanup(curl);
 
   if (code != CURLE_OK) {
-    result.why = curl_easy_strerror(code);
-    if (error_text[0] != '\0') result.why += std::string(": ") + error_text.data();
+    // The error buffer has the details ("Failed to connect to host port 80 after 3 ms: ...").
+    result.why = error_text[0] != '\0' ? std::string(error_text.data()) : std::string(curl_easy_strerror(code));
     if (code == CURLE_REMOTE_FILE_NOT_FOUND || code == CURLE_FILE_COULDNT_READ_FILE) {
       result.outcome = Outcome::kNotFound;
     } else {
@@ -333,7 +333,7 @@ Result<FetchedProduct> fetch_file(const FetchRequest& request, const std::filesy
       note("downloading " + url);
       got = http_get(url, request);
       if (got.outcome != Outcome::kTransient || attempt >= retries) break;
-      note(url + ": " + got.why + "; retrying in " + printf_string("%.0f", delay_s) + " s (attempt " +
+      note(url + ": " + got.why + "; retrying in " + printf_string("%.1f", delay_s) + " s (attempt " +
            std::to_string(attempt + 2) + " of " + std::to_string(retries + 1) + ")");
       std::this_thread::sleep_for(std::chrono::duration<double>(delay_s));
       delay_s = std::min(2.0 * delay_s, 60.0);
@@ -366,7 +366,7 @@ Result<FetchedProduct> fetch_file(const FetchRequest& request, const std::filesy
   }
   std::string list;
   for (const auto& entry : not_found) list += (list.empty() ? "" : ", ") + entry;
-  return make_error(ErrorCode::kNetwork, file.description + " not found in the archive: " + list);
+  return make_error(ErrorCode::kNotFound, file.description + " not found in the archive: " + list);
 }
 
 }  // namespace

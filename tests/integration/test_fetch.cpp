@@ -325,6 +325,8 @@ TEST_F(FetchCli, DownloadsDecompressesCachesAndWorksOffline) {
   EXPECT_NE(third.err.find(server.base_url() + "BRDC/2020/177/BRDC00WRD_S_20201770000_01D_MN.rnx.gz"),
             std::string::npos)
       << third.err;
+  EXPECT_NE(third.err.find("remaining products not attempted"), std::string::npos) << third.err;
+  EXPECT_TRUE(third.out.empty()) << third.out;
   EXPECT_TRUE(read_bytes(path_of(lines[0])) == read_bytes(nav));
   EXPECT_EQ(regular_files_under(cache).size(), 4u);
 }
@@ -352,6 +354,20 @@ TEST_F(FetchCli, MissingProductGivesExit6WithUrlAndLeavesNoFile) {
   EXPECT_NE(missing.err.find("HTTP 404"), std::string::npos) << missing.err;
   EXPECT_TRUE(missing.out.empty()) << missing.out;
   EXPECT_TRUE(regular_files_under(cache).empty());
+
+  // The library tells a missing file (kNotFound) from a failing server (kNetwork).
+  orbits::FetchRequest request;
+  request.day = *orbits::parse_archive_day("2020-06-25");
+  request.products = {orbits::ProductKind::kIonex};
+  request.cache_dir = cache;
+  request.base_url = server.base_url();
+  request.retries = 0;
+  const auto not_found = orbits::fetch_products(request);
+  ASSERT_FALSE(not_found.ok());
+  EXPECT_EQ(not_found.error().code, ErrorCode::kNotFound);
+  EXPECT_NE(not_found.error().message.find(server.base_url() + "products/ionex/2020/177/igsg1770.20i.Z (HTTP 404)"),
+            std::string::npos)
+      << not_found.error().message;
 
   const RunResult html = run_skytrace({"fetch", "--date", "2020-06-25", "--products", "clk", "--cache", cache.string(),
                                        "--base-url", server.base_url(), "--retries", "0"},

@@ -135,8 +135,10 @@ struct FetchedProduct {
   std::size_t downloaded_bytes = 0; // compressed size; 0 when cached
 };
 
-// Fetches every file of one product. kNetwork errors name the URL(s) tried and why (curl's text
-// or the HTTP status); kInvalidArgument for a bad request; kIo when the cache cannot be written.
+// Fetches every file of one product. Errors name the URL(s) tried and why (curl's text or the HTTP
+// status): kNotFound when the archive answered that no candidate name exists (HTTP 404/410),
+// kNetwork when the server could not be reached, failed (5xx after the retries) or sent something
+// that does not decompress; kInvalidArgument for a bad request; kIo when the cache cannot be written.
 [[nodiscard]] Result<std::vector<FetchedProduct>> fetch_product(const FetchRequest& request, ProductKind kind);
 // All products of the request, stopping at the first failure.
 [[nodiscard]] Result<std::vector<FetchedProduct>> fetch_products(const FetchRequest& request);
