@@ -26,16 +26,21 @@ namespace skytrace::orbits {
 
 // Code group delay of `signal` relative to the clock reference of the ephemeris, in seconds: the
 // amount the signal's code is late, so that pseudorange = ... - c (dt_sv - group_delay).
-// GPS/QZSS: L1 C/A and L1 P(Y) T_GD, L2 P(Y) gamma T_GD (gamma = (f1/f2)^2), L2C T_GD - ISC_L2C,
-// L5 T_GD - ISC_L5 (CNAV ISCs, zero when not broadcast). Galileo I/NAV: E1 BGD(E1,E5b), E5b
-// (f1/f7)^2 BGD(E1,E5b); F/NAV: E1 BGD(E1,E5a), E5a (f1/f5)^2 BGD(E1,E5a). BeiDou D1/D2 (clock
-// of B3I): B1I TGD1, B2I TGD2, B3I 0. NavIC: L5 T_GD, S (f5/fS)^2 T_GD.
+// GPS/QZSS: L1 C/A T_GD - ISC_L1CA, L1 P(Y) T_GD, L1C T_GD - ISC_L1CD/L1CP, L2 P(Y) gamma T_GD
+// (gamma = (f1/f2)^2); from a CNAV record L2C T_GD - ISC_L2C and L5 T_GD - ISC_L5I5/L5Q5; from an
+// LNAV record (no ISC) L2C gamma T_GD and L5 (f1/f5)^2 T_GD. Galileo I/NAV: E1 BGD(E1,E5b), E5b
+// (f1/f7)^2 BGD(E1,E5b), E5a BGD(E1,E5b) + ((f1/f5)^2 - 1) BGD(E1,E5a); F/NAV: E1 BGD(E1,E5a),
+// E5a (f1/f5)^2 BGD(E1,E5a), E5b BGD(E1,E5a) + ((f1/f7)^2 - 1) BGD(E1,E5b); E5 AltBOC the mean of
+// E5a and E5b; E6 0. BeiDou (clock of B3I): B1I TGD1, B2I TGD2, B3I 0, B1C pilot TGD_B1Cp, data
+// TGD_B1Cp + ISC_B1Cd, B2a pilot TGD_B2ap, data TGD_B2ap + ISC_B2ad, B2b TGD_B2bI (zero when the
+// record does not carry them). NavIC: L5 T_GD, S (f5/fS)^2 T_GD. Signals with nothing broadcast: 0.
 [[nodiscard]] double group_delay_s(const KeplerEphemeris& eph, const Signal& signal);
 // GLONASS FDMA: G1 0, G2 delta_tau_n when the file gives it, else 0.
 [[nodiscard]] double group_delay_s(const GlonassEphemeris& eph, const Signal& signal);
 
 // The navigation message whose clock and group delays belong to a signal (Galileo E5a -> F/NAV,
-// E1/E5b -> I/NAV); nullopt when any message of the system serves.
+// E1/E5b/E5 -> I/NAV; GPS/QZSS L2C and L5 -> CNAV, L1C -> CNAV-2; BeiDou B1C -> CNAV1,
+// B2a -> CNAV2, B2b -> CNAV3); nullopt when any message of the system serves.
 [[nodiscard]] std::optional<NavMessage> preferred_message(const Signal& signal);
 
 // Broadcast ephemerides of all systems, indexed per satellite.
@@ -51,7 +56,9 @@ class BroadcastEphemerides final : public SatelliteStateSource {
   [[nodiscard]] Result<const GlonassEphemeris*> select_glonass(const SatelliteId& satellite, const GnssTime& t) const;
   [[nodiscard]] Result<const SbasEphemeris*> select_sbas(const SatelliteId& satellite, const GnssTime& t) const;
 
-  // State from the record selected for a signal (Galileo: I/NAV or F/NAV to match it).
+  // State from the record selected for a signal: the preferred message (Galileo: I/NAV or F/NAV to
+  // match it; BeiDou B1I/B2I/B3I: D1, or D2 for GEO), falling back to any message when none of the
+  // preferred one qualifies.
   [[nodiscard]] Result<SatelliteState> state_for_signal(const SatelliteId& satellite, const Signal& signal,
                                                         const GnssTime& t) const;
   // Code group delay of the signal from the record selected for it.
@@ -73,9 +80,14 @@ class BroadcastEphemerides final : public SatelliteStateSource {
   std::unordered_map<SatelliteId, std::vector<size_t>> kepler_index_;
   std::unordered_map<SatelliteId, std::vector<size_t>> glonass_index_;
   std::unordered_map<SatelliteId, std::vector<size_t>> sbas_index_;
+  // Largest validity window among a satellite's Keplerian records: bounds the search around t.
+  std::unordered_map<SatelliteId, double> kepler_max_window_s_;
 };
 
-// Maximum |t - toe| a receiver accepts per system and message (seconds).
+// Maximum |t - toe| a receiver accepts per system and message (seconds): GPS/QZSS half the fit
+// interval and at least 2 h, Galileo 4 h, BeiDou 6 h, NavIC 2 h (never more than RTKLIB 2.4.3's
+// MAXDTOE for GPS fit intervals up to 4 h, so it accepts the same record), GLONASS 30 min + 60 s,
+// SBAS 360 s.
 [[nodiscard]] double validity_half_window_s(const KeplerEphemeris& eph);
 [[nodiscard]] constexpr double glonass_validity_half_window_s() { return 1800.0 + 60.0; }
 [[nodiscard]] constexpr double sbas_validity_half_window_s() { return 360.0; }
