@@ -234,6 +234,10 @@ class Parser {
     if (lines_.size() == 0) return make_error(ErrorCode::kParse, lines_.name() + ": empty file");
     auto& h = file_.header;
     const std::string_view first = lines_[0];
+    if (header_label(first) == "CRINEX VERS   / TYPE") {
+      return make_error(ErrorCode::kUnsupported, lines_.where(0) +
+                                                     ": Hatanaka-compressed (CRINEX) file: expand it with crx2rnx first");
+    }
     if (header_label(first) != "RINEX VERSION / TYPE") {
       return error(0, "first line is not RINEX VERSION / TYPE");
     }

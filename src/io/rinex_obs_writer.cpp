@@ -18,25 +18,47 @@ namespace skytrace::io {
 
 namespace detail {
 
+namespace {
+// "00" .. "99": two digits per division halves the work of the integer part.
+constexpr auto kDigitPairs = [] {
+  std::array<char, 200> table{};
+  for (int i = 0; i < 100; ++i) {
+    table[2 * i] = static_cast<char>('0' + i / 10);
+    table[2 * i + 1] = static_cast<char>('0' + i % 10);
+  }
+  return table;
+}();
+}  // namespace
+
 bool format_f14_3(double value, char* out) {
   // Largest magnitude with a leading blank (positive) or sign (negative) in 14 columns.
   constexpr double kLimit = 999999999.9995;
   if (!(value < kLimit && value > -kLimit)) return false;  // also rejects NaN
-  long long milli = std::llround(value * 1000.0);
-  const bool negative = milli < 0;
-  unsigned long long digits = negative ? static_cast<unsigned long long>(-milli) : static_cast<unsigned long long>(milli);
-  if (digits > 999999999999ULL) return false;
+  const bool negative = value < 0.0;
+  // Round half away from zero to 1e-3 (as printf does except at exact binary ties).
+  const auto milli = static_cast<std::uint64_t>((negative ? -value : value) * 1000.0 + 0.5);
+  if (milli > 999999999999ULL) return false;  // rounding at the limit
+  auto whole = static_cast<std::uint32_t>(milli / 1000);  // <= 999999999
+  const auto frac = static_cast<std::uint32_t>(milli % 1000);
   char* p = out + 14;
-  for (int i = 0; i < 3; ++i) {
-    *--p = static_cast<char>('0' + digits % 10);
-    digits /= 10;
+  p[-1] = static_cast<char>('0' + frac % 10);
+  p[-2] = kDigitPairs[2 * (frac / 10) + 1];
+  p[-3] = kDigitPairs[2 * (frac / 10)];
+  p[-4] = '.';
+  p -= 4;
+  while (whole >= 100) {
+    const std::uint32_t pair = whole % 100;
+    whole /= 100;
+    *--p = kDigitPairs[2 * pair + 1];
+    *--p = kDigitPairs[2 * pair];
   }
-  *--p = '.';
-  do {
-    *--p = static_cast<char>('0' + digits % 10);
-    digits /= 10;
-  } while (digits != 0);
-  if (negative) *--p = '-';
+  if (whole >= 10) {
+    *--p = kDigitPairs[2 * whole + 1];
+    *--p = kDigitPairs[2 * whole];
+  } else {
+    *--p = static_cast<char>('0' + whole);
+  }
+  if (negative && milli != 0) *--p = '-';  // no "-0.000"
   while (p > out) *--p = ' ';
   return true;
 }
@@ -564,7 +586,7 @@ struct RinexObsWriter::Impl {
     omitted += omitted_here;
     ++epochs;
     previous_time = epoch.time;
-    if (!event) {
+    if (epoch.flag == EpochFlag::kOk || epoch.flag == EpochFlag::kPowerFailure) {  // observation epochs only
       if (last_obs && epoch.time > *last_obs) {
         const double dt_s = epoch.time - *last_obs;
         if (!min_interval_s || dt_s < *min_interval_s) min_interval_s = dt_s;

@@ -205,6 +205,15 @@ TEST(RinexObsRealFiles, Kms3Rinex400) {
   expect_rewrite_identical(*file, 4.00, "kms3");
 }
 
+TEST(RinexObsRealFiles, HatanakaCompressedFileIsRefusedClearly) {
+  const auto path = SKYTRACE_SHARED_FILE("real/kms3_rinex4_2022159/KMS300DNK_R_20221591000_01H_30S_MO.crx");
+  auto file = read_rinex_obs(path);
+  ASSERT_FALSE(file.ok());
+  EXPECT_EQ(file.error().code, ErrorCode::kUnsupported);
+  EXPECT_NE(file.error().message.find("MO.crx:1:"), std::string::npos) << file.error().message;
+  EXPECT_NE(file.error().message.find("crx2rnx"), std::string::npos) << file.error().message;
+}
+
 TEST(RinexObsRealFiles, SmartLocBerlin211FiveHertz) {
   const auto path = SKYTRACE_SHARED_FILE("real/smartloc_berlin_potsdamer_platz_2016158/Berlin_Potsdamer_Platz.obs");
   auto file = read_rinex_obs(path);
