@@ -1,0 +1,139 @@
+// Observation synthesis: what one receiver records at one epoch, from the satellite orbits and
+// clocks, the atmosphere and the receiver's own state. The truth of every term is kept beside the
+// measurement; nothing overwrites it.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "skytrace/core/frames.hpp"
+#include "skytrace/core/random.hpp"
+#include "skytrace/core/signal.hpp"
+#include "skytrace/orbits/broadcast.hpp"
+#include "skytrace/receiver/clock.hpp"
+#include "skytrace/receiver/profile.hpp"
+
+namespace skytrace::receiver {
+
+// True antenna (reference point) position and velocity in ECEF at a true time.
+struct Kinematics {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
+};
+
+// Where the receiver is at a true (GPST) time: a static point or an interpolated trajectory.
+class KinematicsSource {
+ public:
+  virtual ~KinematicsSource() = default;
+  [[nodiscard]] virtual Result<Kinematics> at(const GnssTime& t) const = 0;
+};
+
+struct GeneratorSettings {
+  std::vector<Signal> signals;
+  double elevation_mask_deg = 5.0;
+  ReceiverProfile profile;
+  bool ionosphere_klobuchar = true;
+  bool troposphere_saastamoinen = true;
+  bool noise = false;
+  bool ideal_clock = true;
+  std::uint64_t seed = 1;
+  int receiver_index = 0;  // keys the random streams of several receivers apart
+};
+
+enum class SatelliteStatus { kTracked, kBelowMask, kNoEphemeris, kNoSignal };
+[[nodiscard]] std::string_view to_string(SatelliteStatus status);
+
+struct SignalMeasurement {
+  Signal signal;
+  double carrier_hz = 0.0;
+  // Measurements, as the receiver reports them.
+  double pseudorange_m = 0.0;
+  double carrier_phase_cycles = 0.0;
+  double doppler_hz = 0.0;
+  double cn0_dbhz = 0.0;
+  bool loss_of_lock = false;  // RINEX LLI bit 0: a new carrier-phase arc starts here
+  // Truth of the terms.
+  double satellite_clock_m = 0.0;   // c * clock polynomial of the record used for this signal
+  double group_delay_m = 0.0;       // c * code group delay of the signal
+  double ionosphere_code_m = 0.0;   // code delay (the phase is advanced by the same amount)
+  double code_noise_m = 0.0;
+  double phase_noise_m = 0.0;
+  double doppler_noise_mps = 0.0;
+  std::int64_t ambiguity_cycles = 0;
+};
+
+struct SatelliteObservation {
+  SatelliteId satellite;
+  SatelliteStatus status = SatelliteStatus::kTracked;
+  std::string detail;  // why not tracked, for the truth file
+  int glonass_channel = 0;
+  AzimuthElevation direction;
+  double range_m = 0.0;            // geometric, transmit to receive, Sagnac included
+  double range_rate_mps = 0.0;
+  double satellite_clock_m = 0.0;  // c * clock polynomial (default record)
+  double relativistic_m = 0.0;     // c * periodic relativistic clock term
+  double troposphere_m = 0.0;
+  double ionosphere_l1_m = 0.0;    // group delay on 1575.42 MHz
+  Eigen::Vector3d satellite_position_m = Eigen::Vector3d::Zero();  // at transmission, frame at reception
+  std::vector<SignalMeasurement> signals;
+};
+
+struct EpochObservations {
+  GnssTime receiver_time;  // epoch tag (receiver clock)
+  GnssTime true_time;      // = receiver_time - receiver clock bias
+  Kinematics receiver;
+  ClockState receiver_clock;
+  std::vector<SatelliteObservation> satellites;  // every satellite of the signals' systems
+};
+
+// Generates one receiver's observations epoch by epoch (in increasing time), keeping the carrier
+// arcs, the receiver clock and the noise streams from one epoch to the next.
+class ObservationGenerator {
+ public:
+  ObservationGenerator(GeneratorSettings settings, const orbits::BroadcastEphemerides& ephemerides,
+                       std::shared_ptr<const KinematicsSource> kinematics);
+
+  // Observations at the receiver time tag `tag`.
+  [[nodiscard]] Result<EpochObservations> observe(const GnssTime& tag);
+
+  // Every ephemeris record used so far (for the navigation file that goes with the observations).
+  [[nodiscard]] const std::set<const orbits::KeplerEphemeris*>& used_kepler() const { return used_kepler_; }
+  [[nodiscard]] const std::set<const orbits::GlonassEphemeris*>& used_glonass() const { return used_glonass_; }
+  [[nodiscard]] const std::set<const orbits::SbasEphemeris*>& used_sbas() const { return used_sbas_; }
+  [[nodiscard]] const GeneratorSettings& settings() const { return settings_; }
+  // Satellites the generator considers (those of the systems of the listed signals).
+  [[nodiscard]] const std::vector<SatelliteId>& satellites() const { return satellites_; }
+
+ private:
+  struct Arc {
+    std::int64_t ambiguity_cycles = 0;
+    int index = 0;
+    GnssTime last_tag;
+    bool active = false;
+  };
+  struct SignalStreams {
+    RandomStream noise;
+    explicit SignalStreams(std::uint64_t key) : noise(key) {}
+  };
+
+  GeneratorSettings settings_;
+  const orbits::BroadcastEphemerides& ephemerides_;
+  std::shared_ptr<const KinematicsSource> kinematics_;
+  ReceiverClock clock_;
+  std::optional<GnssTime> last_tag_;
+  std::vector<SatelliteId> satellites_;
+  std::map<std::pair<SatelliteId, Signal>, Arc> arcs_;
+  std::map<std::pair<SatelliteId, Signal>, SignalStreams> streams_;
+  std::set<const orbits::KeplerEphemeris*> used_kepler_;
+  std::set<const orbits::GlonassEphemeris*> used_glonass_;
+  std::set<const orbits::SbasEphemeris*> used_sbas_;
+};
+
+}  // namespace skytrace::receiver

@@ -1,0 +1,272 @@
+#include "skytrace/receiver/observation_generator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "skytrace/atmosphere/models.hpp"
+#include "skytrace/core/constants.hpp"
+
+namespace skytrace::receiver {
+namespace {
+
+constexpr double kC = constants::kSpeedOfLight_mps;
+// Sagnac: the Earth turns during the signal's flight (WGS84 rate for every system: it is physics,
+// not a parameter of any one navigation message).
+constexpr double kEarthRotation_radps = constants::kEarthRotationRateGps_radps;
+
+// The state of a satellite from the record a receiver would use at t, and which record that is.
+struct RecordState {
+  orbits::SatelliteState state;
+  const orbits::KeplerEphemeris* kepler = nullptr;
+  const orbits::GlonassEphemeris* glonass = nullptr;
+  const orbits::SbasEphemeris* sbas = nullptr;
+};
+
+Result<RecordState> evaluate_selected(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                                      const GnssTime& t, std::optional<orbits::NavMessage> message) {
+  RecordState out;
+  switch (sat.system) {
+    case GnssSystem::kGlonass: {
+      auto record = ephemerides.select_glonass(sat, t);
+      if (!record) return record.error();
+      out.glonass = *record;
+      out.state = orbits::evaluate_glonass(**record, t);
+      return out;
+    }
+    case GnssSystem::kSbas: {
+      auto record = ephemerides.select_sbas(sat, t);
+      if (!record) return record.error();
+      out.sbas = *record;
+      out.state = orbits::evaluate_sbas(**record, t);
+      return out;
+    }
+    default: {
+      auto record = ephemerides.select_kepler(sat, t, message);
+      if (!record && message) record = ephemerides.select_kepler(sat, t, std::nullopt);
+      if (!record) return record.error();
+      out.kepler = *record;
+      out.state = orbits::evaluate_kepler(**record, t);
+      return out;
+    }
+  }
+}
+
+double group_delay_of(const RecordState& record, const Signal& signal) {
+  if (record.kepler != nullptr) return orbits::group_delay_s(*record.kepler, signal);
+  if (record.glonass != nullptr) return orbits::group_delay_s(*record.glonass, signal);
+  return 0.0;  // SBAS clocks refer to L1 directly
+}
+
+// Coordinates of a vector of the Earth-fixed frame at transmission in the frame at reception,
+// the Earth having turned by `angle_rad` in between.
+Eigen::Vector3d rotate_earth(const Eigen::Vector3d& v, double angle_rad) {
+  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
+  return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
+}
+
+std::uint64_t satellite_key(const SatelliteId& sat) {
+  return (static_cast<std::uint64_t>(sat.system) << 8) | sat.number;
+}
+std::uint64_t signal_key(const Signal& signal) {
+  return (static_cast<std::uint64_t>(signal.system) << 16) | (static_cast<std::uint64_t>(signal.band) << 8) |
+         static_cast<std::uint64_t>(signal.attribute);
+}
+
+double quantize(double value, double step) { return step > 0.0 ? std::round(value / step) * step : value; }
+
+}  // namespace
+
+std::string_view to_string(SatelliteStatus status) {
+  switch (status) {
+    case SatelliteStatus::kTracked: return "tracked";
+    case SatelliteStatus::kBelowMask: return "below_mask";
+    case SatelliteStatus::kNoEphemeris: return "no_ephemeris";
+    case SatelliteStatus::kNoSignal: return "no_signal";
+  }
+  return "?";
+}
+
+ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orbits::BroadcastEphemerides& ephemerides,
+                                           std::shared_ptr<const KinematicsSource> kinematics)
+    : settings_(std::move(settings)),
+      ephemerides_(ephemerides),
+      kinematics_(std::move(kinematics)),
+      clock_(settings_.profile.oscillator, settings_.ideal_clock,
+             stream_key(settings_.seed, {hash_name("receiver-clock"), static_cast<std::uint64_t>(settings_.receiver_index)})) {
+  for (const SatelliteId& sat : ephemerides_.satellites()) {
+    const bool wanted = std::any_of(settings_.signals.begin(), settings_.signals.end(),
+                                    [&](const Signal& s) { return s.system == sat.system; });
+    if (wanted) satellites_.push_back(sat);
+  }
+}
+
+Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
+  if (last_tag_) {
+    if (tag <= *last_tag_) {
+      return make_error(ErrorCode::kInvalidArgument, "epochs must increase: " + tag.to_iso8601(TimeScale::kGpst) +
+                                                         " after " + last_tag_->to_iso8601(TimeScale::kGpst));
+    }
+    clock_.advance(tag - *last_tag_);
+  }
+  EpochObservations epoch;
+  epoch.receiver_time = tag;
+  epoch.receiver_clock = clock_.state();
+  const double rx_clock_m = kC * epoch.receiver_clock.bias_s;
+  const double rx_clock_rate_mps = kC * epoch.receiver_clock.drift_s_per_s;
+  epoch.true_time = tag - epoch.receiver_clock.bias_s;
+  auto kinematics = kinematics_->at(epoch.true_time);
+  if (!kinematics) return kinematics.error();
+  epoch.receiver = *kinematics;
+  const Eigen::Vector3d& rx_m = epoch.receiver.position_m;
+  const Eigen::Vector3d& rx_v_mps = epoch.receiver.velocity_mps;
+  const Geodetic rx_geodetic = ecef_to_geodetic(rx_m);
+  const std::optional<orbits::KlobucharCoefficients>& klobuchar = ephemerides_.data().ionosphere.gps;
+
+  epoch.satellites.reserve(satellites_.size());
+  for (const SatelliteId& sat : satellites_) {
+    SatelliteObservation obs;
+    obs.satellite = sat;
+    const std::optional<orbits::NavMessage> default_message =
+        sat.system == GnssSystem::kGalileo ? std::optional(orbits::NavMessage::kGalileoInav) : std::nullopt;
+
+    // Light-time iteration: the record is selected at the transmission time, as receivers and
+    // positioning engines do; three iterations reach far below a picosecond.
+    double flight_time_s = 0.075;
+    Result<RecordState> record = make_error(ErrorCode::kNotFound, "");
+    Eigen::Vector3d sat_position_m, sat_velocity_mps;
+    double range_m = 0.0;
+    for (int iteration = 0; iteration < 3; ++iteration) {
+      record = evaluate_selected(ephemerides_, sat, epoch.true_time - flight_time_s, default_message);
+      if (!record) break;
+      sat_position_m = rotate_earth(record->state.position_m, kEarthRotation_radps * flight_time_s);
+      range_m = (sat_position_m - rx_m).norm();
+      flight_time_s = range_m / kC;
+    }
+    if (!record) {
+      obs.status = SatelliteStatus::kNoEphemeris;
+      obs.detail = record.error().message;
+      epoch.satellites.push_back(std::move(obs));
+      continue;
+    }
+    const GnssTime transmit_time = epoch.true_time - flight_time_s;
+    const double rotation_rad = kEarthRotation_radps * flight_time_s;
+    sat_velocity_mps = rotate_earth(record->state.velocity_mps, rotation_rad);
+    const Eigen::Vector3d line_of_sight = (sat_position_m - rx_m) / range_m;
+    // d(range)/dt with the flight time changing too: the satellite term is scaled by (1 - d tau/dt)
+    // and the Sagnac rotation angle grows with d tau/dt (Eigen: d R(theta) r / d theta = (y, -x, 0)).
+    const double sat_term = line_of_sight.dot(sat_velocity_mps);
+    const Eigen::Vector3d rotation_derivative(sat_position_m.y(), -sat_position_m.x(), 0.0);
+    const double sagnac_term = kEarthRotation_radps * line_of_sight.dot(rotation_derivative);
+    const double range_rate_mps = (sat_term - line_of_sight.dot(rx_v_mps)) / (1.0 + (sat_term - sagnac_term) / kC);
+
+    obs.direction = azimuth_elevation(rx_m, rx_geodetic, sat_position_m);
+    obs.range_m = range_m;
+    obs.range_rate_mps = range_rate_mps;
+    obs.satellite_position_m = sat_position_m;
+    obs.satellite_clock_m = kC * record->state.clock_bias_s;
+    obs.relativistic_m = kC * record->state.relativistic_s;
+    if (record->glonass != nullptr) obs.glonass_channel = record->glonass->frequency_channel;
+    if (obs.direction.elevation_deg < settings_.elevation_mask_deg) {
+      obs.status = SatelliteStatus::kBelowMask;
+      epoch.satellites.push_back(std::move(obs));
+      continue;
+    }
+    if (settings_.troposphere_saastamoinen) {
+      obs.troposphere_m = atmosphere::saastamoinen_delay_m(rx_geodetic, obs.direction.elevation_deg).value_or(0.0);
+    }
+    if (settings_.ionosphere_klobuchar && klobuchar) {
+      obs.ionosphere_l1_m =
+          atmosphere::klobuchar_delay_l1_m(*klobuchar, epoch.true_time, rx_geodetic, obs.direction).value_or(0.0);
+    }
+
+    for (const Signal& signal : settings_.signals) {
+      if (signal.system != sat.system) continue;
+      const SignalInfo* info = find_signal_info(signal);
+      if (info == nullptr) continue;
+      // The clock and group delay come from the record that belongs to the signal (Galileo E5a:
+      // F/NAV); the orbit is the same for both records of one issue of data.
+      const RecordState* signal_record = &*record;
+      std::optional<RecordState> other_record;
+      if (record->kepler != nullptr) {
+        const auto wanted = orbits::preferred_message(signal);
+        if (wanted && *wanted != record->kepler->message) {
+          auto r = evaluate_selected(ephemerides_, sat, transmit_time, wanted);
+          if (r) other_record = std::move(*r);
+          if (other_record) signal_record = &*other_record;
+        }
+      }
+      if (signal_record->kepler != nullptr) used_kepler_.insert(signal_record->kepler);
+      if (signal_record->glonass != nullptr) used_glonass_.insert(signal_record->glonass);
+      if (signal_record->sbas != nullptr) used_sbas_.insert(signal_record->sbas);
+
+      SignalMeasurement m;
+      m.signal = signal;
+      m.carrier_hz = info->carrier_frequency_hz(obs.glonass_channel);
+      const double wavelength_m = kC / m.carrier_hz;
+      const orbits::SatelliteState& clock = signal_record->state;
+      m.satellite_clock_m = kC * clock.clock_bias_s;
+      m.group_delay_m = kC * group_delay_of(*signal_record, signal);
+      m.ionosphere_code_m = obs.ionosphere_l1_m * std::pow(kFrequencyL1_Hz / m.carrier_hz, 2);
+
+      // C/N0 until the link budget lands: from the horizon value to the zenith value with sqrt(sin el).
+      const double sin_el = std::sin(obs.direction.elevation_deg * std::numbers::pi / 180.0);
+      const double cn0_dbhz = settings_.profile.cn0_horizon_dbhz +
+                              (settings_.profile.cn0_zenith_dbhz - settings_.profile.cn0_horizon_dbhz) *
+                                  std::sqrt(std::max(sin_el, 0.0));
+      if (settings_.profile.tracking_threshold_dbhz > 0.0 && cn0_dbhz < settings_.profile.tracking_threshold_dbhz) continue;
+      m.cn0_dbhz = quantize(cn0_dbhz, settings_.profile.cn0_resolution_dbhz);
+
+      const auto key = std::make_pair(sat, signal);
+      if (settings_.noise) {
+        auto it = streams_.find(key);
+        if (it == streams_.end()) {
+          it = streams_.emplace(key, SignalStreams(stream_key(settings_.seed, {hash_name("tracking-noise"),
+                                                                               static_cast<std::uint64_t>(settings_.receiver_index),
+                                                                               satellite_key(sat), signal_key(signal)})))
+                   .first;
+        }
+        const TrackingNoise sigma = tracking_noise(settings_.profile, *info, m.carrier_hz, cn0_dbhz);
+        m.code_noise_m = sigma.code_m * it->second.noise.gaussian();
+        m.phase_noise_m = sigma.phase_m * it->second.noise.gaussian();
+        m.doppler_noise_mps = sigma.doppler_mps * it->second.noise.gaussian();
+      }
+
+      // Carrier-phase arcs: a signal tracked at the previous epoch continues its arc; otherwise a
+      // new arc starts with a new integer ambiguity and the loss-of-lock flag.
+      Arc& arc = arcs_[key];
+      const bool continues = arc.active && last_tag_ && arc.last_tag == *last_tag_;
+      if (!continues) {
+        ++arc.index;
+        RandomStream ambiguity(stream_key(settings_.seed, {hash_name("ambiguity"), static_cast<std::uint64_t>(settings_.receiver_index),
+                                                           satellite_key(sat), signal_key(signal),
+                                                           static_cast<std::uint64_t>(arc.index)}));
+        arc.ambiguity_cycles = ambiguity.uniform_int(-1000000, 1000000);
+        arc.active = true;
+        m.loss_of_lock = true;
+      }
+      arc.last_tag = tag;
+      m.ambiguity_cycles = arc.ambiguity_cycles;
+
+      const double satellite_clock_total_m = m.satellite_clock_m + obs.relativistic_m;
+      m.pseudorange_m = range_m + rx_clock_m - (satellite_clock_total_m - m.group_delay_m) + m.ionosphere_code_m +
+                        obs.troposphere_m + m.code_noise_m;
+      const double phase_range_m =
+          range_m + rx_clock_m - satellite_clock_total_m - m.ionosphere_code_m + obs.troposphere_m + m.phase_noise_m;
+      m.carrier_phase_cycles = phase_range_m / wavelength_m + static_cast<double>(m.ambiguity_cycles);
+      const double satellite_clock_rate_mps = kC * (clock.clock_drift_s_per_s + clock.relativistic_drift_s_per_s);
+      const double phase_range_rate_mps = range_rate_mps + rx_clock_rate_mps - satellite_clock_rate_mps + m.doppler_noise_mps;
+      m.doppler_hz = -phase_range_rate_mps / wavelength_m;
+      obs.signals.push_back(m);
+    }
+    if (obs.signals.empty()) {
+      obs.status = SatelliteStatus::kNoSignal;
+      obs.detail = "no listed signal tracked";
+    }
+    epoch.satellites.push_back(std::move(obs));
+  }
+  last_tag_ = tag;
+  return epoch;
+}
+
+}  // namespace skytrace::receiver
