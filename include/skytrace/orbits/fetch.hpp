@@ -17,6 +17,9 @@
 // been published under several station-like names over the years (BKG's BRDC00WRD, the IGS
 // BRDC00IGS, DLR's BRDM00DLR), so the broadcast product lists them all as alternatives, tried in
 // order on HTTP 404. IONEX is always the IGS combined map, whatever the analysis centre.
+// The layout follows published URLs of BKG and CDDIS (see tests/unit/test_fetch_urls.cpp); the
+// IONEX folder is CDDIS's layout and was not confirmed on BKG (no network when written): use
+// --base-url for another mirror with the same tree. file:// and ftp:// base URLs work too.
 //
 // Cache: <cache>/<archive path without the compression suffix>, e.g.
 // ~/.cache/skytrace/BRDC/2020/177/BRDC00WRD_S_20201770000_01D_MN.rnx. A file there is never
