@@ -7,7 +7,7 @@
 namespace skytrace {
 namespace {
 
-GnssTime utc_day(int year, int month, int day, int hour = 12) {
+GnssTime gpst_day(int year, int month, int day, int hour = 12) {
   return GnssTime::from_calendar(CalendarTime{year, month, day, hour, 0, 0.0}, TimeScale::kGpst);
 }
 
@@ -15,13 +15,13 @@ SatelliteId sat(const char* text) { return SatelliteId::parse(text).value(); }
 Signal sig(const char* text) { return Signal::parse(text).value(); }
 
 TEST(SatelliteCatalog, GpsBlocksIn2020) {
-  const GnssTime t = utc_day(2020, 6, 25);
+  const GnssTime t = gpst_day(2020, 6, 25);
   // G01 = SVN 63, Block IIF (launched 2011-07-16): L2C and L5, no L1C.
   const auto g01 = satellite_info(sat("G01"), t);
   ASSERT_TRUE(g01.has_value());
   EXPECT_EQ(g01->svn, 63);
   EXPECT_EQ(g01->block, "GPS-IIF");
-  EXPECT_TRUE(g01->open_ended == false);  // SVN 63 left PRN 01 in 2024
+  EXPECT_FALSE(g01->open_ended);  // SVN 63 left PRN 01 in 2024
   EXPECT_TRUE(transmits(sat("G01"), sig("G5Q"), t));
   EXPECT_TRUE(transmits(sat("G01"), sig("G2L"), t));
   EXPECT_FALSE(transmits(sat("G01"), sig("G1L"), t));
@@ -48,13 +48,13 @@ TEST(SatelliteCatalog, GpsIIIUnderPrn04) {
   // GPS III SV01 (SVN 74, launched 2018-12-23) first set as PRN 04 on 2019-01-09 (day 009);
   // before that PRN 04 was flown by the IIA SVN 36. (The often-quoted "G04 is GPS III from
   // 2018-11" is off: the satellite was still on its way to orbit.)
-  const auto before = satellite_info(sat("G04"), utc_day(2018, 11, 15));
+  const auto before = satellite_info(sat("G04"), gpst_day(2018, 11, 15));
   ASSERT_TRUE(before.has_value());
   EXPECT_EQ(before->svn, 36);
   EXPECT_EQ(before->block, "GPS-IIA");
-  EXPECT_FALSE(transmits(sat("G04"), sig("G2L"), utc_day(2018, 11, 15)));
+  EXPECT_FALSE(transmits(sat("G04"), sig("G2L"), gpst_day(2018, 11, 15)));
 
-  const GnssTime t = utc_day(2020, 6, 25);
+  const GnssTime t = gpst_day(2020, 6, 25);
   const auto g04 = satellite_info(sat("G04"), t);
   ASSERT_TRUE(g04.has_value());
   EXPECT_EQ(g04->svn, 74);
@@ -67,22 +67,22 @@ TEST(SatelliteCatalog, GpsIIIUnderPrn04) {
 
 TEST(SatelliteCatalog, PrnReassignmentG18) {
   // PRN 18: IIA SVN 34 until 2020 day 069, then GPS III SV02 (SVN 75) from day 073.
-  const auto old_sat = satellite_info(sat("G18"), utc_day(2020, 3, 9));  // day 069
+  const auto old_sat = satellite_info(sat("G18"), gpst_day(2020, 3, 9));  // day 069
   ASSERT_TRUE(old_sat.has_value());
   EXPECT_EQ(old_sat->svn, 34);
-  EXPECT_FALSE(transmits(sat("G18"), sig("G5Q"), utc_day(2020, 3, 9)));
+  EXPECT_FALSE(transmits(sat("G18"), sig("G5Q"), gpst_day(2020, 3, 9)));
   EXPECT_EQ(old_sat->valid_until, GnssTime::from_calendar(CalendarTime{2020, 3, 10, 0, 0, 0.0}, TimeScale::kGpst));
 
   // In the gap between the two assignments the table knows nothing: conservative default.
-  EXPECT_FALSE(satellite_info(sat("G18"), utc_day(2020, 3, 11)).has_value());
-  EXPECT_TRUE(transmits(sat("G18"), sig("G1C"), utc_day(2020, 3, 11)));
-  EXPECT_EQ(signal_availability(sat("G18"), sig("G5Q"), utc_day(2020, 3, 11)), SignalAvailability::kUncertain);
+  EXPECT_FALSE(satellite_info(sat("G18"), gpst_day(2020, 3, 11)).has_value());
+  EXPECT_TRUE(transmits(sat("G18"), sig("G1C"), gpst_day(2020, 3, 11)));
+  EXPECT_EQ(signal_availability(sat("G18"), sig("G5Q"), gpst_day(2020, 3, 11)), SignalAvailability::kUncertain);
 
-  const auto new_sat = satellite_info(sat("G18"), utc_day(2020, 3, 14));  // day 074
+  const auto new_sat = satellite_info(sat("G18"), gpst_day(2020, 3, 14));  // day 074
   ASSERT_TRUE(new_sat.has_value());
   EXPECT_EQ(new_sat->svn, 75);
-  EXPECT_TRUE(transmits(sat("G18"), sig("G5Q"), utc_day(2020, 3, 14)));
-  EXPECT_TRUE(transmits(sat("G18"), sig("G1L"), utc_day(2020, 3, 14)));
+  EXPECT_TRUE(transmits(sat("G18"), sig("G5Q"), gpst_day(2020, 3, 14)));
+  EXPECT_TRUE(transmits(sat("G18"), sig("G1L"), gpst_day(2020, 3, 14)));
 }
 
 TEST(SatelliteCatalog, BoundaryToTheSecond) {
@@ -94,29 +94,29 @@ TEST(SatelliteCatalog, BoundaryToTheSecond) {
 
 TEST(SatelliteCatalog, SvnMovesBetweenPrns) {
   // SVN 49 (the IIR-M with the L5 demonstration payload) filled in for several PRNs.
-  EXPECT_EQ(satellite_info(sat("G27"), utc_day(2013, 1, 1))->svn, 49);
-  EXPECT_EQ(satellite_info(sat("G30"), utc_day(2013, 6, 1))->svn, 49);
-  EXPECT_EQ(signal_availability(sat("G27"), sig("G5I"), utc_day(2013, 1, 1)), SignalAvailability::kUncertain);
+  EXPECT_EQ(satellite_info(sat("G27"), gpst_day(2013, 1, 1))->svn, 49);
+  EXPECT_EQ(satellite_info(sat("G30"), gpst_day(2013, 6, 1))->svn, 49);
+  EXPECT_EQ(signal_availability(sat("G27"), sig("G5I"), gpst_day(2013, 1, 1)), SignalAvailability::kUncertain);
   // ... and in 2024 it flew as PRN 01 between SVN 63 and GPS III SV07 (SVN 80).
-  EXPECT_EQ(satellite_info(sat("G01"), utc_day(2024, 6, 1))->svn, 49);
-  EXPECT_EQ(satellite_info(sat("G01"), utc_day(2025, 3, 1))->svn, 80);
-  EXPECT_EQ(satellite_info(sat("G01"), utc_day(2025, 3, 1))->block_id, SatelliteBlock::kGpsIIIA);
+  EXPECT_EQ(satellite_info(sat("G01"), gpst_day(2024, 6, 1))->svn, 49);
+  EXPECT_EQ(satellite_info(sat("G01"), gpst_day(2025, 3, 1))->svn, 80);
+  EXPECT_EQ(satellite_info(sat("G01"), gpst_day(2025, 3, 1))->block_id, SatelliteBlock::kGpsIIIA);
 }
 
 TEST(SatelliteCatalog, GpsIIIReplacementsAfter2024) {
   // PRN 21: IIR-A SVN 45 still on 2024-11-25, GPS III SV08 by 2025-11-14; in between unknown.
-  EXPECT_EQ(satellite_info(sat("G21"), utc_day(2024, 11, 1))->svn, 45);
-  EXPECT_FALSE(satellite_info(sat("G21"), utc_day(2025, 6, 1)).has_value());
-  EXPECT_EQ(satellite_info(sat("G21"), utc_day(2026, 1, 1))->block_id, SatelliteBlock::kGpsIIIA);
-  EXPECT_TRUE(transmits(sat("G21"), sig("G1L"), utc_day(2026, 1, 1)));
+  EXPECT_EQ(satellite_info(sat("G21"), gpst_day(2024, 11, 1))->svn, 45);
+  EXPECT_FALSE(satellite_info(sat("G21"), gpst_day(2025, 6, 1)).has_value());
+  EXPECT_EQ(satellite_info(sat("G21"), gpst_day(2026, 1, 1))->block_id, SatelliteBlock::kGpsIIIA);
+  EXPECT_TRUE(transmits(sat("G21"), sig("G1L"), gpst_day(2026, 1, 1)));
   // PRN 13: IIR-A SVN 43 until at least 2026-04-06.
-  EXPECT_EQ(satellite_info(sat("G13"), utc_day(2026, 4, 1))->svn, 43);
-  EXPECT_EQ(satellite_info(sat("G13"), utc_day(2026, 8, 1))->block_id, SatelliteBlock::kGpsIIIA);
-  EXPECT_TRUE(satellite_info(sat("G13"), utc_day(2026, 8, 1))->open_ended);
+  EXPECT_EQ(satellite_info(sat("G13"), gpst_day(2026, 4, 1))->svn, 43);
+  EXPECT_EQ(satellite_info(sat("G13"), gpst_day(2026, 8, 1))->block_id, SatelliteBlock::kGpsIIIA);
+  EXPECT_TRUE(satellite_info(sat("G13"), gpst_day(2026, 8, 1))->open_ended);
 }
 
 TEST(SatelliteCatalog, BeiDouGenerations) {
-  const GnssTime t = utc_day(2021, 1, 1);
+  const GnssTime t = gpst_day(2021, 1, 1);
   // C02: BDS-2 GEO. B1I, B2I, B3I; no B1C, B2a, B2b.
   const auto c02 = satellite_info(sat("C02"), t);
   ASSERT_TRUE(c02.has_value());
@@ -154,7 +154,7 @@ TEST(SatelliteCatalog, BeiDouGenerations) {
 
 TEST(SatelliteCatalog, BeiDouDefaultsByPrnRange) {
   // A PRN the table does not know at that date falls back on its PRN range.
-  const GnssTime t = utc_day(2015, 1, 1);
+  const GnssTime t = gpst_day(2015, 1, 1);
   EXPECT_FALSE(satellite_info(sat("C45"), t).has_value());
   EXPECT_TRUE(transmits(sat("C45"), sig("C1P"), t));
   EXPECT_FALSE(transmits(sat("C45"), sig("C7I"), t));
@@ -166,7 +166,7 @@ TEST(SatelliteCatalog, BeiDouDefaultsByPrnRange) {
 }
 
 TEST(SatelliteCatalog, GlonassCdmaOnlyOnNewerBlocks) {
-  const GnssTime t = utc_day(2020, 6, 25);
+  const GnssTime t = gpst_day(2020, 6, 25);
   // R09: GLONASS-K1 SVN 802 (launched 2014-11-30): L3 CDMA payload.
   EXPECT_EQ(satellite_info(sat("R09"), t)->block, "GLO-K1");
   EXPECT_NE(signal_availability(sat("R09"), sig("R3Q"), t), SignalAvailability::kNo);
@@ -180,27 +180,27 @@ TEST(SatelliteCatalog, GlonassCdmaOnlyOnNewerBlocks) {
   EXPECT_TRUE(transmits(sat("R01"), sig("R2C"), t));
   EXPECT_TRUE(transmits(sat("R01"), sig("R2P"), t));
   // R26 in 2024: the first GLONASS-K2 (SVN 803, launched 2023-08-07).
-  EXPECT_EQ(satellite_info(sat("R26"), utc_day(2024, 5, 3))->block_id, SatelliteBlock::kGlonassK2);
+  EXPECT_EQ(satellite_info(sat("R26"), gpst_day(2024, 5, 3))->block_id, SatelliteBlock::kGlonassK2);
 }
 
 TEST(SatelliteCatalog, GalileoAndTheE20Anomaly) {
-  const GnssTime t = utc_day(2020, 6, 25);
+  const GnssTime t = gpst_day(2020, 6, 25);
   EXPECT_EQ(satellite_info(sat("E11"), t)->block, "GAL-1");
   EXPECT_EQ(satellite_info(sat("E24"), t)->block, "GAL-2");
   for (const char* code : {"E1C", "E5Q", "E7Q", "E8Q", "E6C"}) EXPECT_TRUE(transmits(sat("E24"), sig(code), t)) << code;
   // E20 (GSAT0104) lost E5 and E6 on 2014-05-27.
-  EXPECT_TRUE(transmits(sat("E20"), sig("E5Q"), utc_day(2013, 6, 1)));
+  EXPECT_TRUE(transmits(sat("E20"), sig("E5Q"), gpst_day(2013, 6, 1)));
   EXPECT_FALSE(transmits(sat("E20"), sig("E5Q"), t));
   EXPECT_FALSE(transmits(sat("E20"), sig("E6C"), t));
 }
 
 TEST(SatelliteCatalog, QzssPerSatellite) {
   // QZS-1 (J01) until QZS-1R (J04) took over on 2022-03-24.
-  EXPECT_EQ(satellite_info(sat("J01"), utc_day(2020, 6, 25))->block, "QZS-1");
-  EXPECT_FALSE(satellite_info(sat("J01"), utc_day(2022, 6, 8)).has_value());
-  EXPECT_EQ(satellite_info(sat("J04"), utc_day(2022, 6, 8))->block, "QZS-2A");
-  EXPECT_EQ(satellite_info(sat("J07"), utc_day(2022, 6, 8))->block, "QZS-2G");
-  const GnssTime t = utc_day(2020, 6, 25);
+  EXPECT_EQ(satellite_info(sat("J01"), gpst_day(2020, 6, 25))->block, "QZS-1");
+  EXPECT_FALSE(satellite_info(sat("J01"), gpst_day(2022, 6, 8)).has_value());
+  EXPECT_EQ(satellite_info(sat("J04"), gpst_day(2022, 6, 8))->block, "QZS-2A");
+  EXPECT_EQ(satellite_info(sat("J07"), gpst_day(2022, 6, 8))->block, "QZS-2G");
+  const GnssTime t = gpst_day(2020, 6, 25);
   EXPECT_TRUE(transmits(sat("J01"), sig("J1C"), t));
   EXPECT_TRUE(transmits(sat("J01"), sig("J2L"), t));
   EXPECT_TRUE(transmits(sat("J01"), sig("J5Q"), t));
@@ -212,7 +212,7 @@ TEST(SatelliteCatalog, QzssPerSatellite) {
 }
 
 TEST(SatelliteCatalog, NavicSbasAndForeignSignals) {
-  const GnssTime t = utc_day(2022, 6, 8);
+  const GnssTime t = gpst_day(2022, 6, 8);
   EXPECT_FALSE(satellite_info(sat("I03"), t).has_value());
   EXPECT_TRUE(transmits(sat("I03"), sig("I5A"), t));
   EXPECT_TRUE(transmits(sat("I03"), sig("I9A"), t));
@@ -227,10 +227,10 @@ TEST(SatelliteCatalog, NavicSbasAndForeignSignals) {
 TEST(SatelliteCatalog, ConstellationSnapshot) {
   // On 2020-06-25 PRN 23 was vacant: SVN 60 was decommissioned on day 161 and GPS III SV03
   // (SVN 76), launched on 2020-06-30, was set as PRN 23 on day 196. All other 31 PRNs flew.
-  const auto gps = catalogued_satellites(GnssSystem::kGps, utc_day(2020, 6, 25));
+  const auto gps = catalogued_satellites(GnssSystem::kGps, gpst_day(2020, 6, 25));
   EXPECT_EQ(gps.size(), 31U);
   for (const auto& info : gps) EXPECT_NE(info.id.number, 23) << "G23 should be vacant on 2020-06-25";
-  const auto bds = catalogued_satellites(GnssSystem::kBeiDou, utc_day(2020, 6, 25));
+  const auto bds = catalogued_satellites(GnssSystem::kBeiDou, gpst_day(2020, 6, 25));
   EXPECT_GE(bds.size(), 44U);
   EXPECT_EQ(block_name(SatelliteBlock::kGpsIIRM), "GPS-IIR-M");
 }
