@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "skytrace 0.1.0");
   int exit_code = kExitOk;
+  register_run_command(app, exit_code);
   register_orbits_command(app, exit_code);
   register_fetch_command(app, exit_code);
   try {

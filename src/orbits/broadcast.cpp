@@ -212,15 +212,14 @@ std::optional<NavMessage> message_for(const SatelliteId& satellite, const std::o
   return std::nullopt;
 }
 
-// Preferred message first, then any message, reporting the preferred search's error if both fail.
+// Preferred message first, then any message. When both fail, the any-message error says why
+// (time window, health) without the noise of "no record of the preferred message".
 Result<const KeplerEphemeris*> select_with_fallback(const BroadcastEphemerides& ephemerides,
                                                     const SatelliteId& satellite, const GnssTime& t,
                                                     std::optional<NavMessage> message) {
   auto first = ephemerides.select_kepler(satellite, t, message);
   if (first.ok() || !message) return first;
-  auto fallback = ephemerides.select_kepler(satellite, t, std::nullopt);
-  if (fallback.ok()) return fallback;
-  return first;
+  return ephemerides.select_kepler(satellite, t, std::nullopt);
 }
 
 Status check_signal(const SatelliteId& satellite, const Signal& signal) {
@@ -500,7 +499,12 @@ Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const Satelli
                                                                    std::optional<NavMessage> message) const {
   const auto it = kepler_index_.find(satellite);
   if (it == kepler_index_.end()) return no_ephemeris_at_all(satellite);
-  const auto accept = [&](const KeplerEphemeris& e) { return healthy(e) && (!message || e.message == *message); };
+  // A Galileo data set is first broadcast after its toe (the age of data is never negative), so a
+  // receiver at t can only hold records with toe < t; RTKLIB applies the same rule.
+  const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;
+  const auto accept = [&](const KeplerEphemeris& e) {
+    return healthy(e) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
+  };
   const double max_window = kepler_max_window_s_.at(satellite);
   if (const KeplerEphemeris* found = select_nearest(data_.kepler, it->second, t, max_window, accept)) return found;
   const auto matches = [&](const KeplerEphemeris& e) { return !message || e.message == *message; };

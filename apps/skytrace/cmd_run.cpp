@@ -1,0 +1,63 @@
+// `skytrace run SCENARIO --out DIR`: simulates what the scenario's receivers record.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "skytrace/sim/run.hpp"
+#include "skytrace/sim/scenario.hpp"
+
+namespace skytrace::cli {
+namespace {
+
+struct RunArgs {
+  std::string scenario;
+  std::string out_dir;
+  bool no_truth = false;
+  bool quiet = false;
+};
+
+int run(const RunArgs& args) {
+  auto scenario = sim::load_scenario(args.scenario);
+  if (!scenario) return report_error(scenario.error());
+  sim::RunOptions options;
+  options.write_truth = !args.no_truth;
+  const bool terminal = isatty(fileno(stderr)) != 0 && !args.quiet;
+  if (terminal) {
+    options.progress = [last_percent = -1](std::int64_t done, std::int64_t total) mutable {
+      const int percent = static_cast<int>(100 * done / std::max<std::int64_t>(total, 1));
+      if (percent == last_percent) return;
+      last_percent = percent;
+      const int filled = percent / 2;
+      std::fprintf(stderr, "\r[%-50s] %3d%% epoch %lld/%lld", std::string(static_cast<size_t>(filled), '#').c_str(),
+                   percent, static_cast<long long>(done), static_cast<long long>(total));
+      if (done == total) std::fputc('\n', stderr);
+      std::fflush(stderr);
+    };
+  }
+  auto summary = sim::run_scenario(*scenario, args.out_dir, options);
+  if (!summary) return report_error(summary.error());
+  if (!args.quiet) {
+    std::cout << fmt::format("skytrace run: {} epochs, {} satellite-epochs, {} signal observations in {:.2f} s\n",
+                             summary->epochs, summary->satellite_epochs, summary->observations, summary->wall_time_s);
+    for (const auto& path : summary->outputs) std::cout << "  wrote " << path.string() << "\n";
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_run_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<RunArgs>();
+  CLI::App* cmd = app.add_subcommand("run", "Simulate a scenario: writes obs.rnx, nav.rnx, truth.csv and summary.json");
+  cmd->add_option("scenario", args->scenario, "Scenario YAML file (see docs/scenario.md)")->required();
+  cmd->add_option("--out", args->out_dir, "Output folder (created if missing)")->required();
+  cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv");
+  cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
+  cmd->callback([args, &exit_code]() { exit_code = run(*args); });
+}
+
+}  // namespace skytrace::cli
