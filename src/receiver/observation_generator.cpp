@@ -6,6 +6,7 @@
 
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/constants.hpp"
+#include "skytrace/core/satellite_catalog.hpp"
 
 namespace skytrace::receiver {
 namespace {
@@ -15,7 +16,7 @@ constexpr double kC = constants::kSpeedOfLight_mps;
 // not a parameter of any one navigation message).
 constexpr double kEarthRotation_radps = constants::kEarthRotationRateGps_radps;
 
-// The state of a satellite from the record a receiver would use at t, and which record that is.
+// The ephemeris record a receiver uses, and the satellite state it gives at some instant.
 struct RecordState {
   orbits::SatelliteState state;
   const orbits::KeplerEphemeris* kepler = nullptr;
@@ -23,32 +24,42 @@ struct RecordState {
   const orbits::SbasEphemeris* sbas = nullptr;
 };
 
-Result<RecordState> evaluate_selected(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
-                                      const GnssTime& t, std::optional<orbits::NavMessage> message) {
+// The record a receiver holds at its own time `t_receiver` (the epoch tag, as RTKLIB selects with
+// the observation time), with a Galileo message preference falling back to the other message.
+Result<RecordState> select_record(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                                  const GnssTime& t_receiver, std::optional<orbits::NavMessage> message) {
   RecordState out;
   switch (sat.system) {
     case GnssSystem::kGlonass: {
-      auto record = ephemerides.select_glonass(sat, t);
+      auto record = ephemerides.select_glonass(sat, t_receiver);
       if (!record) return record.error();
       out.glonass = *record;
-      out.state = orbits::evaluate_glonass(**record, t);
       return out;
     }
     case GnssSystem::kSbas: {
-      auto record = ephemerides.select_sbas(sat, t);
+      auto record = ephemerides.select_sbas(sat, t_receiver);
       if (!record) return record.error();
       out.sbas = *record;
-      out.state = orbits::evaluate_sbas(**record, t);
       return out;
     }
     default: {
-      auto record = ephemerides.select_kepler(sat, t, message);
-      if (!record && message) record = ephemerides.select_kepler(sat, t, std::nullopt);
+      auto record = ephemerides.select_kepler(sat, t_receiver, message);
+      if (!record && message) record = ephemerides.select_kepler(sat, t_receiver, std::nullopt);
       if (!record) return record.error();
       out.kepler = *record;
-      out.state = orbits::evaluate_kepler(**record, t);
       return out;
     }
+  }
+}
+
+// Evaluates the record's orbit and clock at instant t (on the GPST timeline).
+void evaluate_record(RecordState& record, const GnssTime& t) {
+  if (record.kepler != nullptr) {
+    record.state = orbits::evaluate_kepler(*record.kepler, t);
+  } else if (record.glonass != nullptr) {
+    record.state = orbits::evaluate_glonass(*record.glonass, t);
+  } else {
+    record.state = orbits::evaluate_sbas(*record.sbas, t);
   }
 }
 
@@ -130,24 +141,22 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const std::optional<orbits::NavMessage> default_message =
         sat.system == GnssSystem::kGalileo ? std::optional(orbits::NavMessage::kGalileoInav) : std::nullopt;
 
-    // Light-time iteration: the record is selected at the transmission time, as receivers and
-    // positioning engines do; three iterations reach far below a picosecond.
-    double flight_time_s = 0.075;
-    Result<RecordState> record = make_error(ErrorCode::kNotFound, "");
-    Eigen::Vector3d sat_position_m, sat_velocity_mps;
-    double range_m = 0.0;
-    for (int iteration = 0; iteration < 3; ++iteration) {
-      record = evaluate_selected(ephemerides_, sat, epoch.true_time - flight_time_s, default_message);
-      if (!record) break;
-      sat_position_m = rotate_earth(record->state.position_m, kEarthRotation_radps * flight_time_s);
-      range_m = (sat_position_m - rx_m).norm();
-      flight_time_s = range_m / kC;
-    }
+    Result<RecordState> record = select_record(ephemerides_, sat, tag, default_message);
     if (!record) {
       obs.status = SatelliteStatus::kNoEphemeris;
       obs.detail = record.error().message;
       epoch.satellites.push_back(std::move(obs));
       continue;
+    }
+    // Light-time iteration; three iterations reach far below a picosecond.
+    double flight_time_s = 0.075;
+    Eigen::Vector3d sat_position_m, sat_velocity_mps;
+    double range_m = 0.0;
+    for (int iteration = 0; iteration < 3; ++iteration) {
+      evaluate_record(*record, epoch.true_time - flight_time_s);
+      sat_position_m = rotate_earth(record->state.position_m, kEarthRotation_radps * flight_time_s);
+      range_m = (sat_position_m - rx_m).norm();
+      flight_time_s = range_m / kC;
     }
     const GnssTime transmit_time = epoch.true_time - flight_time_s;
     const double rotation_rad = kEarthRotation_radps * flight_time_s;
@@ -184,6 +193,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       if (signal.system != sat.system) continue;
       const SignalInfo* info = find_signal_info(signal);
       if (info == nullptr) continue;
+      // A receiver records only what the satellite transmits (GPS L5 only from Block IIF on, no
+      // B2I from BeiDou-3, ...).
+      if (!transmits(sat, signal, tag)) continue;
       // The clock and group delay come from the record that belongs to the signal (Galileo E5a:
       // F/NAV); the orbit is the same for both records of one issue of data.
       const RecordState* signal_record = &*record;
@@ -191,8 +203,11 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       if (record->kepler != nullptr) {
         const auto wanted = orbits::preferred_message(signal);
         if (wanted && *wanted != record->kepler->message) {
-          auto r = evaluate_selected(ephemerides_, sat, transmit_time, wanted);
-          if (r) other_record = std::move(*r);
+          auto r = select_record(ephemerides_, sat, tag, wanted);
+          if (r) {
+            evaluate_record(*r, transmit_time);
+            other_record = std::move(*r);
+          }
           if (other_record) signal_record = &*other_record;
         }
       }
