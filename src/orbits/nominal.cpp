@@ -1,7 +1,6 @@
 #include "skytrace/orbits/nominal.hpp"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -36,10 +35,14 @@ struct SystemConstants {
 // records evaluate to the design orbit with the receiver's own algorithm.
 SystemConstants system_constants(GnssSystem system) {
   switch (system) {
-    case GnssSystem::kGalileo: return {k::kGmGalileo_m3ps2, k::kEarthRotationRateGalileo_radps};
-    case GnssSystem::kBeiDou: return {k::kGmBeiDou_m3ps2, k::kEarthRotationRateBeiDou_radps};
-    case GnssSystem::kGlonass: return {k::kGmGlonass_m3ps2, k::kEarthRotationRateGlonass_radps};
-    default: return {k::kGmGps_m3ps2, k::kEarthRotationRateGps_radps};
+    case GnssSystem::kGalileo:
+      return {k::kGmGalileo_m3ps2, k::kEarthRotationRateGalileo_radps};
+    case GnssSystem::kBeiDou:
+      return {k::kGmBeiDou_m3ps2, k::kEarthRotationRateBeiDou_radps};
+    case GnssSystem::kGlonass:
+      return {k::kGmGlonass_m3ps2, k::kEarthRotationRateGlonass_radps};
+    default:
+      return {k::kGmGps_m3ps2, k::kEarthRotationRateGps_radps};
   }
 }
 
@@ -48,9 +51,9 @@ double synchronous_axis_m(const SystemConstants& c) {
   return std::cbrt(c.gm_m3ps2 / (c.earth_rotation_radps * c.earth_rotation_radps));
 }
 
-NominalOrbit make_orbit(GnssSystem system, int number, NominalOrbitType type, std::string slot, double a_m,
-                        double e, double i_deg, double omega_deg, const GnssTime& epoch, double node_lon_deg,
-                        double mean_anomaly_deg) {
+NominalOrbit make_orbit(GnssSystem system, int number, NominalOrbitType type, std::string slot,
+                        double a_m, double e, double i_deg, double omega_deg, const GnssTime& epoch,
+                        double node_lon_deg, double mean_anomaly_deg) {
   const SystemConstants c = system_constants(system);
   NominalOrbit o;
   o.satellite = SatelliteId{system, static_cast<std::uint8_t>(number)};
@@ -81,38 +84,43 @@ struct GpsSlot {
   double argument_of_latitude_deg;
 };
 constexpr std::array<GpsSlot, 24> kGpsSlots = {{
-    {"A1", 272.847, 268.126}, {"A2", 272.847, 161.786}, {"A3", 272.847, 11.676},  {"A4", 272.847, 41.806},
-    {"B1", 332.847, 80.956},  {"B2", 332.847, 173.336}, {"B3", 332.847, 309.976}, {"B4", 332.847, 204.376},
-    {"C1", 32.847, 111.876},  {"C2", 32.847, 11.796},   {"C3", 32.847, 339.666},  {"C4", 32.847, 241.556},
-    {"D1", 92.847, 135.226},  {"D2", 92.847, 265.446},  {"D3", 92.847, 35.156},   {"D4", 92.847, 167.356},
-    {"E1", 152.847, 197.046}, {"E2", 152.847, 302.596}, {"E3", 152.847, 66.066},  {"E4", 152.847, 333.686},
-    {"F1", 212.847, 238.886}, {"F2", 212.847, 345.226}, {"F3", 212.847, 105.206}, {"F4", 212.847, 135.346},
+    {"A1", 272.847, 268.126}, {"A2", 272.847, 161.786}, {"A3", 272.847, 11.676},
+    {"A4", 272.847, 41.806},  {"B1", 332.847, 80.956},  {"B2", 332.847, 173.336},
+    {"B3", 332.847, 309.976}, {"B4", 332.847, 204.376}, {"C1", 32.847, 111.876},
+    {"C2", 32.847, 11.796},   {"C3", 32.847, 339.666},  {"C4", 32.847, 241.556},
+    {"D1", 92.847, 135.226},  {"D2", 92.847, 265.446},  {"D3", 92.847, 35.156},
+    {"D4", 92.847, 167.356},  {"E1", 152.847, 197.046}, {"E2", 152.847, 302.596},
+    {"E3", 152.847, 66.066},  {"E4", 152.847, 333.686}, {"F1", 212.847, 238.886},
+    {"F2", 212.847, 345.226}, {"F3", 212.847, 105.206}, {"F4", 212.847, 135.346},
 }};
 // Greenwich hour angle at the defined epoch: 18 h 36 min 14.4 s.
 constexpr double kGpsEpochGha_deg = (18.0 + 36.0 / 60.0 + 14.4 / 3600.0) * 15.0;
 
 void add_gps(std::vector<NominalOrbit>& out) {
-  const GnssTime epoch = GnssTime::from_calendar(CalendarTime{1993, 7, 1, 0, 0, 0.0}, TimeScale::kUtc);
+  const GnssTime epoch =
+      GnssTime::from_calendar(CalendarTime{1993, 7, 1, 0, 0, 0.0}, TimeScale::kUtc);
   int prn = 1;
   for (const GpsSlot& s : kGpsSlots) {
     // Earth-fixed node longitude = inertial RAAN - Greenwich hour angle; e = 0, so M = u.
-    NominalOrbit o = make_orbit(GnssSystem::kGps, prn++, NominalOrbitType::kMeo, s.name, 26559.7e3, 0.0, 55.0, 0.0,
-                                epoch, s.raan_deg - kGpsEpochGha_deg, s.argument_of_latitude_deg);
+    NominalOrbit o =
+        make_orbit(GnssSystem::kGps, prn++, NominalOrbitType::kMeo, s.name, 26559.7e3, 0.0, 55.0,
+                   0.0, epoch, s.raan_deg - kGpsEpochGha_deg, s.argument_of_latitude_deg);
     o.node_rate_rad_per_s = repeat_node_rate(o, 2.0, 1.0);
     out.push_back(std::move(o));
   }
 }
 
 // Walker T/P/F = 24/3/1: planes 120 deg apart in node, 8 slots 45 deg apart, +15 deg per plane.
-void add_walker(std::vector<NominalOrbit>& out, GnssSystem system, const std::vector<int>& numbers, double a_m,
-                double i_deg, const GnssTime& epoch, double revolutions, double days) {
+void add_walker(std::vector<NominalOrbit>& out, GnssSystem system, const std::vector<int>& numbers,
+                double a_m, double i_deg, const GnssTime& epoch, double revolutions, double days) {
   for (int plane = 0; plane < 3; ++plane) {
     for (int slot = 0; slot < 8; ++slot) {
       const int index = plane * 8 + slot;
-      const std::string name = "plane " + std::string(1, static_cast<char>('A' + plane)) + " slot " +
-                               std::to_string(slot + 1);
-      NominalOrbit o = make_orbit(system, numbers[static_cast<size_t>(index)], NominalOrbitType::kMeo, name, a_m,
-                                  0.0, i_deg, 0.0, epoch, 120.0 * plane, 45.0 * slot + 15.0 * plane);
+      const std::string name = "plane " + std::string(1, static_cast<char>('A' + plane)) +
+                               " slot " + std::to_string(slot + 1);
+      NominalOrbit o =
+          make_orbit(system, numbers[static_cast<size_t>(index)], NominalOrbitType::kMeo, name, a_m,
+                     0.0, i_deg, 0.0, epoch, 120.0 * plane, 45.0 * slot + 15.0 * plane);
       o.node_rate_rad_per_s = revolutions > 0.0 ? repeat_node_rate(o, revolutions, days) : 0.0;
       out.push_back(std::move(o));
     }
@@ -128,24 +136,25 @@ std::string longitude_label(const char* kind, double longitude_deg) {
 NominalOrbit geo(GnssSystem system, int number, double longitude_deg, const GnssTime& epoch) {
   // Equatorial circular synchronous orbit: longitude = node longitude + argument of latitude.
   return make_orbit(system, number, NominalOrbitType::kGeo, longitude_label("GEO", longitude_deg),
-                    synchronous_axis_m(system_constants(system)), 0.0, 0.0, 0.0, epoch, longitude_deg, 0.0);
+                    synchronous_axis_m(system_constants(system)), 0.0, 0.0, 0.0, epoch,
+                    longitude_deg, 0.0);
 }
 
 // A circular inclined synchronous orbit whose figure-8 crosses the equator at `crossing_deg`, at
 // mean anomaly `phase_deg` at the epoch. The crossing longitude is node longitude + argument of
 // latitude (both change at the Earth rate), so node longitude = crossing - phase.
-NominalOrbit igso(GnssSystem system, int number, double crossing_deg, double i_deg, double phase_deg,
-                  const GnssTime& epoch) {
+NominalOrbit igso(GnssSystem system, int number, double crossing_deg, double i_deg,
+                  double phase_deg, const GnssTime& epoch) {
   return make_orbit(system, number, NominalOrbitType::kIgso, longitude_label("IGSO", crossing_deg),
-                    synchronous_axis_m(system_constants(system)), 0.0, i_deg, 0.0, epoch, crossing_deg - phase_deg,
-                    phase_deg);
+                    synchronous_axis_m(system_constants(system)), 0.0, i_deg, 0.0, epoch,
+                    crossing_deg - phase_deg, phase_deg);
 }
 
 void add_galileo(std::vector<NominalOrbit>& out) {
   std::vector<int> numbers(24);
   for (int i = 0; i < 24; ++i) numbers[static_cast<size_t>(i)] = i + 1;
-  add_walker(out, GnssSystem::kGalileo, numbers, 29600e3, 56.0, GnssTime::from_week_tow(TimeScale::kGst, 0, 0.0),
-             17.0, 10.0);
+  add_walker(out, GnssSystem::kGalileo, numbers, 29600e3, 56.0,
+             GnssTime::from_week_tow(TimeScale::kGst, 0, 0.0), 17.0, 10.0);
 }
 
 void add_beidou(std::vector<NominalOrbit>& out) {
@@ -156,28 +165,30 @@ void add_beidou(std::vector<NominalOrbit>& out) {
   for (int prn = 41; prn <= 46; ++prn) meo.push_back(prn);
   add_walker(out, GnssSystem::kBeiDou, meo, 27906e3, 55.0, epoch, 13.0, 7.0);
   // IGSO C38-C40 on one ground track, 8 h apart: each later one is the previous one 8 h late.
-  for (int k = 0; k < 3; ++k) out.push_back(igso(GnssSystem::kBeiDou, 38 + k, 118.0, 55.0, -120.0 * k, epoch));
+  for (int k = 0; k < 3; ++k)
+    out.push_back(igso(GnssSystem::kBeiDou, 38 + k, 118.0, 55.0, -120.0 * k, epoch));
   out.push_back(geo(GnssSystem::kBeiDou, 59, 140.0, epoch));
   out.push_back(geo(GnssSystem::kBeiDou, 60, 80.0, epoch));
   out.push_back(geo(GnssSystem::kBeiDou, 61, 110.5, epoch));
-  std::sort(out.begin(), out.end(), [](const NominalOrbit& a, const NominalOrbit& b) {
-    return a.satellite < b.satellite;
-  });
+  std::sort(out.begin(), out.end(),
+            [](const NominalOrbit& a, const NominalOrbit& b) { return a.satellite < b.satellite; });
 }
 
 // Frequency channel k per slot 1..24.
-constexpr std::array<int, 24> kGlonassChannels = {1,  -4, 5, 6,  1,  -4, 5, 6,  -2, -7, 0, -1,
-                                                  -2, -7, 0, -1, 4,  -3, 3, 2,  4,  -3, 3, 2};
+constexpr std::array<int, 24> kGlonassChannels = {1,  -4, 5, 6,  1, -4, 5, 6, -2, -7, 0, -1,
+                                                  -2, -7, 0, -1, 4, -3, 3, 2, 4,  -3, 3, 2};
 
 void add_glonass(std::vector<NominalOrbit>& out) {
-  const GnssTime epoch = GnssTime::from_calendar(CalendarTime{2000, 1, 1, 0, 0, 0.0}, TimeScale::kUtc);
+  const GnssTime epoch =
+      GnssTime::from_calendar(CalendarTime{2000, 1, 1, 0, 0, 0.0}, TimeScale::kUtc);
   for (int plane = 0; plane < 3; ++plane) {
     for (int slot = 0; slot < 8; ++slot) {
       const int number = plane * 8 + slot + 1;
       // Slot numbers grow against the motion: slot j + 1 trails slot j by 45 deg.
-      NominalOrbit o = make_orbit(GnssSystem::kGlonass, number, NominalOrbitType::kMeo,
-                                  "plane " + std::to_string(plane + 1) + " slot " + std::to_string(number), 25510e3,
-                                  0.0, 64.8, 0.0, epoch, 120.0 * plane, 15.0 * plane - 45.0 * slot);
+      NominalOrbit o =
+          make_orbit(GnssSystem::kGlonass, number, NominalOrbitType::kMeo,
+                     "plane " + std::to_string(plane + 1) + " slot " + std::to_string(number),
+                     25510e3, 0.0, 64.8, 0.0, epoch, 120.0 * plane, 15.0 * plane - 45.0 * slot);
       o.glonass_channel = kGlonassChannels[static_cast<size_t>(number - 1)];
       out.push_back(std::move(o));
     }
@@ -190,8 +201,8 @@ void add_qzss(std::vector<NominalOrbit>& out) {
   // J01 at apogee (M = 180 deg, u = 90 deg) over 135 E at the epoch: longitude = node + 90 deg.
   // J02 and J03 follow the same ground track 8 and 16 h later.
   for (int k = 0; k < 3; ++k) {
-    out.push_back(make_orbit(GnssSystem::kQzss, 1 + k, NominalOrbitType::kQzo, "QZO 135.00E", a_m, 0.075, 41.0,
-                             270.0, epoch, 45.0 + 120.0 * k, 180.0 - 120.0 * k));
+    out.push_back(make_orbit(GnssSystem::kQzss, 1 + k, NominalOrbitType::kQzo, "QZO 135.00E", a_m,
+                             0.075, 41.0, 270.0, epoch, 45.0 + 120.0 * k, 180.0 - 120.0 * k));
   }
   out.push_back(geo(GnssSystem::kQzss, 7, 127.0, epoch));
 }
@@ -228,7 +239,9 @@ KlobucharCoefficients typical_klobuchar() {
   return k;
 }
 
-double symmetric(RandomStream& rng, double half_width) { return (2.0 * rng.uniform() - 1.0) * half_width; }
+double symmetric(RandomStream& rng, double half_width) {
+  return (2.0 * rng.uniform() - 1.0) * half_width;
+}
 double quantize(double value, double lsb) { return std::round(value / lsb) * lsb; }
 
 struct ClockModel {
@@ -237,8 +250,9 @@ struct ClockModel {
 };
 
 ClockModel clock_model(std::uint64_t seed, const SatelliteId& sat) {
-  RandomStream rng(stream_key(seed, {hash_name("nominal-clock"), static_cast<std::uint64_t>(sat.system),
-                                     static_cast<std::uint64_t>(sat.number)}));
+  RandomStream rng(
+      stream_key(seed, {hash_name("nominal-clock"), static_cast<std::uint64_t>(sat.system),
+                        static_cast<std::uint64_t>(sat.number)}));
   ClockModel c;
   c.bias_at_anchor_s = symmetric(rng, 3e-4);
   if (sat.system == GnssSystem::kGlonass) {
@@ -250,8 +264,9 @@ ClockModel clock_model(std::uint64_t seed, const SatelliteId& sat) {
 }
 
 GroupDelays group_delays(std::uint64_t seed, const SatelliteId& sat) {
-  RandomStream rng(stream_key(seed, {hash_name("nominal-group-delay"), static_cast<std::uint64_t>(sat.system),
-                                     static_cast<std::uint64_t>(sat.number)}));
+  RandomStream rng(
+      stream_key(seed, {hash_name("nominal-group-delay"), static_cast<std::uint64_t>(sat.system),
+                        static_cast<std::uint64_t>(sat.number)}));
   GroupDelays gd;
   switch (sat.system) {
     case GnssSystem::kGalileo:
@@ -263,32 +278,40 @@ GroupDelays group_delays(std::uint64_t seed, const SatelliteId& sat) {
       gd.tgd1_s = quantize(symmetric(rng, 1e-8), 1e-10);
       gd.tgd2_s = quantize(symmetric(rng, 1e-8), 1e-10);
       break;
-    default: gd.tgd_s = quantize(symmetric(rng, 1e-8), 0x1.0p-31); break;
+    default:
+      gd.tgd_s = quantize(symmetric(rng, 1e-8), 0x1.0p-31);
+      break;
   }
   return gd;
 }
 
 // Reference times t = k * spacing (+ offset) of GPST whole seconds covering [begin, end].
-std::vector<GnssTime> record_times(const GnssTime& begin, const GnssTime& end, std::int64_t spacing_s,
-                                   std::int64_t offset_s) {
+std::vector<GnssTime> record_times(const GnssTime& begin, const GnssTime& end,
+                                   std::int64_t spacing_s, std::int64_t offset_s) {
   auto floor_div = [](std::int64_t a, std::int64_t b) {
     std::int64_t q = a / b;
     if ((a % b != 0) && (a < 0)) --q;
     return q;
   };
   const std::int64_t first = floor_div(begin.whole_seconds() - offset_s, spacing_s);
-  const std::int64_t last = -floor_div(-(end.whole_seconds() + (end.fraction_s() > 0.0 ? 1 : 0) - offset_s), spacing_s);
+  const std::int64_t last =
+      -floor_div(-(end.whole_seconds() + (end.fraction_s() > 0.0 ? 1 : 0) - offset_s), spacing_s);
   std::vector<GnssTime> times;
-  for (std::int64_t i = first; i <= last; ++i) times.push_back(GnssTime::from_gpst_seconds(i * spacing_s + offset_s));
+  for (std::int64_t i = first; i <= last; ++i)
+    times.push_back(GnssTime::from_gpst_seconds(i * spacing_s + offset_s));
   return times;
 }
 
 NavMessage legacy_message(const NominalOrbit& o) {
   switch (o.satellite.system) {
-    case GnssSystem::kBeiDou: return o.type == NominalOrbitType::kGeo ? NavMessage::kBeiDouD2 : NavMessage::kBeiDouD1;
-    case GnssSystem::kQzss: return NavMessage::kQzssLnav;
-    case GnssSystem::kNavic: return NavMessage::kNavicLnav;
-    default: return NavMessage::kGpsLnav;
+    case GnssSystem::kBeiDou:
+      return o.type == NominalOrbitType::kGeo ? NavMessage::kBeiDouD2 : NavMessage::kBeiDouD1;
+    case GnssSystem::kQzss:
+      return NavMessage::kQzssLnav;
+    case GnssSystem::kNavic:
+      return NavMessage::kNavicLnav;
+    default:
+      return NavMessage::kGpsLnav;
   }
 }
 
@@ -301,8 +324,8 @@ void set_orbit(KeplerEphemeris& e, const NominalOrbit& o, double toe_sow) {
   e.delta_n_rad_per_s = 0.0;
   if (o.satellite.system == GnssSystem::kBeiDou && o.type == NominalOrbitType::kGeo) {
     // BDS-SIS-ICD GEO: the elements describe the orbit in a frame tilted by +5 deg about x, with
-    // no Earth rotation over tk in the node; [X Y Z] = R_Z(omega_e tk) R_X(-5 deg) [X_GK Y_GK Z_GK].
-    // An equatorial orbit at longitude L appears there with i = 5 deg, node at 180 deg and
+    // no Earth rotation over tk in the node; [X Y Z] = R_Z(omega_e tk) R_X(-5 deg) [X_GK Y_GK
+    // Z_GK]. An equatorial orbit at longitude L appears there with i = 5 deg, node at 180 deg and
     // argument of latitude L + 180 deg.
     const double longitude_rad = p.node_longitude_rad + p.mean_anomaly_rad;
     e.i0_rad = 5.0 * kDeg;
@@ -319,8 +342,8 @@ void set_orbit(KeplerEphemeris& e, const NominalOrbit& o, double toe_sow) {
   e.omega_dot_rad_per_s = o.node_rate_rad_per_s;
 }
 
-void add_kepler_records(NavigationData& data, const NominalOrbit& o, const GnssTime& begin, const GnssTime& end,
-                        const GnssTime& clock_anchor, std::uint64_t seed) {
+void add_kepler_records(NavigationData& data, const NominalOrbit& o, const GnssTime& begin,
+                        const GnssTime& end, const GnssTime& clock_anchor, std::uint64_t seed) {
   const GnssSystem system = o.satellite.system;
   const bool beidou = system == GnssSystem::kBeiDou;
   // BeiDou D1 records are hourly in BDT (BDT = GPST - 14 s); the others every 2 h.
@@ -330,7 +353,11 @@ void add_kepler_records(NavigationData& data, const NominalOrbit& o, const GnssT
   const GroupDelays delays = group_delays(seed, o.satellite);
   const TimeScale week_scale = beidou ? TimeScale::kBdt : TimeScale::kGpst;
 
-  for (const GnssTime& toe : record_times(begin, end, spacing_s, offset_s)) {
+  // Galileo data sets are broadcast from their toe on, and receivers (RTKLIB, BroadcastEphemerides)
+  // only use one whose toe has passed: the first toe must lie before `begin`.
+  const bool galileo = system == GnssSystem::kGalileo;
+  const GnssTime first_needed = galileo ? begin - 1.0 : begin;
+  for (const GnssTime& toe : record_times(first_needed, end, spacing_s, offset_s)) {
     const WeekTow wt = toe.to_week_tow(week_scale);
     const std::int64_t issue = toe.whole_seconds() / spacing_s;
 
@@ -347,8 +374,9 @@ void add_kepler_records(NavigationData& data, const NominalOrbit& o, const GnssT
     set_orbit(e, o, wt.tow_s);
     e.group_delays = delays;
     e.health = 0;
-    // Broadcast from half a spacing before toe: from then on it is the record nearest in time.
-    e.transmission_time_sow = wt.tow_s - static_cast<double>(spacing_s) / 2.0;
+    // GPS-like records are broadcast from half a spacing before toe (from then on they are the
+    // nearest in time); Galileo ones from toe.
+    e.transmission_time_sow = galileo ? wt.tow_s : wt.tow_s - static_cast<double>(spacing_s) / 2.0;
     e.source = "nominal constellation";
     switch (system) {
       case GnssSystem::kGps:
@@ -374,7 +402,8 @@ void add_kepler_records(NavigationData& data, const NominalOrbit& o, const GnssT
         e.iode = e.iodc = static_cast<int>(issue % 24);  // 5-bit AODE/AODC
         e.accuracy_m = 2.0;
         break;
-      default: break;
+      default:
+        break;
     }
     if (system == GnssSystem::kGalileo) {
       e.iode = e.iodc = static_cast<int>(issue % 1024);  // IODnav
@@ -383,7 +412,7 @@ void add_kepler_records(NavigationData& data, const NominalOrbit& o, const GnssT
       e.data_source = 517;  // I/NAV E1-B and E5b, clock for E5b/E1
       KeplerEphemeris fnav = e;
       fnav.message = NavMessage::kGalileoFnav;
-      fnav.data_source = 258;  // F/NAV E5a, clock for E5a/E1
+      fnav.data_source = 258;               // F/NAV E5a, clock for E5a/E1
       fnav.group_delays.bgd_e1e5b_s = 0.0;  // F/NAV does not carry BGD(E1,E5b)
       data.kepler.push_back(std::move(e));
       data.kepler.push_back(std::move(fnav));
@@ -425,8 +454,8 @@ NominalState glonass_initial_state(const NominalOrbit& o, const GnssTime& t) {
 }
 
 // GLONASS state vectors at t_b = hh:15 and hh:45 UTC (t_b is a multiple of 15 min of Moscow time).
-void add_glonass_records(NavigationData& data, const NominalOrbit& o, const GnssTime& begin, const GnssTime& end,
-                         const GnssTime& clock_anchor, std::uint64_t seed) {
+void add_glonass_records(NavigationData& data, const NominalOrbit& o, const GnssTime& begin,
+                         const GnssTime& end, const GnssTime& clock_anchor, std::uint64_t seed) {
   const ClockModel clock = clock_model(seed, o.satellite);
   // Walk UTC days from the one holding `begin - 30 min`, placing t_b on the UTC calendar so that
   // leap seconds do not shift the grid.
@@ -436,7 +465,8 @@ void add_glonass_records(NavigationData& data, const NominalOrbit& o, const Gnss
     for (int half_hour = 0; half_hour < 48; ++half_hour) {
       const int minutes = 15 + 30 * half_hour;
       const GnssTime tb = GnssTime::from_calendar(
-          CalendarTime{day.year, day.month, day.day, minutes / 60, minutes % 60, 0.0}, TimeScale::kUtc);
+          CalendarTime{day.year, day.month, day.day, minutes / 60, minutes % 60, 0.0},
+          TimeScale::kUtc);
       if (tb - end > 1800.0) {
         past_end = true;
         break;
@@ -448,7 +478,8 @@ void add_glonass_records(NavigationData& data, const NominalOrbit& o, const Gnss
       const NominalState s = data.glonass.empty() || data.glonass.back().satellite != o.satellite
                                  ? glonass_initial_state(o, tb)
                                  : [&] {
-                                     const SatelliteState p = evaluate_glonass(data.glonass.back(), tb);
+                                     const SatelliteState p =
+                                         evaluate_glonass(data.glonass.back(), tb);
                                      return NominalState{p.position_m, p.velocity_mps};
                                    }();
       GlonassEphemeris g;
@@ -467,8 +498,10 @@ void add_glonass_records(NavigationData& data, const NominalOrbit& o, const Gnss
     }
     if (past_end) break;
     // Next UTC day: noon of the following day is safely inside it whatever the leap seconds.
-    const GnssTime noon = GnssTime::from_calendar(CalendarTime{day.year, day.month, day.day, 12, 0, 0.0},
-                                                  TimeScale::kUtc) + 86400.0;
+    const GnssTime noon =
+        GnssTime::from_calendar(CalendarTime{day.year, day.month, day.day, 12, 0, 0.0},
+                                TimeScale::kUtc) +
+        86400.0;
     day = noon.to_calendar(TimeScale::kUtc);
   }
 }
@@ -493,13 +526,26 @@ std::vector<NominalOrbit> nominal_orbits(const std::vector<GnssSystem>& systems)
     if (std::find(systems.begin(), systems.end(), system) == systems.end()) continue;
     std::vector<NominalOrbit> part;
     switch (system) {
-      case GnssSystem::kGps: add_gps(part); break;
-      case GnssSystem::kGlonass: add_glonass(part); break;
-      case GnssSystem::kGalileo: add_galileo(part); break;
-      case GnssSystem::kBeiDou: add_beidou(part); break;
-      case GnssSystem::kQzss: add_qzss(part); break;
-      case GnssSystem::kNavic: add_navic(part); break;
-      case GnssSystem::kSbas: break;
+      case GnssSystem::kGps:
+        add_gps(part);
+        break;
+      case GnssSystem::kGlonass:
+        add_glonass(part);
+        break;
+      case GnssSystem::kGalileo:
+        add_galileo(part);
+        break;
+      case GnssSystem::kBeiDou:
+        add_beidou(part);
+        break;
+      case GnssSystem::kQzss:
+        add_qzss(part);
+        break;
+      case GnssSystem::kNavic:
+        add_navic(part);
+        break;
+      case GnssSystem::kSbas:
+        break;
     }
     for (auto& o : part) out.push_back(std::move(o));
   }
@@ -513,7 +559,8 @@ NominalState nominal_state(const NominalOrbit& o, const GnssTime& t) {
   const double n_radps = o.mean_motion_rad_per_s();
   double ecc_rad = p.mean_anomaly_rad;
   for (int i = 0; i < 30; ++i) {
-    const double step = (ecc_rad - e * std::sin(ecc_rad) - p.mean_anomaly_rad) / (1.0 - e * std::cos(ecc_rad));
+    const double step =
+        (ecc_rad - e * std::sin(ecc_rad) - p.mean_anomaly_rad) / (1.0 - e * std::cos(ecc_rad));
     ecc_rad -= step;
     if (std::fabs(step) < 1e-14) break;
   }
@@ -545,22 +592,26 @@ NominalState nominal_state(const NominalOrbit& o, const GnssTime& t) {
 Result<NavigationData> make_nominal_constellation(const GnssTime& start, double duration_s,
                                                   const NominalConstellationOptions& options) {
   if (!std::isfinite(duration_s) || duration_s < 0.0) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      "nominal constellation: duration must be a finite number of seconds >= 0, got " +
-                          std::to_string(duration_s));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        "nominal constellation: duration must be a finite number of seconds >= 0, got " +
+            std::to_string(duration_s));
   }
   if (!std::isfinite(options.margin_s) || options.margin_s < 0.0) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      "nominal constellation: margin must be a finite number of seconds >= 0, got " +
-                          std::to_string(options.margin_s));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        "nominal constellation: margin must be a finite number of seconds >= 0, got " +
+            std::to_string(options.margin_s));
   }
   if (duration_s + 2.0 * options.margin_s > 366.0 * 86400.0) {
     return make_error(ErrorCode::kInvalidArgument,
                       "nominal constellation: span of " + std::to_string(duration_s / 86400.0) +
                           " days is longer than the 366 days supported");
   }
-  if (std::find(options.systems.begin(), options.systems.end(), GnssSystem::kSbas) != options.systems.end()) {
-    return make_error(ErrorCode::kUnsupported, "nominal constellation: SBAS has no nominal constellation");
+  if (std::find(options.systems.begin(), options.systems.end(), GnssSystem::kSbas) !=
+      options.systems.end()) {
+    return make_error(ErrorCode::kUnsupported,
+                      "nominal constellation: SBAS has no nominal constellation");
   }
 
   const GnssTime begin = start - options.margin_s;

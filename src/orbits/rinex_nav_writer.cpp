@@ -46,10 +46,10 @@ std::string format_utc_now() {
   const year_month_day ymd{day};
   const hh_mm_ss hms{floor<seconds>(now - day)};
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%04d%02u%02u %02d%02d%02d UTC", static_cast<int>(ymd.year()),
-                static_cast<unsigned>(ymd.month()), static_cast<unsigned>(ymd.day()),
-                static_cast<int>(hms.hours().count()), static_cast<int>(hms.minutes().count()),
-                static_cast<int>(hms.seconds().count()));
+  std::snprintf(buffer, sizeof buffer, "%04d%02u%02u %02d%02d%02d UTC",
+                static_cast<int>(ymd.year()), static_cast<unsigned>(ymd.month()),
+                static_cast<unsigned>(ymd.day()), static_cast<int>(hms.hours().count()),
+                static_cast<int>(hms.minutes().count()), static_cast<int>(hms.seconds().count()));
   return buffer;
 }
 
@@ -60,9 +60,9 @@ std::string epoch_field(const SatelliteId& satellite, const GnssTime& t, TimeSca
       GnssTime::from_gpst_seconds(t.whole_seconds() + (t.fraction_s() >= 0.5 ? 1 : 0));
   const CalendarTime c = rounded.to_calendar(scale);
   char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%c%02d %04d %02d %02d %02d %02d %02d", system_letter(satellite.system),
-                static_cast<int>(satellite.number), c.year, c.month, c.day, c.hour, c.minute,
-                static_cast<int>(c.second));
+  std::snprintf(buffer, sizeof buffer, "%c%02d %04d %02d %02d %02d %02d %02d",
+                system_letter(satellite.system), static_cast<int>(satellite.number), c.year,
+                c.month, c.day, c.hour, c.minute, static_cast<int>(c.second));
   return buffer;
 }
 
@@ -70,7 +70,8 @@ std::string epoch_field(const SatelliteId& satellite, const GnssTime& t, TimeSca
 // Trailing spare fields are left out (blank), as the format allows.
 class RecordWriter {
  public:
-  RecordWriter(std::string& out, const std::string& epoch, double v0, double v1, double v2) : out_(out) {
+  RecordWriter(std::string& out, const std::string& epoch, double v0, double v1, double v2)
+      : out_(out) {
     out_ += epoch + d19(v0) + d19(v1) + d19(v2) + "\n";
   }
   RecordWriter& line(std::initializer_list<double> values) {
@@ -90,7 +91,8 @@ std::pair<int, double> toe_week_sow(const KeplerEphemeris& eph) {
   if (eph.week > 0) return {eph.week, eph.toe_sow};
   // RINEX 3: GPS weeks for G, E, J and I (Galileo and NavIC weeks are written aligned to GPS);
   // BDT weeks for C.
-  const TimeScale scale = eph.satellite.system == GnssSystem::kBeiDou ? TimeScale::kBdt : TimeScale::kGpst;
+  const TimeScale scale =
+      eph.satellite.system == GnssSystem::kBeiDou ? TimeScale::kBdt : TimeScale::kGpst;
   const WeekTow wt = eph.toe.to_week_tow(scale);
   return {wt.week, wt.tow_s};
 }
@@ -104,7 +106,9 @@ double galileo_data_source(const KeplerEphemeris& eph) {
 
 // QZSS line 7 carries a fit-interval *flag* (0: 2 hours, 1: more than 2 hours; IS-QZSS 4.1.2.7).
 // Records hold hours: up to 2 h is flag 0; more, or 0 (not quantified, as read from flag 1), is 1.
-double qzss_fit_flag(double fit_interval_h) { return fit_interval_h > 0.0 && fit_interval_h <= 2.0 ? 0.0 : 1.0; }
+double qzss_fit_flag(double fit_interval_h) {
+  return fit_interval_h > 0.0 && fit_interval_h <= 2.0 ? 0.0 : 1.0;
+}
 
 void write_kepler(std::string& out, const KeplerEphemeris& e) {
   const GnssSystem system = e.satellite.system;
@@ -121,12 +125,14 @@ void write_kepler(std::string& out, const KeplerEphemeris& e) {
   const GroupDelays& gd = e.group_delays;
   switch (system) {
     case GnssSystem::kGps:
-      w.line({e.idot_rad_per_s, static_cast<double>(e.codes_on_l2), wk, static_cast<double>(e.l2p_data_flag)})
+      w.line({e.idot_rad_per_s, static_cast<double>(e.codes_on_l2), wk,
+              static_cast<double>(e.l2p_data_flag)})
           .line({e.accuracy_m, health, gd.tgd_s, static_cast<double>(e.iodc)})
           .line({e.transmission_time_sow, e.fit_interval_h});
       break;
     case GnssSystem::kQzss:
-      w.line({e.idot_rad_per_s, static_cast<double>(e.codes_on_l2), wk, static_cast<double>(e.l2p_data_flag)})
+      w.line({e.idot_rad_per_s, static_cast<double>(e.codes_on_l2), wk,
+              static_cast<double>(e.l2p_data_flag)})
           .line({e.accuracy_m, health, gd.tgd_s, static_cast<double>(e.iodc)})
           .line({e.transmission_time_sow, qzss_fit_flag(e.fit_interval_h)});
       break;
@@ -176,7 +182,8 @@ void write_glonass(std::string& out, const GlonassEphemeris& g) {
              static_cast<double>(g.health)})
       .line({g.position_m.y() * kKm, g.velocity_mps.y() * kKm, g.acceleration_mps2.y() * kKm,
              static_cast<double>(g.frequency_channel)})
-      .line({g.position_m.z() * kKm, g.velocity_mps.z() * kKm, g.acceleration_mps2.z() * kKm, g.age_days});
+      .line({g.position_m.z() * kKm, g.velocity_mps.z() * kKm, g.acceleration_mps2.z() * kKm,
+             g.age_days});
 }
 
 void write_sbas(std::string& out, const SbasEphemeris& s) {
@@ -185,7 +192,8 @@ void write_sbas(std::string& out, const SbasEphemeris& s) {
   RecordWriter(out, epoch, s.agf0_s, s.agf1_s_per_s, s.transmission_time_sow)
       .line({s.position_m.x() * kKm, s.velocity_mps.x() * kKm, s.acceleration_mps2.x() * kKm,
              static_cast<double>(s.health)})
-      .line({s.position_m.y() * kKm, s.velocity_mps.y() * kKm, s.acceleration_mps2.y() * kKm, s.accuracy_m})
+      .line({s.position_m.y() * kKm, s.velocity_mps.y() * kKm, s.acceleration_mps2.y() * kKm,
+             s.accuracy_m})
       .line({s.position_m.z() * kKm, s.velocity_mps.z() * kKm, s.acceleration_mps2.z() * kKm,
              static_cast<double>(s.iodn)});
 }
@@ -232,7 +240,8 @@ void write_klobuchar(std::string& out, const char* alpha_name, const char* beta_
                      const KlobucharCoefficients& k) {
   auto line = [&](const char* name, const std::array<double, 4>& v) {
     char buffer[96];
-    std::snprintf(buffer, sizeof buffer, "%-4s %12.4E%12.4E%12.4E%12.4E", name, v[0], v[1], v[2], v[3]);
+    std::snprintf(buffer, sizeof buffer, "%-4s %12.4E%12.4E%12.4E%12.4E", name, v[0], v[1], v[2],
+                  v[3]);
     out += header_line(buffer, "IONOSPHERIC CORR");
   };
   line(alpha_name, k.alpha);
@@ -251,8 +260,8 @@ void write_time_correction(std::string& out, const TimeSystemCorrection& c) {
     sow = 0;
   }
   char buffer[96];
-  std::snprintf(buffer, sizeof buffer, "%-4.4s %17.10E%16.9E %6ld %4d", c.type.c_str(), c.a0_s, c.a1_s_per_s, sow,
-                week);
+  std::snprintf(buffer, sizeof buffer, "%-4.4s %17.10E%16.9E %6ld %4d", c.type.c_str(), c.a0_s,
+                c.a1_s_per_s, sow, week);
   out += header_line(buffer, "TIME SYSTEM CORR");
 }
 
@@ -285,10 +294,11 @@ std::string format_rinex3_nav(const NavigationData& data, const RinexNavWriteOpt
   out.reserve(80 * (12 + 8 * records.size()));
   out += header_line("     3.04           N: GNSS NAV DATA    M: MIXED", "RINEX VERSION / TYPE");
   {
-    const std::string date = options.creation_date.empty() ? format_utc_now() : options.creation_date;
+    const std::string date =
+        options.creation_date.empty() ? format_utc_now() : options.creation_date;
     char buffer[96];
-    std::snprintf(buffer, sizeof buffer, "%-20.20s%-20.20s%-20.20s", options.program.c_str(), options.run_by.c_str(),
-                  date.c_str());
+    std::snprintf(buffer, sizeof buffer, "%-20.20s%-20.20s%-20.20s", options.program.c_str(),
+                  options.run_by.c_str(), date.c_str());
     out += header_line(buffer, "PGM / RUN BY / DATE");
   }
   if (omitted > 0) {
@@ -317,9 +327,15 @@ std::string format_rinex3_nav(const NavigationData& data, const RinexNavWriteOpt
 
   for (const RecordRef& r : records) {
     switch (r.kind) {
-      case 0: write_kepler(out, data.kepler[r.index]); break;
-      case 1: write_glonass(out, data.glonass[r.index]); break;
-      default: write_sbas(out, data.sbas[r.index]); break;
+      case 0:
+        write_kepler(out, data.kepler[r.index]);
+        break;
+      case 1:
+        write_glonass(out, data.glonass[r.index]);
+        break;
+      default:
+        write_sbas(out, data.sbas[r.index]);
+        break;
     }
   }
   return out;

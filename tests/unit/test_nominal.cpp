@@ -3,7 +3,6 @@
 // designs: satellites per system, orbit radius, inclination, period, GEO longitudes, IGSO equator
 // crossings, the QZSS figure-8 centre and the GPS slot table at its epoch.
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,7 +19,9 @@ namespace {
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-GnssTime test_start() { return GnssTime::from_calendar(CalendarTime{2020, 6, 25, 0, 0, 0.0}, TimeScale::kGpst); }
+GnssTime test_start() {
+  return GnssTime::from_calendar(CalendarTime{2020, 6, 25, 0, 0, 0.0}, TimeScale::kGpst);
+}
 
 const NavigationData& day_data() {
   static const NavigationData data = make_nominal_constellation(test_start(), 86400.0).value();
@@ -34,10 +35,14 @@ struct Earth {
 Earth earth_of(GnssSystem system) {
   namespace k = constants;
   switch (system) {
-    case GnssSystem::kGalileo: return {k::kGmGalileo_m3ps2, k::kEarthRotationRateGalileo_radps};
-    case GnssSystem::kBeiDou: return {k::kGmBeiDou_m3ps2, k::kEarthRotationRateBeiDou_radps};
-    case GnssSystem::kGlonass: return {k::kGmGlonass_m3ps2, k::kEarthRotationRateGlonass_radps};
-    default: return {k::kGmGps_m3ps2, k::kEarthRotationRateGps_radps};
+    case GnssSystem::kGalileo:
+      return {k::kGmGalileo_m3ps2, k::kEarthRotationRateGalileo_radps};
+    case GnssSystem::kBeiDou:
+      return {k::kGmBeiDou_m3ps2, k::kEarthRotationRateBeiDou_radps};
+    case GnssSystem::kGlonass:
+      return {k::kGmGlonass_m3ps2, k::kEarthRotationRateGlonass_radps};
+    default:
+      return {k::kGmGps_m3ps2, k::kEarthRotationRateGps_radps};
   }
 }
 
@@ -73,7 +78,8 @@ double latitude_deg(const Eigen::Vector3d& r) { return std::asin(r.z() / r.norm(
 TEST(NominalConstellation, SatellitesPerSystem) {
   std::map<GnssSystem, std::set<int>> satellites;
   for (const auto& e : day_data().kepler) satellites[e.satellite.system].insert(e.satellite.number);
-  for (const auto& g : day_data().glonass) satellites[g.satellite.system].insert(g.satellite.number);
+  for (const auto& g : day_data().glonass)
+    satellites[g.satellite.system].insert(g.satellite.number);
   EXPECT_EQ(satellites[GnssSystem::kGps].size(), 24u);
   EXPECT_EQ(satellites[GnssSystem::kGalileo].size(), 24u);
   EXPECT_EQ(satellites[GnssSystem::kBeiDou].size(), 30u);
@@ -98,16 +104,20 @@ TEST(NominalConstellation, RadiusInclinationAndPeriodOfEveryRecord) {
   auto design = [](const SatelliteId& sat) -> Design {
     constexpr double kSidereal_s = 86164.09;
     switch (sat.system) {
-      case GnssSystem::kGps: return {26559.7, 55.0, 11 * 3600 + 58 * 60, 60};  // 11 h 58 min
-      case GnssSystem::kGalileo: return {29600.0, 56.0, 14 * 3600 + 4 * 60, 60};  // 14 h 4 min
+      case GnssSystem::kGps:
+        return {26559.7, 55.0, 11 * 3600 + 58 * 60, 60};  // 11 h 58 min
+      case GnssSystem::kGalileo:
+        return {29600.0, 56.0, 14 * 3600 + 4 * 60, 60};  // 14 h 4 min
       case GnssSystem::kBeiDou:
         if (sat.number >= 59) return {42164.0, 0.0, kSidereal_s, 1};
         if (sat.number >= 38 && sat.number <= 40) return {42164.0, 55.0, kSidereal_s, 1};
         return {27906.0, 55.0, 12 * 3600 + 53 * 60, 60};  // 12 h 53 min
-      case GnssSystem::kQzss: return {42164.0, sat.number == 7 ? 0.0 : 41.0, kSidereal_s, 1};
+      case GnssSystem::kQzss:
+        return {42164.0, sat.number == 7 ? 0.0 : 41.0, kSidereal_s, 1};
       case GnssSystem::kNavic:
         return {42164.0, (sat.number == 3 || sat.number >= 6) ? 0.0 : 29.0, kSidereal_s, 1};
-      default: return {};
+      default:
+        return {};
     }
   };
   size_t checked = 0;
@@ -118,7 +128,8 @@ TEST(NominalConstellation, RadiusInclinationAndPeriodOfEveryRecord) {
       const GnssTime t = record.toe + dt_s;
       const SatelliteState s = evaluate_kepler(record, t);
       const Elements el = elements(s, record.satellite.system);
-      const std::string what = record.satellite.to_string() + " toe " + record.toe.to_iso8601(TimeScale::kGpst, 0);
+      const std::string what =
+          record.satellite.to_string() + " toe " + record.toe.to_iso8601(TimeScale::kGpst, 0);
       EXPECT_NEAR(el.inclination_deg, d.i_deg, 0.01) << what;
       if (qzo) {
         EXPECT_NEAR(record.sqrt_a_sqrtm * record.sqrt_a_sqrtm / 1e3, d.a_km, 1.0) << what;
@@ -127,8 +138,10 @@ TEST(NominalConstellation, RadiusInclinationAndPeriodOfEveryRecord) {
         EXPECT_NEAR(el.radius_m / 1e3, d.a_km, 1.0) << what;  // circular orbits
         if (d.i_deg > 0.0) {
           // Period from the rate of the argument of latitude over one minute.
-          const Elements later = elements(evaluate_kepler(record, t + 60.0), record.satellite.system);
-          const double du_deg = wrap_deg(later.argument_of_latitude_deg - el.argument_of_latitude_deg);
+          const Elements later =
+              elements(evaluate_kepler(record, t + 60.0), record.satellite.system);
+          const double du_deg =
+              wrap_deg(later.argument_of_latitude_deg - el.argument_of_latitude_deg);
           EXPECT_NEAR(360.0 * 60.0 / du_deg, d.period_s, d.period_tol_s) << what;
         }
       }
@@ -142,9 +155,9 @@ TEST(NominalConstellation, SynchronousOrbitsRepeatAfterOneSiderealDay) {
   const BroadcastEphemerides eph(day_data());
   for (const auto& sat : eph.satellites()) {
     const bool synchronous = sat.system == GnssSystem::kQzss || sat.system == GnssSystem::kNavic ||
-                             (sat.system == GnssSystem::kBeiDou && sat.number >= 38 && sat.number != 41 &&
-                              sat.number != 42 && sat.number != 43 && sat.number != 44 && sat.number != 45 &&
-                              sat.number != 46);
+                             (sat.system == GnssSystem::kBeiDou && sat.number >= 38 &&
+                              sat.number != 41 && sat.number != 42 && sat.number != 43 &&
+                              sat.number != 44 && sat.number != 45 && sat.number != 46);
     if (!synchronous) continue;
     for (double t_s : {0.0, 5000.0}) {
       const auto a = eph.state(sat, test_start() + t_s).value();
@@ -157,8 +170,9 @@ TEST(NominalConstellation, SynchronousOrbitsRepeatAfterOneSiderealDay) {
 TEST(NominalConstellation, GeostationarySatellitesStayOverTheirLongitude) {
   const BroadcastEphemerides eph(day_data());
   const std::map<SatelliteId, double> longitudes = {
-      {{GnssSystem::kBeiDou, 59}, 140.0}, {{GnssSystem::kBeiDou, 60}, 80.0}, {{GnssSystem::kBeiDou, 61}, 110.5},
-      {{GnssSystem::kQzss, 7}, 127.0},    {{GnssSystem::kNavic, 3}, 83.0},   {{GnssSystem::kNavic, 6}, 32.5},
+      {{GnssSystem::kBeiDou, 59}, 140.0}, {{GnssSystem::kBeiDou, 60}, 80.0},
+      {{GnssSystem::kBeiDou, 61}, 110.5}, {{GnssSystem::kQzss, 7}, 127.0},
+      {{GnssSystem::kNavic, 3}, 83.0},    {{GnssSystem::kNavic, 6}, 32.5},
       {{GnssSystem::kNavic, 7}, 131.5}};
   for (const auto& [sat, lon_deg] : longitudes) {
     double worst_deg = 0.0;
@@ -178,8 +192,9 @@ TEST(NominalConstellation, GeostationarySatellitesStayOverTheirLongitude) {
 TEST(NominalConstellation, IgsoCrossTheEquatorAtTheirLongitude) {
   const BroadcastEphemerides eph(day_data());
   const std::map<SatelliteId, double> crossings = {
-      {{GnssSystem::kBeiDou, 38}, 118.0}, {{GnssSystem::kBeiDou, 39}, 118.0}, {{GnssSystem::kBeiDou, 40}, 118.0},
-      {{GnssSystem::kNavic, 1}, 55.0},    {{GnssSystem::kNavic, 2}, 55.0},    {{GnssSystem::kNavic, 4}, 111.75},
+      {{GnssSystem::kBeiDou, 38}, 118.0}, {{GnssSystem::kBeiDou, 39}, 118.0},
+      {{GnssSystem::kBeiDou, 40}, 118.0}, {{GnssSystem::kNavic, 1}, 55.0},
+      {{GnssSystem::kNavic, 2}, 55.0},    {{GnssSystem::kNavic, 4}, 111.75},
       {{GnssSystem::kNavic, 5}, 111.75}};
   for (const auto& [sat, lon_deg] : crossings) {
     int found = 0;
@@ -188,7 +203,8 @@ TEST(NominalConstellation, IgsoCrossTheEquatorAtTheirLongitude) {
       const Eigen::Vector3d r = eph.state(sat, test_start() + t_s).value().position_m;
       if ((previous.z() < 0.0) != (r.z() < 0.0)) {
         // Both nodes of a circular synchronous orbit lie at the figure-8 crossing.
-        const Eigen::Vector3d at = previous + (r - previous) * (previous.z() / (previous.z() - r.z()));
+        const Eigen::Vector3d at =
+            previous + (r - previous) * (previous.z() / (previous.z() - r.z()));
         EXPECT_NEAR(wrap_deg(longitude_deg(at) - lon_deg), 0.0, 0.1) << sat.to_string();
         ++found;
       }
@@ -223,7 +239,8 @@ TEST(NominalConstellation, QuasiZenithFigureEightCentredOn135East) {
 
 TEST(NominalConstellation, GpsSlotsMatchTheSpsTableAtItsEpoch) {
   // GPS SPS PS baseline 24-slot table at 1993-07-01 00:00 UTC; Greenwich hour angle 279.06 deg.
-  const GnssTime epoch = GnssTime::from_calendar(CalendarTime{1993, 7, 1, 0, 0, 0.0}, TimeScale::kUtc);
+  const GnssTime epoch =
+      GnssTime::from_calendar(CalendarTime{1993, 7, 1, 0, 0, 0.0}, TimeScale::kUtc);
   const auto data = make_nominal_constellation(epoch, 0.0);
   ASSERT_TRUE(data.ok());
   const BroadcastEphemerides eph(*data);
@@ -232,15 +249,18 @@ TEST(NominalConstellation, GpsSlotsMatchTheSpsTableAtItsEpoch) {
     double raan_deg, arg_lat_deg;
   };
   // A1, A3, B3, C4, D3, E2, F4 (PRNs in slot order A1..F4 = G01..G24).
-  for (const Slot& slot : {Slot{1, 272.847, 268.126}, Slot{3, 272.847, 11.676}, Slot{7, 332.847, 309.976},
-                           Slot{12, 32.847, 241.556}, Slot{15, 92.847, 35.156}, Slot{18, 152.847, 302.596},
-                           Slot{24, 212.847, 135.346}}) {
+  for (const Slot& slot :
+       {Slot{1, 272.847, 268.126}, Slot{3, 272.847, 11.676}, Slot{7, 332.847, 309.976},
+        Slot{12, 32.847, 241.556}, Slot{15, 92.847, 35.156}, Slot{18, 152.847, 302.596},
+        Slot{24, 212.847, 135.346}}) {
     const SatelliteId sat{GnssSystem::kGps, static_cast<std::uint8_t>(slot.prn)};
     const auto s = eph.state(sat, epoch);
     ASSERT_TRUE(s.ok()) << s.error().message;
     const Elements el = elements(*s, GnssSystem::kGps);
-    EXPECT_NEAR(wrap_deg(el.node_longitude_deg + 279.06 - slot.raan_deg), 0.0, 0.01) << sat.to_string();
-    EXPECT_NEAR(wrap_deg(el.argument_of_latitude_deg - slot.arg_lat_deg), 0.0, 0.01) << sat.to_string();
+    EXPECT_NEAR(wrap_deg(el.node_longitude_deg + 279.06 - slot.raan_deg), 0.0, 0.01)
+        << sat.to_string();
+    EXPECT_NEAR(wrap_deg(el.argument_of_latitude_deg - slot.arg_lat_deg), 0.0, 0.01)
+        << sat.to_string();
   }
 }
 
@@ -249,7 +269,8 @@ TEST(NominalConstellation, GpsGroundTrackRepeatsEveryTwoRevolutions) {
   const auto& first = day_data().kepler.front();
   ASSERT_EQ(first.satellite, (SatelliteId{GnssSystem::kGps, 1}));
   const double a_m = first.sqrt_a_sqrtm * first.sqrt_a_sqrtm;
-  const double repeat_s = 2.0 * 2.0 * 3.14159265358979 * std::sqrt(a_m * a_m * a_m / constants::kGmGps_m3ps2);
+  const double repeat_s =
+      2.0 * 2.0 * 3.14159265358979 * std::sqrt(a_m * a_m * a_m / constants::kGmGps_m3ps2);
   const GnssTime t = test_start() + 3000.0;
   const auto a = eph.state(first.satellite, t).value();
   const auto b = eph.state(first.satellite, t + repeat_s).value();
@@ -263,7 +284,8 @@ TEST(NominalConstellation, CoversTheSpanWithMargins) {
   for (const auto& sat : satellites) {
     for (double t_s = -7200.0; t_s <= 86400.0 + 7200.0; t_s += 900.0) {
       const auto s = eph.state(sat, test_start() + t_s);
-      EXPECT_TRUE(s.ok()) << sat.to_string() << " at " << t_s << " s: " << (s.ok() ? "" : s.error().message);
+      EXPECT_TRUE(s.ok()) << sat.to_string() << " at " << t_s
+                          << " s: " << (s.ok() ? "" : s.error().message);
     }
   }
 }
@@ -308,8 +330,9 @@ TEST(NominalConstellation, ConsecutiveRecordsDescribeOneOrbit) {
 }
 
 TEST(NominalConstellation, GlonassSlotsChannelsAndOrbit) {
-  const std::map<int, int> expected_channel = {{1, 1},   {2, -4}, {3, 5},  {4, 6},  {9, -2}, {10, -7},
-                                               {11, 0},  {12, -1}, {17, 4}, {18, -3}, {19, 3}, {20, 2}};
+  const std::map<int, int> expected_channel = {{1, 1},  {2, -4},  {3, 5},  {4, 6},
+                                               {9, -2}, {10, -7}, {11, 0}, {12, -1},
+                                               {17, 4}, {18, -3}, {19, 3}, {20, 2}};
   std::map<int, int> channel;
   double worst_radius_km = 0.0;
   for (const auto& g : day_data().glonass) {
@@ -347,11 +370,19 @@ TEST(NominalConstellation, MessagesAndGroupDelays) {
         EXPECT_EQ(e.data_source, 258u);
         EXPECT_EQ(e.group_delays.bgd_e1e5b_s, 0.0);
         break;
-      case NavMessage::kBeiDouD1: ++d1; EXPECT_LT(e.satellite.number, 59); break;
-      case NavMessage::kBeiDouD2: ++d2; EXPECT_GE(e.satellite.number, 59); break;
-      default: break;
+      case NavMessage::kBeiDouD1:
+        ++d1;
+        EXPECT_LT(e.satellite.number, 59);
+        break;
+      case NavMessage::kBeiDouD2:
+        ++d2;
+        EXPECT_GE(e.satellite.number, 59);
+        break;
+      default:
+        break;
     }
-    for (double gd : {e.group_delays.tgd_s, e.group_delays.bgd_e1e5a_s, e.group_delays.tgd1_s, e.group_delays.tgd2_s}) {
+    for (double gd : {e.group_delays.tgd_s, e.group_delays.bgd_e1e5a_s, e.group_delays.tgd1_s,
+                      e.group_delays.tgd2_s}) {
       EXPECT_LE(std::fabs(gd), 1.01e-8);
     }
     EXPECT_LE(std::fabs(e.af0_s), 3.1e-4);

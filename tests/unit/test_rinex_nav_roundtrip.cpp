@@ -24,19 +24,21 @@ constexpr double kRelative = 1e-11;
 #define EXPECT_REL(a, b) EXPECT_PRED_FORMAT2(near_rel, a, b)
 
 int system_rank(GnssSystem system) {
-  return static_cast<int>(std::find(kAllSystems.begin(), kAllSystems.end(), system) - kAllSystems.begin());
+  return static_cast<int>(std::find(kAllSystems.begin(), kAllSystems.end(), system) -
+                          kAllSystems.begin());
 }
 
 // The order the writer uses: system, satellite, Galileo I/NAV before F/NAV, toe (stable).
 void sort_like_writer(NavigationData& data) {
-  std::stable_sort(data.kepler.begin(), data.kepler.end(), [](const KeplerEphemeris& a, const KeplerEphemeris& b) {
-    const auto key = [](const KeplerEphemeris& e) {
-      return std::make_tuple(system_rank(e.satellite.system), e.satellite.number,
-                             e.message == NavMessage::kGalileoFnav ? 1 : 0);
-    };
-    if (key(a) != key(b)) return key(a) < key(b);
-    return a.toe < b.toe;
-  });
+  std::stable_sort(data.kepler.begin(), data.kepler.end(),
+                   [](const KeplerEphemeris& a, const KeplerEphemeris& b) {
+                     const auto key = [](const KeplerEphemeris& e) {
+                       return std::make_tuple(system_rank(e.satellite.system), e.satellite.number,
+                                              e.message == NavMessage::kGalileoFnav ? 1 : 0);
+                     };
+                     if (key(a) != key(b)) return key(a) < key(b);
+                     return a.toe < b.toe;
+                   });
   auto by_satellite_toe = [](const auto& a, const auto& b) {
     if (a.satellite != b.satellite) return a.satellite < b.satellite;
     return a.toe < b.toe;
@@ -46,7 +48,8 @@ void sort_like_writer(NavigationData& data) {
 }
 
 void expect_same_kepler(const KeplerEphemeris& a, const KeplerEphemeris& b) {
-  SCOPED_TRACE(a.satellite.to_string() + " toe " + a.toe.to_iso8601(TimeScale::kGpst, 0) + " from " + a.source);
+  SCOPED_TRACE(a.satellite.to_string() + " toe " + a.toe.to_iso8601(TimeScale::kGpst, 0) +
+               " from " + a.source);
   EXPECT_EQ(a.satellite, b.satellite);
   EXPECT_EQ(a.message, b.message);
   EXPECT_EQ(a.toc, b.toc);
@@ -92,7 +95,8 @@ void expect_same_vector(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 void expect_same_glonass(const GlonassEphemeris& a, const GlonassEphemeris& b) {
-  SCOPED_TRACE(a.satellite.to_string() + " t_b " + a.toe.to_iso8601(TimeScale::kUtc, 0) + " from " + a.source);
+  SCOPED_TRACE(a.satellite.to_string() + " t_b " + a.toe.to_iso8601(TimeScale::kUtc, 0) + " from " +
+               a.source);
   EXPECT_EQ(a.satellite, b.satellite);
   EXPECT_EQ(a.toe, b.toe);
   EXPECT_REL(a.minus_tau_n_s, b.minus_tau_n_s);
@@ -108,7 +112,8 @@ void expect_same_glonass(const GlonassEphemeris& a, const GlonassEphemeris& b) {
 }
 
 void expect_same_sbas(const SbasEphemeris& a, const SbasEphemeris& b) {
-  SCOPED_TRACE(a.satellite.to_string() + " t0 " + a.toe.to_iso8601(TimeScale::kGpst, 0) + " from " + a.source);
+  SCOPED_TRACE(a.satellite.to_string() + " t0 " + a.toe.to_iso8601(TimeScale::kGpst, 0) + " from " +
+               a.source);
   EXPECT_EQ(a.satellite, b.satellite);
   EXPECT_EQ(a.toe, b.toe);
   EXPECT_REL(a.agf0_s, b.agf0_s);
@@ -143,9 +148,12 @@ void expect_round_trip(NavigationData original) {
   ASSERT_EQ(copy.kepler.size(), original.kepler.size());
   ASSERT_EQ(copy.glonass.size(), original.glonass.size());
   ASSERT_EQ(copy.sbas.size(), original.sbas.size());
-  for (size_t i = 0; i < original.kepler.size(); ++i) expect_same_kepler(original.kepler[i], copy.kepler[i]);
-  for (size_t i = 0; i < original.glonass.size(); ++i) expect_same_glonass(original.glonass[i], copy.glonass[i]);
-  for (size_t i = 0; i < original.sbas.size(); ++i) expect_same_sbas(original.sbas[i], copy.sbas[i]);
+  for (size_t i = 0; i < original.kepler.size(); ++i)
+    expect_same_kepler(original.kepler[i], copy.kepler[i]);
+  for (size_t i = 0; i < original.glonass.size(); ++i)
+    expect_same_glonass(original.glonass[i], copy.glonass[i]);
+  for (size_t i = 0; i < original.sbas.size(); ++i)
+    expect_same_sbas(original.sbas[i], copy.sbas[i]);
 
   expect_same_klobuchar(original.ionosphere.gps, copy.ionosphere.gps);
   expect_same_klobuchar(original.ionosphere.qzss, copy.ionosphere.qzss);
@@ -154,8 +162,10 @@ void expect_round_trip(NavigationData original) {
   ASSERT_EQ(original.ionosphere.galileo.has_value(), copy.ionosphere.galileo.has_value());
   if (original.ionosphere.galileo) {
     EXPECT_REL(original.ionosphere.galileo->ai0_sfu, copy.ionosphere.galileo->ai0_sfu);
-    EXPECT_REL(original.ionosphere.galileo->ai1_sfu_per_deg, copy.ionosphere.galileo->ai1_sfu_per_deg);
-    EXPECT_REL(original.ionosphere.galileo->ai2_sfu_per_deg2, copy.ionosphere.galileo->ai2_sfu_per_deg2);
+    EXPECT_REL(original.ionosphere.galileo->ai1_sfu_per_deg,
+               copy.ionosphere.galileo->ai1_sfu_per_deg);
+    EXPECT_REL(original.ionosphere.galileo->ai2_sfu_per_deg2,
+               copy.ionosphere.galileo->ai2_sfu_per_deg2);
   }
   ASSERT_EQ(copy.time_corrections.size(), original.time_corrections.size());
   for (size_t i = 0; i < original.time_corrections.size(); ++i) {
@@ -182,7 +192,8 @@ TEST(RinexNavRoundTrip, RealEsbcMixedFile) {
 }
 
 TEST(RinexNavRoundTrip, NominalConstellation) {
-  const GnssTime start = GnssTime::from_calendar(CalendarTime{2020, 6, 27, 23, 0, 0.0}, TimeScale::kGpst);
+  const GnssTime start =
+      GnssTime::from_calendar(CalendarTime{2020, 6, 27, 23, 0, 0.0}, TimeScale::kGpst);
   // Across the GPS week change of Saturday/Sunday, where transmission times turn negative.
   auto data = make_nominal_constellation(start, 3 * 3600.0);
   ASSERT_TRUE(data.ok()) << data.error().message;

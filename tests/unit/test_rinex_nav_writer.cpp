@@ -188,7 +188,8 @@ GlonassEphemeris glonass_r01() {
   g.toe = GnssTime::from_calendar(CalendarTime{2020, 6, 24, 23, 15, 0.0}, TimeScale::kUtc);
   g.minus_tau_n_s = 6.355904042721e-05;
   g.gamma_n = 0.0;
-  g.message_frame_time_s = 82800.0;  // 23:00:00 of the UTC day: 342000 s of the UTC week (Wednesday)
+  g.message_frame_time_s =
+      82800.0;  // 23:00:00 of the UTC day: 342000 s of the UTC week (Wednesday)
   g.position_m = {1.090894238281e+07, -2.885726074219e+06, 2.288353955078e+07};
   g.velocity_mps = {1.407806396484e+03, 2.795855522156e+03, -3.169984817505e+02};
   g.acceleration_mps2 = {-1.862645149231e-06, -0.0, -2.793967723846e-06};
@@ -247,16 +248,18 @@ KeplerEphemeris navic_i05() {
 NavigationData all_systems() {
   NavigationData data;
   // Deliberately out of order: the writer sorts by system, satellite, message and toe.
-  data.kepler = {navic_i05(), galileo_e01(false), qzss_j01(), beidou_c05(), galileo_e01(true), gps_g01()};
+  data.kepler = {navic_i05(),  galileo_e01(false), qzss_j01(),
+                 beidou_c05(), galileo_e01(true),  gps_g01()};
   data.glonass = {glonass_r01()};
   data.sbas = {sbas_s23()};
   data.ionosphere.galileo = NequickGCoefficients{2.8250e+01, 7.8125e-03, 1.0071e-02};
   data.ionosphere.gps = KlobucharCoefficients{{4.6566e-09, 1.4901e-08, -5.9605e-08, -1.1921e-07},
                                               {8.1920e+04, 9.8304e+04, -6.5536e+04, -5.2429e+05}};
-  data.ionosphere.beidou = KlobucharCoefficients{{1.1176e-08, 2.9802e-08, -4.1723e-07, 6.5565e-07},
-                                                 {1.4131e+05, -5.2429e+05, 1.6384e+06, -4.5875e+05}};
-  data.time_corrections.push_back(
-      {"GAGP", 2.3574102670e-09, 3.996802889e-15, GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600), ""});
+  data.ionosphere.beidou =
+      KlobucharCoefficients{{1.1176e-08, 2.9802e-08, -4.1723e-07, 6.5565e-07},
+                            {1.4131e+05, -5.2429e+05, 1.6384e+06, -4.5875e+05}};
+  data.time_corrections.push_back({"GAGP", 2.3574102670e-09, 3.996802889e-15,
+                                   GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600), ""});
   data.time_corrections.push_back(
       {"BDUT", -2.793967723846e-09, 0.0, GnssTime::from_week_tow(TimeScale::kBdt, 755, 14), ""});
   data.time_corrections.push_back({"GLUT", 1.8626451492e-09, 0.0, GnssTime{}, ""});
@@ -289,7 +292,8 @@ TEST(RinexNavWriter, HeaderLinesInColumns) {
       "                                                            END OF HEADER",
   };
   ASSERT_GE(lines.size(), expected.size());
-  for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(lines[i], expected[i]) << "header line " << i + 1;
+  for (size_t i = 0; i < expected.size(); ++i)
+    EXPECT_EQ(lines[i], expected[i]) << "header line " << i + 1;
 }
 
 TEST(RinexNavWriter, GpsRecordMatchesRealFile) {
@@ -425,9 +429,9 @@ TEST(RinexNavWriter, RecordsOrderedBySystemThenSatellite) {
 TEST(RinexNavWriter, FillsWeekAndDataSourceOfHandMadeRecords) {
   NavigationData data;
   KeplerEphemeris e = galileo_e01(false);
-  e.week = 0;          // not given: from toe
+  e.week = 0;  // not given: from toe
   e.toe_sow = 0.0;
-  e.data_source = 0;   // not given: F/NAV -> 258
+  e.data_source = 0;  // not given: F/NAV -> 258
   data.kepler.push_back(e);
   KeplerEphemeris c = beidou_c05();
   c.week = 0;
@@ -441,7 +445,7 @@ TEST(RinexNavWriter, FillsWeekAndDataSourceOfHandMadeRecords) {
   const auto beidou = record(text, "C05 ", 8);
   ASSERT_EQ(beidou.size(), 8u);
   EXPECT_EQ(beidou[3].substr(0, 23), "     3.384000000000E+05");  // BDT seconds of week
-  EXPECT_EQ(beidou[5].substr(42, 19), " 7.550000000000E+02");    // BDT week
+  EXPECT_EQ(beidou[5].substr(42, 19), " 7.550000000000E+02");     // BDT week
 }
 
 TEST(RinexNavWriter, LeavesOutCnavRecordsWithAComment) {

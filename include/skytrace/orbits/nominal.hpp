@@ -16,30 +16,30 @@
 //   Galileo  Walker 24/3/1, a = 29600 km, i = 56 deg (Galileo OS SDD, reference constellation);
 //            E01..E24, plane A/B/C = E01-08/E09-16/E17-24; node regression for the 17-revolution /
 //            10-day ground-track repeat. The phase of the pattern against the Earth is arbitrary.
-//   BeiDou   BDS-3 (BeiDou ICD B1I 3.0 / China Satellite Navigation Office constellation page):
+//   BeiDou   BDS-3 as described by the China Satellite Navigation Office:
 //            24 MEO in Walker 24/3/1, a = 27906 km, i = 55 deg, PRNs C19-C30, C32-C37, C41-C46
 //            (13-revolution / 7-day repeat); 3 IGSO C38-C40, a geosynchronous, i = 55 deg, one
 //            figure-8 ground track crossing the equator at 118 E, 120 deg apart; 3 GEO C59 at
 //            140 E, C60 at 80 E, C61 at 110.5 E. GEO records use the BDS-SIS-ICD GEO convention
 //            (elements in a frame tilted by 5 deg) and the D2 message; the others D1.
-//   GLONASS  GLONASS ICD Edition 5.1 (2008): 24 slots in 3 planes 120 deg apart, 8 slots 45 deg apart in
-//            argument of latitude, planes shifted by 15 deg, a = 25510 km, i = 64.8 deg; slots 1-8
-//            plane 1, 9-16 plane 2, 17-24 plane 3, numbered against the direction of motion.
-//            Frequency channels per slot as assigned by the GLONASS IAC (antipodal slots k and k+4
-//            share a channel): 1:+1 2:-4 3:+5 4:+6 9:-2 10:-7 11:0 12:-1 17:+4 18:-3 19:+3 20:+2
-//            (as in the ESBC00DNK 2020-06-25 navigation file).
+//   GLONASS  GLONASS ICD Edition 5.1 (2008): 24 slots in 3 planes 120 deg apart, 8 slots 45 deg
+//            apart in argument of latitude, planes shifted by 15 deg, a = 25510 km, i = 64.8 deg;
+//            slots 1-8 plane 1, 9-16 plane 2, 17-24 plane 3, numbered against the direction of
+//            motion. Frequency channels per slot as assigned by the GLONASS IAC (antipodal slots k
+//            and k+4 share a channel): 1:+1 2:-4 3:+5 4:+6 9:-2 10:-7 11:0 12:-1 17:+4 18:-3 19:+3
+//            20:+2 (as in the ESBC00DNK 2020-06-25 navigation file).
 //            State vectors every 30 min (t_b at hh:15 and hh:45 UTC), lunisolar acceleration 0: the
 //            Keplerian design state at the first t_b (speed trimmed so that the mean radius under
-//            J2 stays the design's), each later state integrated from the
-//            previous record as receivers do (PZ-90 with J2, evaluate_glonass), so neighbouring
-//            records join within millimetres (design states at every t_b would jump by ~15 m at
-//            each switch). The GLONASS orbits therefore follow the design at the start of the span
-//            and drift from it by J2 (node -0.03 deg/day) over it.
+//            J2 is the design's; the radius then stays within 0.92 km of it), each later state
+//            integrated from the previous record as receivers do (PZ-90 with J2, evaluate_glonass),
+//            so neighbouring records join within a millimetre (design states at every t_b would
+//            jump by ~15 m at each switch). The GLONASS orbits follow the design at the start of
+//            the span and drift from it by J2 (node about -0.03 deg/day) over it.
 //   QZSS     qzss.go.jp "Quasi-Zenith Satellite Orbit" and JAXA's QZS-1 orbit report (2010-09-27):
 //            3 quasi-zenith orbits J01-J03 (a geosynchronous, e = 0.075, i = 41 deg, argument of
-//            perigee 270 deg, figure-8 centred on 135 E, 8 h apart on one ground track) and the QZS-3
-//            GEO J07 at 127 E.
-//   NavIC    NavIC SPS ICD (ISRO, 2017), 2: GEO I03 at 83 E, I06 at 32.5 E, I07 at 131.5 E; IGSO
+//            perigee 270 deg, figure-8 centred on 135 E, 8 h apart on one ground track) and the
+//            QZS-3 GEO J07 at 127 E.
+//   NavIC    NavIC SPS ICD (ISRO, 2017): GEO I03 at 83 E, I06 at 32.5 E, I07 at 131.5 E; IGSO
 //            (i = 29 deg) I01, I02 crossing the equator at 55 E and I04, I05 at 111.75 E. ISRO has
 //            published no phasing of the two IGSOs sharing a ground track; they are a quarter of a
 //            sidereal day apart here.
@@ -48,7 +48,6 @@
 #pragma once
 
 #include <Eigen/Core>
-
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -74,8 +73,9 @@ struct NominalOrbit {
   double inclination_rad = 0.0;
   double argument_of_perigee_rad = 0.0;
   GnssTime reference_epoch;
-  double node_longitude_rad = 0.0;  // Earth-fixed longitude of the ascending node at reference_epoch
-  double mean_anomaly_rad = 0.0;    // at reference_epoch
+  // Earth-fixed longitude of the ascending node and mean anomaly at reference_epoch.
+  double node_longitude_rad = 0.0;
+  double mean_anomaly_rad = 0.0;
   double node_rate_rad_per_s = 0.0;  // inertial rate of the node (broadcast OMEGA DOT)
   double gm_m3ps2 = 0.0;
   double earth_rotation_radps = 0.0;
@@ -101,7 +101,8 @@ struct NominalConstellationOptions {
   std::vector<GnssSystem> systems = nominal_systems();
   // Seed of the per-satellite clock polynomials and group delays (same seed, same records).
   std::uint64_t seed = 1;
-  // Records cover [start - margin, start + duration + margin].
+  // Records cover [start - margin, start + duration + margin] (Galileo from its last toe before,
+  // as a Galileo record is only used after its toe).
   double margin_s = 7200.0;
 };
 
@@ -111,7 +112,7 @@ struct NominalConstellationOptions {
 // +-0.3 ms, drift within +-5e-12 s/s, continuous across records) and group delays within +-10 ns;
 // GPS Klobuchar coefficients and GPS - UTC of `start`. Errors: a non-finite or negative duration
 // or margin, a span longer than 366 days, or SBAS among the systems.
-[[nodiscard]] Result<NavigationData> make_nominal_constellation(const GnssTime& start, double duration_s,
-                                                                const NominalConstellationOptions& options = {});
+[[nodiscard]] Result<NavigationData> make_nominal_constellation(
+    const GnssTime& start, double duration_s, const NominalConstellationOptions& options = {});
 
 }  // namespace skytrace::orbits
