@@ -736,6 +736,17 @@ TEST(RinexNavReaderErrors, Rinex4TruncatedAndMismatchedRecords) {
   EXPECT_EQ(e.message, "t.rnx:3: unknown satellite system letter 'X'");
 }
 
+TEST(RinexNavReaderErrors, ExtraBroadcastOrbitLine) {
+  const std::string extra = "     1.000000000000E+00\n";
+  Error e = parse_error(kMinimalHeader + kG05 + extra);
+  EXPECT_EQ(e.message, "t.rnx:11: broadcast-orbit line outside a record");
+  const std::string header4 =
+      "     4.00           N: GNSS NAV DATA    M: MIXED            RINEX VERSION / TYPE\n"
+      "                                                            END OF HEADER\n";
+  e = parse_error(header4 + "> EPH G05 LNAV\n" + kG05 + extra);
+  EXPECT_EQ(e.message, "t.rnx:12: record of G05 has 9 lines, expected 8");
+}
+
 TEST(RinexNavReaderErrors, Rinex2TruncatedGlonassRecord) {
   const std::string text(kGlonass201);
   const Error e = parse_error(first_lines(text, 6), "brdc.16g");
