@@ -507,8 +507,22 @@ Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const Satelli
   };
   const double max_window = kepler_max_window_s_.at(satellite);
   if (const KeplerEphemeris* found = select_nearest(data_.kepler, it->second, t, max_window, accept)) return found;
+  const std::string_view wanted = message ? to_string(*message) : "";
   const auto matches = [&](const KeplerEphemeris& e) { return !message || e.message == *message; };
-  return explain_no_record(data_.kepler, it->second, satellite, t, message ? to_string(*message) : "", matches);
+  if (toe_must_be_past) {
+    const auto matches_past = [&](const KeplerEphemeris& e) { return matches(e) && e.toe < t; };
+    const auto& indices = it->second;
+    const bool any_match = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches(data_.kepler[i]); });
+    const bool any_past = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches_past(data_.kepler[i]); });
+    if (any_match && !any_past) {
+      return make_error(ErrorCode::kOutOfRange, "no " + std::string(wanted) + (wanted.empty() ? "" : " ") +
+                                                    "ephemeris for " + satellite.to_string() + " at " + format_time(t) +
+                                                    " GPST: every record has its toe at or after that time (Galileo data "
+                                                    "sets are transmitted after their toe)");
+    }
+    return explain_no_record(data_.kepler, indices, satellite, t, wanted, matches_past);
+  }
+  return explain_no_record(data_.kepler, it->second, satellite, t, wanted, matches);
 }
 
 Result<const GlonassEphemeris*> BroadcastEphemerides::select_glonass(const SatelliteId& satellite,

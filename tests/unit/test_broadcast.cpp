@@ -662,7 +662,7 @@ TEST(BroadcastSelection, GalileoMessagesFollowTheSignal) {
   data.kepler.push_back(galileo_e01(NavMessage::kGalileoInav));
   const BroadcastEphemerides eph(data);
   const SatelliteId e01{GnssSystem::kGalileo, 1};
-  const GnssTime t = gpst(2020, 6, 25, 12, 10, 0);
+  const GnssTime t = gpst(2020, 6, 25, 12, 11, 0);
   EXPECT_EQ(eph.select_kepler(e01, t).value()->message, NavMessage::kGalileoFnav);  // any: closest
   EXPECT_EQ(eph.select_kepler(e01, t, NavMessage::kGalileoInav).value()->message, NavMessage::kGalileoInav);
 
@@ -693,6 +693,34 @@ TEST(BroadcastSelection, GalileoMessagesFollowTheSignal) {
   EXPECT_DOUBLE_EQ(only_f.group_delay_for_signal(e01, sig(GnssSystem::kGalileo, '7', 'Q'), t).value(),
                    -1.862645149231e-09 + (gamma17 - 1.0) * 0.0);
   EXPECT_TRUE(only_f.state(e01, t).ok());
+  // Neither message within its window: the error tells why, in terms of any message.
+  const auto stale = only_f.state_for_signal(e01, sig(GnssSystem::kGalileo, '1', 'C'), t + 5.0 * 3600.0);
+  ASSERT_FALSE(stale.ok());
+  EXPECT_EQ(stale.error().message,
+            "no ephemeris for E01 at 2020-06-25T17:11:00 GPST (nearest healthy record toe 2020-06-25T12:00:00, 5.2 h "
+            "away; limit 4.0 h)");
+}
+
+TEST(BroadcastSelection, GalileoRecordsOnlyAfterTheirToe) {
+  // Galileo data sets are transmitted after their toe (RTKLIB skips toe >= t as well): a record
+  // whose toe is 1 s ahead is not yet available even though it is the closest.
+  NavigationData data;
+  KeplerEphemeris next = galileo_e01(NavMessage::kGalileoInav);
+  next.toe = next.toe + 600.0;
+  next.toc = next.toe;
+  next.iode = 9;
+  data.kepler.push_back(galileo_e01(NavMessage::kGalileoInav));
+  data.kepler.push_back(next);
+  const BroadcastEphemerides eph(data);
+  const SatelliteId e01{GnssSystem::kGalileo, 1};
+  EXPECT_EQ(eph.select_kepler(e01, gpst(2020, 6, 25, 12, 9, 59)).value()->iode, 8);
+  EXPECT_EQ(eph.select_kepler(e01, gpst(2020, 6, 25, 12, 10, 0)).value()->iode, 8);
+  EXPECT_EQ(eph.select_kepler(e01, gpst(2020, 6, 25, 12, 10, 1)).value()->iode, 9);
+  const auto early = eph.select_kepler(e01, gpst(2020, 6, 25, 11, 59, 0), NavMessage::kGalileoInav);
+  ASSERT_FALSE(early.ok());
+  EXPECT_EQ(early.error().message,
+            "no INAV ephemeris for E01 at 2020-06-25T11:59:00 GPST: every record has its toe at or after that time "
+            "(Galileo data sets are transmitted after their toe)");
 }
 
 TEST(BroadcastSelection, GlonassSbasWindowsChannelsAndSatellites) {
