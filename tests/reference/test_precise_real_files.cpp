@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/precise.hpp"
+#include "skytrace/orbits/rinex_nav.hpp"
 #include "test_support.hpp"
 
 namespace skytrace::orbits {
@@ -19,6 +21,7 @@ constexpr const char* kGrgDay = "real/esbc_2020177/GRG0MGXFIN_20201770000_01D_15
 constexpr const char* kGrgClock = "real/esbc_2020177/GRG0MGXFIN_20201770000_01D_30S_CLK.CLK";
 constexpr const char* kCodOrbit = "real/slac_2021118/COD0MGXFIN_20211180000_01D_05M_ORB.SP3";
 constexpr const char* kCodClock = "real/slac_2021118/COD0MGXFIN_20211180000_01D_30S_CLK.CLK";
+constexpr const char* kEsbcNav = "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
 constexpr const char* kGfzOrbit = "real/smartloc_berlin_potsdamer_platz_2016158/gbm19001.sp3";
 
 SatelliteId sat(const char* text) { return SatelliteId::parse(text).value(); }
@@ -426,6 +429,55 @@ TEST(PreciseRealFiles, StateFromSp3AndClockFile) {
   EXPECT_EQ(beyond.error().message,
             "no precise orbit for G05 at 2021-04-29T00:30:00 GPST (the SP3 data cover 2021-04-28T18:00:00 to "
             "2021-04-29T00:00:00 GPST)");
+}
+
+// An independent check of the state as a whole: broadcast ephemerides of the same day (another
+// implementation, another product) must agree at the broadcast accuracy, and the relativistic
+// term -2 r.v / c^2 must match the Keplerian F e sqrt(A) sin E of the broadcast evaluation.
+TEST(PreciseRealFiles, AgreesWithBroadcastEphemerides) {
+  const auto orbit_path = SKYTRACE_SHARED_FILE(kGrgDay);
+  const auto clock_path = SKYTRACE_SHARED_FILE(kGrgClock);
+  const auto nav_path = SKYTRACE_SHARED_FILE(kEsbcNav);
+  auto precise = PreciseEphemerides::create(read_sp3(orbit_path).value(), read_rinex_clock(clock_path).value());
+  ASSERT_TRUE(precise.ok());
+  auto navigation = read_rinex_nav(nav_path);
+  ASSERT_TRUE(navigation.ok()) << navigation.error().message;
+  const BroadcastEphemerides broadcast(std::move(*navigation));
+  std::map<GnssSystem, std::vector<double>> position_m, clock_s, relativistic_s;
+  for (int hour = 1; hour < 24; hour += 3) {
+    const GnssTime t = gpst(2020, 6, 25, hour, 7, 30.0);
+    for (const auto& satellite : precise->satellites()) {
+      auto p = precise->state(satellite, t);
+      auto b = broadcast.state(satellite, t);
+      if (!p.ok() || !b.ok()) continue;
+      position_m[satellite.system].push_back((p->position_m - b->position_m).norm());
+      if (satellite.system == GnssSystem::kGlonass) continue;  // broadcast clock holds the term
+      clock_s[satellite.system].push_back(std::abs(p->clock_bias_s - b->clock_bias_s));
+      relativistic_s[satellite.system].push_back(std::abs(p->relativistic_s - b->relativistic_s));
+    }
+  }
+  for (const auto& [system, values] : position_m) {
+    const auto& clocks = clock_s[system];
+    const auto& relativistic = relativistic_s[system];
+    std::printf("[ measured ] precise vs broadcast, %s: position median %.2f m, max %.2f m (CoM vs APC "
+                "uncorrected)",
+                std::string(system_name(system)).c_str(), percentile(values, 0.5), percentile(values, 1.0));
+    if (!clocks.empty()) {
+      std::printf("; clock median %.2f ns, max %.2f ns; relativistic term max %.3f ns", percentile(clocks, 0.5) * 1e9,
+                  percentile(clocks, 1.0) * 1e9, percentile(relativistic, 1.0) * 1e9);
+    }
+    std::printf("\n");
+    EXPECT_GT(values.size(), 50u);
+    // GLONASS broadcast orbits are a few metres (measured median 2.8 m), GPS and Galileo about 1 m.
+    const bool glonass = system == GnssSystem::kGlonass;
+    EXPECT_LT(percentile(values, 0.5), glonass ? 5.0 : 2.0) << system_name(system);
+    EXPECT_LT(percentile(values, 1.0), glonass ? 15.0 : 10.0) << system_name(system);
+    if (glonass) continue;
+    EXPECT_LT(percentile(clocks, 0.5), 3e-9) << system_name(system);
+    EXPECT_LT(percentile(clocks, 1.0), 15e-9) << system_name(system);
+    EXPECT_LT(percentile(relativistic, 1.0), 0.2e-9) << system_name(system);
+  }
+  EXPECT_EQ(position_m.size(), 3u);
 }
 
 }  // namespace

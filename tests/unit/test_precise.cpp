@@ -1,6 +1,7 @@
 // SP3 and RINEX clock parsing on small inline files, and the interpolation of precise orbits and
 // clocks on synthetic orbits whose exact positions are known.
 #include <Eigen/Geometry>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstdio>
@@ -117,6 +118,22 @@ TEST(Sp3Reader, ParsesHeaderValuesAndMissingMarkers) {
   EXPECT_NEAR((*r03)[0].clock_s, 12.5e-6, 1e-15);
   EXPECT_EQ(data->satellite_count(GnssSystem::kGps), 2u);
   EXPECT_EQ(data->satellite_count(GnssSystem::kGlonass), 0u);  // no valid position
+}
+
+TEST(Sp3Reader, ReadsGzipCompressedFiles) {
+  const auto dir = make_temp_dir("sp3_gzip");
+  const std::string text = small_sp3c();
+  const auto path = dir / "small.sp3.gz";
+  gzFile file = gzopen(path.string().c_str(), "wb");
+  ASSERT_NE(file, nullptr);
+  ASSERT_EQ(gzwrite(file, text.data(), static_cast<unsigned>(text.size())), static_cast<int>(text.size()));
+  gzclose(file);
+  auto compressed = read_sp3(path);
+  ASSERT_TRUE(compressed.ok()) << compressed.error().message;
+  auto plain = read_sp3(write_text(dir, "small.sp3", text));
+  ASSERT_TRUE(plain.ok());
+  ASSERT_EQ(compressed->epochs.size(), plain->epochs.size());
+  EXPECT_EQ(compressed->records[0][0].position_m, plain->records[0][0].position_m);
 }
 
 TEST(Sp3Reader, ConvertsEpochsFromTheFileTimeSystem) {
