@@ -3,6 +3,7 @@
 // on the antenna reference point. RTKLIB is an independent implementation of the same models, so
 // this checks orbits, clocks, group delays, Sagnac, light time, atmosphere and the RINEX writers.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -36,12 +37,18 @@ class RtklibSinglePoint : public ::testing::Test {
       skip_reason_ = "rnx2rtkp (Debian package rtklib) is not installed: run scripts/setup";
       return;
     }
-    out_dir_ = test::make_temp_dir("rtklib_single_point");
+    // One folder per process: CTest runs the tests of this suite in parallel processes.
+    out_dir_ = test::make_temp_dir("rtklib_single_point_" + std::to_string(getpid()));
     const auto run = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
                                        test::shell_quote(scenario.string()) + " --out " +
                                        test::shell_quote(out_dir_.string()) + " --quiet");
     run_exit_code_ = run.exit_code;
     run_output_ = run.output;
+  }
+
+  static void TearDownTestSuite() {
+    std::error_code ignored;
+    if (!out_dir_.empty() && !::testing::Test::HasFailure()) std::filesystem::remove_all(out_dir_, ignored);
   }
 
   void SetUp() override {
