@@ -204,6 +204,34 @@ Result<PreciseEphemerides> PreciseEphemerides::create(Sp3Data orbits, std::optio
                                                        std::to_string(options.interpolation_points));
   }
   if (orbits.epochs.empty()) return make_error(ErrorCode::kInvalidArgument, "SP3 data hold no epochs");
+  // Data built by hand must keep the layout the readers produce (lookups rely on it).
+  for (size_t k = 1; k < orbits.epochs.size(); ++k) {
+    if (!(orbits.epochs[k] - orbits.epochs[k - 1] > kSameTime_s)) {
+      return make_error(ErrorCode::kInvalidArgument, "SP3 data: epochs not strictly increasing at index " +
+                                                         std::to_string(k));
+    }
+  }
+  if (orbits.records.size() != orbits.satellites.size() ||
+      !std::is_sorted(orbits.satellites.begin(), orbits.satellites.end()) ||
+      std::adjacent_find(orbits.satellites.begin(), orbits.satellites.end()) != orbits.satellites.end()) {
+    return make_error(ErrorCode::kInvalidArgument, "SP3 data: satellites must be sorted, unique and have records");
+  }
+  for (size_t k = 0; k < orbits.records.size(); ++k) {
+    if (orbits.records[k].size() != orbits.epochs.size()) {
+      return make_error(ErrorCode::kInvalidArgument, "SP3 data: records of " + orbits.satellites[k].to_string() +
+                                                         " do not match the epochs");
+    }
+  }
+  if (clocks) {
+    for (const auto& [satellite, samples] : clocks->satellite_clocks) {
+      for (size_t k = 1; k < samples.size(); ++k) {
+        if (!(samples[k].time - samples[k - 1].time > kSameTime_s)) {
+          return make_error(ErrorCode::kInvalidArgument, "clock data of " + satellite.to_string() +
+                                                             ": samples not strictly increasing in time");
+        }
+      }
+    }
+  }
   if (!(orbits.interval_s > 0.0)) {
     // Estimate from the epochs when the header gave none.
     double smallest_s = 0.0;

@@ -712,6 +712,16 @@ TEST(PreciseInterpolation, RejectsBadOptions) {
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().code, ErrorCode::kInvalidArgument);
   EXPECT_FALSE(PreciseEphemerides::create(Sp3Data{}).ok());
+  // Hand-built data must keep the readers' layout.
+  Sp3Data unsorted = synthetic_sp3(kT0, 30, 900.0, 0.0);
+  std::swap(unsorted.epochs[3], unsorted.epochs[4]);
+  EXPECT_FALSE(PreciseEphemerides::create(unsorted).ok());
+  Sp3Data short_records = synthetic_sp3(kT0, 30, 900.0, 0.0);
+  short_records.records[0].pop_back();
+  EXPECT_FALSE(PreciseEphemerides::create(short_records).ok());
+  RinexClockData clocks;
+  clocks.satellite_clocks[kG01] = {{kT0 + 30.0, 1e-4, -1.0}, {kT0, 1e-4, -1.0}};
+  EXPECT_FALSE(PreciseEphemerides::create(synthetic_sp3(kT0, 30, 900.0, 0.0), clocks).ok());
 }
 
 }  // namespace
