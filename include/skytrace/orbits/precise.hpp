@@ -9,8 +9,10 @@
 // phase-centre offset themselves.
 //
 // Clocks: SP3 and RINEX clock values are satellite clock offsets from system time without the
-// periodic relativistic term (IGS convention); PreciseEphemerides reports that term separately as
-// relativistic_s = -2 r.v / c^2, the quantity SatelliteState documents.
+// periodic relativistic term (IGS convention, GLONASS included, unlike GLONASS broadcast clocks);
+// PreciseEphemerides reports that term separately as relativistic_s = -2 r.v / c^2 for every
+// system, and its rate with the two-body acceleration. SP3 clock-event flags are kept in the
+// records but not acted on.
 #pragma once
 
 #include <Eigen/Core>
