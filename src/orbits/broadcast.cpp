@@ -475,14 +475,19 @@ std::optional<NavMessage> preferred_message(const Signal& signal) {
 }
 
 double validity_half_window_s(const KeplerEphemeris& eph) {
-  // RTKLIB 2.4.3 MAXDTOE*: GPS 7200, QZSS 7200, Galileo 14400, BeiDou 21600, NavIC 7200 s.
+  // RTKLIB 2.4.3 MAXDTOE*: GPS 7200, QZSS 7200, Galileo 14400, BeiDou 21600, NavIC 7200 s; a
+  // narrower window here only makes a satellite absent where RTKLIB would still accept it.
   switch (eph.satellite.system) {
     case GnssSystem::kGps:
     case GnssSystem::kQzss:
       // IS-GPS-200 20.3.4.4: the record fits over its fit interval centred on toe (4 h nominal).
       return std::max(7200.0, eph.fit_interval_h * 3600.0 / 2.0);
     case GnssSystem::kGalileo: return 14400.0;  // nominal validity of a Galileo data set: 4 h
-    case GnssSystem::kBeiDou: return 21600.0;   // the ICD states no fit interval; RTKLIB's value
+    // BeiDou uploads a new data set every hour and the ICD states no fit interval; a tracking
+    // receiver never holds one older than that. Farther out the BDS-2 orbits degrade to tens of
+    // metres (50-120 m at 5 h on 2016-06-06 against GFZ's orbits), so records are not stretched to
+    // RTKLIB's 6 h.
+    case GnssSystem::kBeiDou: return 3600.0;
     case GnssSystem::kNavic: return 7200.0;
     default: return 7200.0;
   }

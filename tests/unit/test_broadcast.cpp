@@ -639,7 +639,7 @@ TEST(BroadcastSelection, FitIntervalWidensTheGpsWindow) {
   EXPECT_FALSE(eph.select_kepler(SatelliteId{GnssSystem::kGps, 3}, gpst(2020, 6, 25, 3, 1, 0)).ok());
   EXPECT_EQ(validity_half_window_s(gps_g07()), 7200.0);
   EXPECT_EQ(validity_half_window_s(galileo_e01(NavMessage::kGalileoInav)), 14400.0);
-  EXPECT_EQ(validity_half_window_s(beidou_c11()), 21600.0);
+  EXPECT_EQ(validity_half_window_s(beidou_c11()), 3600.0);  // hourly uploads: no stale BDS-2 orbits
 }
 
 TEST(BroadcastSelection, SameToeTakesTheLastRecordRead) {
