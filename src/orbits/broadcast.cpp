@@ -500,21 +500,41 @@ BroadcastEphemerides::BroadcastEphemerides(NavigationData data) : data_(std::mov
   for (const auto& [satellite, indices] : kepler_index_) kepler_max_window_s_[satellite] = max_window_s(data_.kepler, indices);
 }
 
-Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const SatelliteId& satellite, const GnssTime& t,
-                                                                   std::optional<NavMessage> message) const {
+const KeplerEphemeris* BroadcastEphemerides::find_kepler(const SatelliteId& satellite, const GnssTime& t,
+                                                          std::optional<NavMessage> message) const {
   const auto it = kepler_index_.find(satellite);
-  if (it == kepler_index_.end()) return no_ephemeris_at_all(satellite);
+  if (it == kepler_index_.end()) return nullptr;
   // A Galileo data set is first broadcast after its toe (the age of data is never negative), so a
   // receiver at t can only hold records with toe < t; RTKLIB applies the same rule.
   const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;
   const auto accept = [&](const KeplerEphemeris& e) {
     return healthy(e) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
   };
-  const double max_window = kepler_max_window_s_.at(satellite);
-  if (const KeplerEphemeris* found = select_nearest(data_.kepler, it->second, t, max_window, accept)) return found;
+  return select_nearest(data_.kepler, it->second, t, kepler_max_window_s_.at(satellite), accept);
+}
+
+const GlonassEphemeris* BroadcastEphemerides::find_glonass(const SatelliteId& satellite, const GnssTime& t) const {
+  const auto it = glonass_index_.find(satellite);
+  if (it == glonass_index_.end()) return nullptr;
+  const auto accept = [](const GlonassEphemeris& e) { return healthy(e); };
+  return select_nearest(data_.glonass, it->second, t, glonass_validity_half_window_s(), accept);
+}
+
+const SbasEphemeris* BroadcastEphemerides::find_sbas(const SatelliteId& satellite, const GnssTime& t) const {
+  const auto it = sbas_index_.find(satellite);
+  if (it == sbas_index_.end()) return nullptr;
+  const auto accept = [](const SbasEphemeris& e) { return healthy(e); };
+  return select_nearest(data_.sbas, it->second, t, sbas_validity_half_window_s(), accept);
+}
+
+Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const SatelliteId& satellite, const GnssTime& t,
+                                                                   std::optional<NavMessage> message) const {
+  if (const KeplerEphemeris* found = find_kepler(satellite, t, message)) return found;
+  const auto it = kepler_index_.find(satellite);
+  if (it == kepler_index_.end()) return no_ephemeris_at_all(satellite);
   const std::string_view wanted = message ? to_string(*message) : "";
   const auto matches = [&](const KeplerEphemeris& e) { return !message || e.message == *message; };
-  if (toe_must_be_past) {
+  if (satellite.system == GnssSystem::kGalileo) {
     const auto matches_past = [&](const KeplerEphemeris& e) { return matches(e) && e.toe < t; };
     const auto& indices = it->second;
     const bool any_match = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches(data_.kepler[i]); });
@@ -532,23 +552,16 @@ Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const Satelli
 
 Result<const GlonassEphemeris*> BroadcastEphemerides::select_glonass(const SatelliteId& satellite,
                                                                      const GnssTime& t) const {
+  if (const GlonassEphemeris* found = find_glonass(satellite, t)) return found;
   const auto it = glonass_index_.find(satellite);
   if (it == glonass_index_.end()) return no_ephemeris_at_all(satellite);
-  const auto accept = [](const GlonassEphemeris& e) { return healthy(e); };
-  if (const GlonassEphemeris* found =
-          select_nearest(data_.glonass, it->second, t, glonass_validity_half_window_s(), accept)) {
-    return found;
-  }
   return explain_no_record(data_.glonass, it->second, satellite, t, "", [](const GlonassEphemeris&) { return true; });
 }
 
 Result<const SbasEphemeris*> BroadcastEphemerides::select_sbas(const SatelliteId& satellite, const GnssTime& t) const {
+  if (const SbasEphemeris* found = find_sbas(satellite, t)) return found;
   const auto it = sbas_index_.find(satellite);
   if (it == sbas_index_.end()) return no_ephemeris_at_all(satellite);
-  const auto accept = [](const SbasEphemeris& e) { return healthy(e); };
-  if (const SbasEphemeris* found = select_nearest(data_.sbas, it->second, t, sbas_validity_half_window_s(), accept)) {
-    return found;
-  }
   return explain_no_record(data_.sbas, it->second, satellite, t, "", [](const SbasEphemeris&) { return true; });
 }
 

@@ -1,7 +1,10 @@
 #include "skytrace/receiver/observation_generator.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <numbers>
 
 #include "skytrace/atmosphere/models.hpp"
@@ -26,30 +29,20 @@ struct RecordState {
 
 // The record a receiver holds at its own time `t_receiver` (the epoch tag, as RTKLIB selects with
 // the observation time), with a Galileo message preference falling back to the other message.
-Result<RecordState> select_record(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
-                                  const GnssTime& t_receiver, std::optional<orbits::NavMessage> message) {
+// nullopt when it holds none (the broadcast layer's select_* explain why, at a cost per call).
+std::optional<RecordState> select_record(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                                         const GnssTime& t_receiver, std::optional<orbits::NavMessage> message) {
   RecordState out;
   switch (sat.system) {
-    case GnssSystem::kGlonass: {
-      auto record = ephemerides.select_glonass(sat, t_receiver);
-      if (!record) return record.error();
-      out.glonass = *record;
-      return out;
-    }
-    case GnssSystem::kSbas: {
-      auto record = ephemerides.select_sbas(sat, t_receiver);
-      if (!record) return record.error();
-      out.sbas = *record;
-      return out;
-    }
-    default: {
-      auto record = ephemerides.select_kepler(sat, t_receiver, message);
-      if (!record && message) record = ephemerides.select_kepler(sat, t_receiver, std::nullopt);
-      if (!record) return record.error();
-      out.kepler = *record;
-      return out;
-    }
+    case GnssSystem::kGlonass: out.glonass = ephemerides.find_glonass(sat, t_receiver); break;
+    case GnssSystem::kSbas: out.sbas = ephemerides.find_sbas(sat, t_receiver); break;
+    default:
+      out.kepler = ephemerides.find_kepler(sat, t_receiver, message);
+      if (out.kepler == nullptr && message) out.kepler = ephemerides.find_kepler(sat, t_receiver, std::nullopt);
+      break;
   }
+  if (out.kepler == nullptr && out.glonass == nullptr && out.sbas == nullptr) return std::nullopt;
+  return out;
 }
 
 // Evaluates the record's orbit and clock at instant t (on the GPST timeline).
@@ -105,11 +98,23 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
       kinematics_(std::move(kinematics)),
       clock_(settings_.profile.oscillator, settings_.ideal_clock,
              stream_key(settings_.seed, {hash_name("receiver-clock"), static_cast<std::uint64_t>(settings_.receiver_index)})) {
+  for (const Signal& signal : settings_.signals) {
+    const SignalInfo* info = find_signal_info(signal);
+    if (info == nullptr) throw std::invalid_argument("signal " + signal.to_string() + " is not in the catalogue");
+    signal_info_[signal] = info;
+  }
   for (const SatelliteId& sat : ephemerides_.satellites()) {
     const bool wanted = std::any_of(settings_.signals.begin(), settings_.signals.end(),
                                     [&](const Signal& s) { return s.system == sat.system; });
     if (wanted) satellites_.push_back(sat);
   }
+}
+
+bool ObservationGenerator::transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
+  const auto day = static_cast<std::int64_t>(std::floor(t.gpst_seconds_approx() / 86400.0));
+  auto [it, inserted] = transmits_cache_.try_emplace(std::make_pair(sat, signal), day, false);
+  if (inserted || it->second.first != day) it->second = {day, transmits(sat, signal, t)};
+  return it->second.second;
 }
 
 Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
@@ -132,6 +137,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   const Eigen::Vector3d& rx_m = epoch.receiver.position_m;
   const Eigen::Vector3d& rx_v_mps = epoch.receiver.velocity_mps;
   const Geodetic rx_geodetic = ecef_to_geodetic(rx_m);
+  const Eigen::Matrix3d rx_to_enu = ecef_to_enu_rotation(rx_geodetic);
   const std::optional<orbits::KlobucharCoefficients>& klobuchar = ephemerides_.data().ionosphere.gps;
 
   epoch.satellites.reserve(satellites_.size());
@@ -141,35 +147,62 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const std::optional<orbits::NavMessage> default_message =
         sat.system == GnssSystem::kGalileo ? std::optional(orbits::NavMessage::kGalileoInav) : std::nullopt;
 
-    Result<RecordState> record = select_record(ephemerides_, sat, tag, default_message);
+    std::optional<RecordState> record = select_record(ephemerides_, sat, tag, default_message);
     if (!record) {
       obs.status = SatelliteStatus::kNoEphemeris;
-      obs.detail = record.error().message;
+      obs.detail = "no valid broadcast ephemeris";
+      flight_time_guess_s_.erase(sat);
       epoch.satellites.push_back(std::move(obs));
       continue;
     }
-    // Light-time iteration; three iterations reach far below a picosecond.
-    double flight_time_s = 0.075;
+    // Light-time iteration. The record is evaluated once, at a guess of the transmission time (the
+    // last epoch's flight time), and the iteration moves along the second-order expansion of the
+    // orbit and clock around it: the step is microseconds after the first epoch, and below 12 ms
+    // even then, where the expansion is exact to 1e-10 m.
+    const auto guess = flight_time_guess_s_.find(sat);
+    const double guess_s = guess != flight_time_guess_s_.end() ? guess->second : 0.075;
+    const GnssTime evaluation_time = epoch.true_time - guess_s;
+    evaluate_record(*record, evaluation_time);
+    const orbits::SatelliteState& at_guess = record->state;
+    const Eigen::Vector3d& r0 = at_guess.position_m;
+    const Eigen::Vector3d& v0 = at_guess.velocity_mps;
+    // Acceleration in the Earth-fixed frame: gravity, Coriolis and centrifugal terms.
+    const Eigen::Vector3d omega(0.0, 0.0, kEarthRotation_radps);
+    const Eigen::Vector3d a0 = -constants::kGmGps_m3ps2 / std::pow(r0.norm(), 3) * r0 - 2.0 * omega.cross(v0) -
+                               omega.cross(omega.cross(r0));
+    double flight_time_s = guess_s;
     Eigen::Vector3d sat_position_m, sat_velocity_mps;
     double range_m = 0.0;
-    for (int iteration = 0; iteration < 3; ++iteration) {
-      evaluate_record(*record, epoch.true_time - flight_time_s);
-      sat_position_m = rotate_earth(record->state.position_m, kEarthRotation_radps * flight_time_s);
+    double step_s = 0.0;  // transmission time minus evaluation time
+    for (int iteration = 0; iteration < 4; ++iteration) {
+      step_s = guess_s - flight_time_s;
+      const Eigen::Vector3d r = r0 + v0 * step_s + 0.5 * a0 * step_s * step_s;
+      sat_position_m = rotate_earth(r, kEarthRotation_radps * flight_time_s);
       range_m = (sat_position_m - rx_m).norm();
       flight_time_s = range_m / kC;
     }
+    step_s = guess_s - flight_time_s;
+    flight_time_guess_s_[sat] = flight_time_s;
+    record->state.clock_bias_s += at_guess.clock_drift_s_per_s * step_s;
+    record->state.relativistic_s += at_guess.relativistic_drift_s_per_s * step_s;
+    record->state.velocity_mps = v0 + a0 * step_s;
     const GnssTime transmit_time = epoch.true_time - flight_time_s;
     const double rotation_rad = kEarthRotation_radps * flight_time_s;
     sat_velocity_mps = rotate_earth(record->state.velocity_mps, rotation_rad);
     const Eigen::Vector3d line_of_sight = (sat_position_m - rx_m) / range_m;
     // d(range)/dt with the flight time changing too: the satellite term is scaled by (1 - d tau/dt)
-    // and the Sagnac rotation angle grows with d tau/dt (Eigen: d R(theta) r / d theta = (y, -x, 0)).
+    // and the Sagnac rotation angle grows with d tau/dt (d R(theta) r / d theta = (y, -x, 0)).
     const double sat_term = line_of_sight.dot(sat_velocity_mps);
     const Eigen::Vector3d rotation_derivative(sat_position_m.y(), -sat_position_m.x(), 0.0);
     const double sagnac_term = kEarthRotation_radps * line_of_sight.dot(rotation_derivative);
     const double range_rate_mps = (sat_term - line_of_sight.dot(rx_v_mps)) / (1.0 + (sat_term - sagnac_term) / kC);
 
-    obs.direction = azimuth_elevation(rx_m, rx_geodetic, sat_position_m);
+    {
+      const Eigen::Vector3d enu = rx_to_enu * (sat_position_m - rx_m);
+      obs.direction.elevation_deg = std::atan2(enu.z(), std::hypot(enu.x(), enu.y())) * 180.0 / std::numbers::pi;
+      const double azimuth_deg = std::atan2(enu.x(), enu.y()) * 180.0 / std::numbers::pi;
+      obs.direction.azimuth_deg = azimuth_deg < 0.0 ? azimuth_deg + 360.0 : azimuth_deg;
+    }
     obs.range_m = range_m;
     obs.range_rate_mps = range_rate_mps;
     obs.satellite_position_m = sat_position_m;
@@ -191,11 +224,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
 
     for (const Signal& signal : settings_.signals) {
       if (signal.system != sat.system) continue;
-      const SignalInfo* info = find_signal_info(signal);
-      if (info == nullptr) continue;
+      const SignalInfo* info = signal_info_.at(signal);
       // A receiver records only what the satellite transmits (GPS L5 only from Block IIF on, no
-      // B2I from BeiDou-3, ...).
-      if (!transmits(sat, signal, tag)) continue;
+      // B2I from BeiDou-3, ...); the answer is kept for the GPST day.
+      if (!transmitted(sat, signal, tag)) continue;
       // The clock and group delay come from the record that belongs to the signal (Galileo E5a:
       // F/NAV); the orbit is the same for both records of one issue of data.
       const RecordState* signal_record = &*record;
@@ -204,7 +236,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         const auto wanted = orbits::preferred_message(signal);
         if (wanted && *wanted != record->kepler->message) {
           auto r = select_record(ephemerides_, sat, tag, wanted);
-          if (r) {
+          if (r && r->kepler != record->kepler) {
             evaluate_record(*r, transmit_time);
             other_record = std::move(*r);
           }

@@ -124,9 +124,13 @@ TEST_F(BroadcastVsPrecise, BeiDouAndQzssOrbits) {
   // GRG has no BeiDou GEO (C01-C05) in this product; the MEO and IGSO satellites it has must agree
   // as broadcast orbits do (a few metres).
   const auto& c = figures_[GnssSystem::kBeiDou];
-  if (!c.orbit_3d_m.empty()) EXPECT_LE(median(c.orbit_3d_m), 5.0);
+  if (!c.orbit_3d_m.empty()) {
+    EXPECT_LE(median(c.orbit_3d_m), 5.0);
+  }
   const auto& j = figures_[GnssSystem::kQzss];
-  if (!j.orbit_3d_m.empty()) EXPECT_LE(median(j.orbit_3d_m), 5.0);
+  if (!j.orbit_3d_m.empty()) {
+    EXPECT_LE(median(j.orbit_3d_m), 5.0);
+  }
 }
 
 }  // namespace

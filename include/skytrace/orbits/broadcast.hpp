@@ -55,6 +55,12 @@ class BroadcastEphemerides final : public SatelliteStateSource {
                                                              std::optional<NavMessage> message = std::nullopt) const;
   [[nodiscard]] Result<const GlonassEphemeris*> select_glonass(const SatelliteId& satellite, const GnssTime& t) const;
   [[nodiscard]] Result<const SbasEphemeris*> select_sbas(const SatelliteId& satellite, const GnssTime& t) const;
+  // The same selections without building an explanation: nullptr when no record qualifies (for
+  // per-epoch loops, where most misses are satellites simply not broadcasting to this station).
+  [[nodiscard]] const KeplerEphemeris* find_kepler(const SatelliteId& satellite, const GnssTime& t,
+                                                   std::optional<NavMessage> message = std::nullopt) const;
+  [[nodiscard]] const GlonassEphemeris* find_glonass(const SatelliteId& satellite, const GnssTime& t) const;
+  [[nodiscard]] const SbasEphemeris* find_sbas(const SatelliteId& satellite, const GnssTime& t) const;
 
   // State from the record selected for a signal: the preferred message (Galileo: I/NAV or F/NAV to
   // match it; BeiDou B1I/B2I/B3I: D1, or D2 for GEO), falling back to any message when none of the

@@ -123,7 +123,13 @@ class ObservationGenerator {
     explicit SignalStreams(std::uint64_t key) : noise(key) {}
   };
 
+  // Whether the satellite transmits the signal, cached per GPST day.
+  bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
+
   GeneratorSettings settings_;
+  std::map<Signal, const SignalInfo*> signal_info_;
+  std::map<std::pair<SatelliteId, Signal>, std::pair<std::int64_t, bool>> transmits_cache_;
+  std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
   std::shared_ptr<const KinematicsSource> kinematics_;
   ReceiverClock clock_;
