@@ -4,6 +4,10 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -68,6 +72,75 @@ class StagingDir {
   StagingDir(std::filesystem::path out_dir, std::filesystem::path path) : out_dir_(std::move(out_dir)), path_(std::move(path)) {}
   std::filesystem::path out_dir_;
   std::filesystem::path path_;
+};
+
+struct QueuedEpoch {
+  std::int64_t index = 0;
+  size_t receiver = 0;
+  receiver::EpochObservations epoch;
+};
+using EpochBatch = std::vector<QueuedEpoch>;
+
+// A bounded single-producer single-consumer queue of computed epochs, in batches. Spent batches go
+// back to the producer, which frees them: memory is released by the thread that allocated it, so
+// the two threads do not contend for the allocator's locks.
+class EpochQueue {
+ public:
+  explicit EpochQueue(size_t capacity_batches) : capacity_(capacity_batches) {}
+  // False when the consumer has cancelled.
+  bool push(EpochBatch batch) {
+    std::unique_lock lock(mutex_);
+    not_full_.wait(lock, [&] { return full_.size() < capacity_ || cancelled_; });
+    if (cancelled_) return false;
+    full_.push_back(std::move(batch));
+    not_empty_.notify_one();
+    return true;
+  }
+  // nullopt once the producer has closed the queue and it is empty.
+  std::optional<EpochBatch> pop() {
+    std::unique_lock lock(mutex_);
+    not_empty_.wait(lock, [&] { return !full_.empty() || closed_; });
+    if (full_.empty()) return std::nullopt;
+    EpochBatch batch = std::move(full_.front());
+    full_.pop_front();
+    not_full_.notify_one();
+    return batch;
+  }
+  void give_back(EpochBatch batch) {
+    std::lock_guard lock(mutex_);
+    spent_.push_back(std::move(batch));
+  }
+  // The producer frees the spent batches outside the lock.
+  void release_spent() {
+    std::vector<EpochBatch> spent;
+    {
+      std::lock_guard lock(mutex_);
+      spent.swap(spent_);
+    }
+  }
+  void close() {
+    std::lock_guard lock(mutex_);
+    closed_ = true;
+    not_empty_.notify_all();
+  }
+  void cancel() {
+    std::lock_guard lock(mutex_);
+    cancelled_ = true;
+    not_full_.notify_all();
+  }
+  bool cancelled() {
+    std::lock_guard lock(mutex_);
+    return cancelled_;
+  }
+
+ private:
+  size_t capacity_;
+  std::deque<EpochBatch> full_;
+  std::vector<EpochBatch> spent_;
+  bool closed_ = false;
+  bool cancelled_ = false;
+  std::mutex mutex_;
+  std::condition_variable not_full_, not_empty_;
 };
 
 // Marker position and the antenna reference point (marker + antenna height up + offsets east/north).
@@ -383,29 +456,83 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
 
   RunSummary summary;
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  for (std::int64_t k = 0; k < epoch_count; ++k) {
-    const GnssTime tag = s.time.start + static_cast<double>(k) * s.time.interval_s;
-    for (ReceiverRun& rx : receivers) {
-      auto epoch = rx.generator->observe(tag);
-      if (!epoch) return epoch.error();
-      const io::ObservationEpoch record = to_rinex(*epoch, rx.header, rx.columns);
-      if (auto st = rx.writer.write_epoch(record); !st) return st.error();
-      for (const auto& sat : epoch->satellites) {
-        if (sat.status != receiver::SatelliteStatus::kTracked) continue;
-        ++summary.satellite_epochs;
-        ++summary.satellite_epochs_per_system[std::string(system_name(sat.satellite.system))];
-        summary.observations += static_cast<std::int64_t>(sat.signals.size());
-      }
-      if (options.write_truth) {
-        append_truth(truth_buffer, *epoch, rx.settings->name);
-        if (truth_buffer.size() > (1u << 20)) {
-          truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
-          truth_buffer.clear();
-        }
+  // Writes one computed epoch of one receiver: RINEX, counts, truth.
+  auto write_epoch = [&](std::int64_t index, size_t receiver_index, const receiver::EpochObservations& epoch) -> Status {
+    ReceiverRun& rx = receivers[receiver_index];
+    const io::ObservationEpoch record = to_rinex(epoch, rx.header, rx.columns);
+    if (auto st = rx.writer.write_epoch(record); !st) return st.error();
+    for (const auto& sat : epoch.satellites) {
+      if (sat.status != receiver::SatelliteStatus::kTracked) continue;
+      ++summary.satellite_epochs;
+      ++summary.satellite_epochs_per_system[std::string(system_name(sat.satellite.system))];
+      summary.observations += static_cast<std::int64_t>(sat.signals.size());
+    }
+    if (options.write_truth) {
+      append_truth(truth_buffer, epoch, rx.settings->name);
+      if (truth_buffer.size() > (1u << 20)) {
+        truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
+        truth_buffer.clear();
       }
     }
-    ++summary.epochs;
-    if (options.progress) options.progress(k + 1, epoch_count);
+    if (receiver_index + 1 == receivers.size()) {
+      ++summary.epochs;
+      if (options.progress) options.progress(index + 1, epoch_count);
+    }
+    return Ok{};
+  };
+  auto epoch_tag = [&](std::int64_t k) { return s.time.start + static_cast<double>(k) * s.time.interval_s; };
+
+  if (!options.write_truth) {
+    // Without truth.csv, writing costs a fraction of computing: one thread does both (measured
+    // faster than handing epochs between threads, docs/performance.md).
+    for (std::int64_t k = 0; k < epoch_count; ++k) {
+      for (size_t i = 0; i < receivers.size(); ++i) {
+        auto epoch = receivers[i].generator->observe(epoch_tag(k));
+        if (!epoch) return epoch.error();
+        if (auto st = write_epoch(k, i, *epoch); !st) return st.error();
+      }
+    }
+  } else {
+    // With truth.csv, formatting costs as much as computing: a worker computes the epochs (the
+    // generators keep state from epoch to epoch, so they stay on one thread) while this thread
+    // formats and writes them.
+    constexpr size_t kBatchEpochs = 64;
+    EpochQueue queue(8);
+    std::optional<Error> producer_error;
+    std::thread producer([&] {
+      EpochBatch batch;
+      for (std::int64_t k = 0; k < epoch_count && !queue.cancelled(); ++k) {
+        for (size_t i = 0; i < receivers.size(); ++i) {
+          auto epoch = receivers[i].generator->observe(epoch_tag(k));
+          if (!epoch) {
+            producer_error = epoch.error();
+            queue.close();
+            return;
+          }
+          batch.push_back(QueuedEpoch{k, i, std::move(*epoch)});
+        }
+        if (batch.size() >= kBatchEpochs) {
+          if (!queue.push(std::move(batch))) return;
+          batch = EpochBatch();
+          queue.release_spent();
+        }
+      }
+      if (!batch.empty()) queue.push(std::move(batch));
+      queue.close();
+    });
+    Status consumed = Ok{};
+    while (auto batch = queue.pop()) {
+      for (const QueuedEpoch& item : *batch) {
+        consumed = write_epoch(item.index, item.receiver, item.epoch);
+        if (!consumed) break;
+      }
+      if (!consumed) break;
+      queue.give_back(std::move(*batch));
+    }
+    if (!consumed) queue.cancel();
+    producer.join();
+    if (producer_error) return *producer_error;
+    if (!consumed) return consumed.error();
   }
   for (ReceiverRun& rx : receivers) {
     if (auto st = rx.writer.finish(); !st) return st.error();
