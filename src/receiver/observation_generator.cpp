@@ -62,6 +62,27 @@ double group_delay_of(const RecordState& record, const Signal& signal) {
   return 0.0;  // SBAS clocks refer to L1 directly
 }
 
+// Code group delay of a signal relative to the clock of precise products, which refer to the
+// ionosphere-free combination of the IGS reference signals: GPS/QZSS L1/L2 P(Y) like the broadcast
+// clock; Galileo E1/E5a like F/NAV; BeiDou B1I/B3I where the broadcast clock refers to B3I alone.
+double precise_clock_group_delay_s(const RecordState& record, const Signal& signal) {
+  if (record.kepler == nullptr) return group_delay_of(record, signal);
+  const orbits::KeplerEphemeris& eph = *record.kepler;
+  switch (eph.satellite.system) {
+    case GnssSystem::kGalileo: {
+      orbits::KeplerEphemeris as_fnav = eph;  // I/NAV records carry BGD(E1,E5a) too
+      as_fnav.message = orbits::NavMessage::kGalileoFnav;
+      return orbits::group_delay_s(as_fnav, signal);
+    }
+    case GnssSystem::kBeiDou: {
+      // The B1I/B3I ionosphere-free code is late by gamma/(gamma-1) TGD1 against B3I.
+      const double gamma = std::pow(kFrequencyB1I_Hz / kFrequencyB3I_Hz, 2);
+      return orbits::group_delay_s(eph, signal) - gamma / (gamma - 1.0) * eph.group_delays.tgd1_s;
+    }
+    default: return orbits::group_delay_s(eph, signal);
+  }
+}
+
 // Coordinates of a vector of the Earth-fixed frame at transmission in the frame at reception,
 // the Earth having turned by `angle_rad` in between.
 Eigen::Vector3d rotate_earth(const Eigen::Vector3d& v, double angle_rad) {
@@ -92,9 +113,11 @@ std::string_view to_string(SatelliteStatus status) {
 }
 
 ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orbits::BroadcastEphemerides& ephemerides,
-                                           std::shared_ptr<const KinematicsSource> kinematics)
+                                           std::shared_ptr<const KinematicsSource> kinematics,
+                                           const orbits::SatelliteStateSource* truth_orbits)
     : settings_(std::move(settings)),
       ephemerides_(ephemerides),
+      truth_orbits_(truth_orbits),
       kinematics_(std::move(kinematics)),
       clock_(settings_.profile.oscillator, settings_.ideal_clock,
              stream_key(settings_.seed, {hash_name("receiver-clock"), static_cast<std::uint64_t>(settings_.receiver_index)})) {
@@ -163,6 +186,16 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const double guess_s = guess != flight_time_guess_s_.end() ? guess->second : 0.075;
     const GnssTime evaluation_time = epoch.true_time - guess_s;
     evaluate_record(*record, evaluation_time);
+    bool precise_truth = false;
+    if (truth_orbits_ != nullptr) {
+      // Precise products as the truth: the signals come from the precise orbit and clock, while
+      // the broadcast record stays the one a receiver decodes (nav.rnx, group delays).
+      // Satellites the product lacks (a G/R/E product has no BeiDou) keep the broadcast truth.
+      if (auto precise = truth_orbits_->state(sat, evaluation_time)) {
+        record->state = *precise;
+        precise_truth = true;
+      }
+    }
     const orbits::SatelliteState& at_guess = record->state;
     const Eigen::Vector3d& r0 = at_guess.position_m;
     const Eigen::Vector3d& v0 = at_guess.velocity_mps;
@@ -237,7 +270,11 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         if (wanted && *wanted != record->kepler->message) {
           auto r = select_record(ephemerides_, sat, tag, wanted);
           if (r && r->kepler != record->kepler) {
-            evaluate_record(*r, transmit_time);
+            if (!precise_truth) {
+              evaluate_record(*r, transmit_time);
+            } else {
+              r->state = record->state;  // the precise clock serves every signal
+            }
             other_record = std::move(*r);
           }
           if (other_record) signal_record = &*other_record;
@@ -253,7 +290,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       const double wavelength_m = kC / m.carrier_hz;
       const orbits::SatelliteState& clock = signal_record->state;
       m.satellite_clock_m = kC * clock.clock_bias_s;
-      m.group_delay_m = kC * group_delay_of(*signal_record, signal);
+      m.group_delay_m = kC * (precise_truth ? precise_clock_group_delay_s(*signal_record, signal)
+                                            : group_delay_of(*signal_record, signal));
       m.ionosphere_code_m = obs.ionosphere_l1_m * std::pow(kFrequencyL1_Hz / m.carrier_hz, 2);
 
       // C/N0 until the link budget lands: from the horizon value to the zenith value with sqrt(sin el).

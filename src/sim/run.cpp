@@ -18,6 +18,7 @@
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/nominal.hpp"
+#include "skytrace/orbits/precise.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/trajectory.hpp"
@@ -396,11 +397,6 @@ Result<orbits::NavigationData> load_navigation(const Scenario& s) {
 
 Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& out_dir, const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
-  if (!s.ephemeris.precise_orbits.empty()) {
-    return make_error(ErrorCode::kUnsupported,
-                      "ephemeris.precise_orbits as signal truth arrives with the receiver-realism work; "
-                      "remove it to simulate from the broadcast ephemerides");
-  }
   if (s.world.sdf) {
     return make_error(ErrorCode::kUnsupported,
                       s.world.sdf->string() + ": loading 3D worlds arrives with the world layer; this build simulates open sky only");
@@ -413,6 +409,20 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
                       "(IONOSPHERIC CORR GPSA/GPSB or ION ALPHA/BETA)");
   }
   const orbits::BroadcastEphemerides ephemerides(std::move(*navigation));
+  std::optional<orbits::PreciseEphemerides> precise;
+  if (!s.ephemeris.precise_orbits.empty()) {
+    auto orbits_data = orbits::read_sp3(s.ephemeris.precise_orbits);
+    if (!orbits_data) return orbits_data.error();
+    std::optional<orbits::RinexClockData> clocks;
+    if (!s.ephemeris.precise_clocks.empty()) {
+      auto clock_data = orbits::read_rinex_clock(s.ephemeris.precise_clocks);
+      if (!clock_data) return clock_data.error();
+      clocks = std::move(*clock_data);
+    }
+    auto created = orbits::PreciseEphemerides::create(std::move(*orbits_data), std::move(clocks));
+    if (!created) return created.error();
+    precise.emplace(std::move(*created));
+  }
   if (auto coverage = check_coverage(s, ephemerides); !coverage) return coverage.error();
 
   auto staging = StagingDir::create(out_dir);
@@ -437,7 +447,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     g.ideal_clock = s.models.receiver_clock == "ideal";
     g.seed = s.seed;
     g.receiver_index = static_cast<int>(i);
-    rx.generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), ephemerides, rx.kinematics);
+    rx.generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), ephemerides, rx.kinematics,
+                                                                     precise ? &*precise : nullptr);
     rx.file_name = s.receivers.size() == 1 ? "obs.rnx" : "obs_" + rx.settings->name + ".rnx";
     rx.header = make_header(s, rx, ephemerides, s.output.rinex_version);
     rx.columns = signal_columns(rx.header);

@@ -97,8 +97,11 @@ struct EpochObservations {
 // arcs, the receiver clock and the noise streams from one epoch to the next.
 class ObservationGenerator {
  public:
+  // `truth_orbits`, when given (precise products), supplies the orbits and clocks the signals come
+  // from; the broadcast ephemerides remain what the receiver decodes. Both must outlive the generator.
   ObservationGenerator(GeneratorSettings settings, const orbits::BroadcastEphemerides& ephemerides,
-                       std::shared_ptr<const KinematicsSource> kinematics);
+                       std::shared_ptr<const KinematicsSource> kinematics,
+                       const orbits::SatelliteStateSource* truth_orbits = nullptr);
 
   // Observations at the receiver time tag `tag`.
   [[nodiscard]] Result<EpochObservations> observe(const GnssTime& tag);
@@ -131,6 +134,7 @@ class ObservationGenerator {
   std::map<std::pair<SatelliteId, Signal>, std::pair<std::int64_t, bool>> transmits_cache_;
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
+  const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
   std::shared_ptr<const KinematicsSource> kinematics_;
   ReceiverClock clock_;
   std::optional<GnssTime> last_tag_;
