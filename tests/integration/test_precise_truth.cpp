@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "process.hpp"
+#include "rtklib.hpp"
 #include "skytrace/core/frames.hpp"
 #include "test_support.hpp"
 
@@ -16,20 +17,9 @@ namespace skytrace {
 namespace {
 
 double median_error_m(const std::filesystem::path& solution, const Eigen::Vector3d& antenna, size_t& epochs) {
-  std::vector<double> errors;
-  std::ifstream in(solution);
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '%') continue;
-    std::istringstream fields(line);
-    std::string date, time;
-    Eigen::Vector3d xyz;
-    fields >> date >> time >> xyz.x() >> xyz.y() >> xyz.z();
-    if (fields) errors.push_back((xyz - antenna).norm());
-  }
+  const std::vector<double> errors = test::sorted_errors_m(test::read_rtklib_xyz(solution), antenna);
   epochs = errors.size();
-  if (errors.empty()) return NAN;
-  std::sort(errors.begin(), errors.end());
-  return errors[errors.size() / 2];
+  return errors.empty() ? NAN : errors[errors.size() / 2];
 }
 
 TEST(PreciseTruth, RtklibWithTheSameProductsLandsOnTheAntennaAndBroadcastShowsItsErrors) {

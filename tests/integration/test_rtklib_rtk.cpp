@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "process.hpp"
+#include "rtklib.hpp"
 #include "skytrace/core/frames.hpp"
 #include "test_support.hpp"
 
@@ -43,22 +44,14 @@ TEST(RtklibRtk, ContractBaseRoverPairFixesAndLandsOnTheRover) {
                                    test::shell_quote((dir / "rtk-base/obs.rnx").string()) + " " +
                                    test::shell_quote((dir / "rtk-rover/nav.rnx").string()));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  size_t epochs = 0, fixed = 0;
+  const auto solutions = test::read_rtklib_xyz(dir / "rtk.pos");
+  const size_t epochs = solutions.size();
+  size_t fixed = 0;
   std::vector<double> fixed_errors_m;
-  std::ifstream in(dir / "rtk.pos");
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '%') continue;
-    std::istringstream fields(line);
-    std::string date, time;
-    Eigen::Vector3d xyz;
-    int quality = 0;
-    fields >> date >> time >> xyz.x() >> xyz.y() >> xyz.z() >> quality;
-    if (!fields) continue;
-    ++epochs;
-    if (quality == 1) {
-      ++fixed;
-      fixed_errors_m.push_back((xyz - rover).norm());
-    }
+  for (const auto& solution : solutions) {
+    if (solution.quality != 1) continue;
+    ++fixed;
+    fixed_errors_m.push_back((solution.ecef_m - rover).norm());
   }
   ASSERT_GT(epochs, 0u);
   const double fix_ratio = static_cast<double>(fixed) / static_cast<double>(epochs);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "process.hpp"
+#include "rtklib.hpp"
 #include "skytrace/core/frames.hpp"
 #include "test_support.hpp"
 
@@ -146,20 +147,10 @@ class RtklibSinglePoint : public ::testing::Test {
     const Geodetic site = ecef_to_geodetic(kEsbcMarker);
     const Eigen::Vector3d up = ecef_to_enu_rotation(site).row(2).transpose();
     const Eigen::Vector3d antenna = kEsbcMarker + kEsbcAntennaHeight_m * up;
-    std::vector<double> errors;
-    std::ifstream in(solution);
-    for (std::string line; std::getline(in, line);) {
-      if (line.empty() || line[0] == '%') continue;
-      std::istringstream fields(line);
-      std::string date, time;
-      Eigen::Vector3d xyz;
-      fields >> date >> time >> xyz.x() >> xyz.y() >> xyz.z();
-      if (fields) errors.push_back((xyz - antenna).norm());
-    }
+    const std::vector<double> errors = test::sorted_errors_m(test::read_rtklib_xyz(solution), antenna);
     Errors e;
     e.epochs = errors.size();
     if (errors.empty()) return e;
-    std::sort(errors.begin(), errors.end());
     e.median_m = errors[errors.size() / 2];
     e.p95_m = errors[static_cast<size_t>(std::ceil(0.95 * static_cast<double>(errors.size()))) - 1];
     e.max_m = errors.back();
