@@ -25,5 +25,6 @@ int report_error(const Error& error);
 void register_orbits_command(CLI::App& app, int& exit_code);
 void register_fetch_command(CLI::App& app, int& exit_code);
 void register_run_command(CLI::App& app, int& exit_code);
+void register_compare_command(CLI::App& app, int& exit_code);
 
 }  // namespace skytrace::cli
