@@ -61,4 +61,22 @@ AzimuthElevation azimuth_elevation(const Eigen::Vector3d& observer_ecef_m, const
   return ae;
 }
 
+Eigen::Matrix3d LocalFrame::ecef_to_local_rotation() const {
+  // ENU -> local: rotate by -heading about up (the local x axis is `heading` from east).
+  const double h = heading_deg * kDegToRad;
+  Eigen::Matrix3d enu_to_local;
+  enu_to_local << std::cos(h), std::sin(h), 0.0,  //
+      -std::sin(h), std::cos(h), 0.0,               //
+      0.0, 0.0, 1.0;
+  return enu_to_local * ecef_to_enu_rotation(origin);
+}
+
+Eigen::Vector3d LocalFrame::to_ecef(const Eigen::Vector3d& local_m) const {
+  return geodetic_to_ecef(origin) + ecef_to_local_rotation().transpose() * local_m;
+}
+
+Eigen::Vector3d LocalFrame::from_ecef(const Eigen::Vector3d& ecef_m) const {
+  return ecef_to_local_rotation() * (ecef_m - geodetic_to_ecef(origin));
+}
+
 }  // namespace skytrace

@@ -10,11 +10,7 @@
 namespace skytrace::sim {
 
 Eigen::Vector3d world_enu_to_ecef(const Eigen::Vector3d& world_m, const WorldOrigin& origin) {
-  // Gazebo: the world x axis points `heading` counter-clockwise from east in the local ENU frame.
-  const double h = origin.heading_deg * std::numbers::pi / 180.0;
-  const Eigen::Vector3d enu(std::cos(h) * world_m.x() - std::sin(h) * world_m.y(),
-                            std::sin(h) * world_m.x() + std::cos(h) * world_m.y(), world_m.z());
-  return enu_to_ecef(enu, origin.origin);
+  return origin.to_ecef(world_m);
 }
 
 Result<Eigen::Vector3d> position_to_ecef(const PositionSetting& position, const std::optional<WorldOrigin>& world) {

@@ -83,3 +83,21 @@ TEST(Frames, GeodeticRoundTripAndKnownPoint) {
 
 }  // namespace
 }  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+TEST(LocalFrame, HeadingTurnsTheXAxisCounterClockwiseFromEast) {
+  const LocalFrame east_x{Geodetic{55.49357, 8.45683, 59.5}, 0.0};
+  const LocalFrame north_x{Geodetic{55.49357, 8.45683, 59.5}, 90.0};
+  const Geodetic origin = east_x.origin;
+  // heading 0: local x is east; heading 90: local x is north, local y is west.
+  EXPECT_NEAR((ecef_to_enu(east_x.to_ecef({10, 0, 0}), origin) - Eigen::Vector3d(10, 0, 0)).norm(), 0.0, 1e-6);
+  EXPECT_NEAR((ecef_to_enu(north_x.to_ecef({10, 0, 0}), origin) - Eigen::Vector3d(0, 10, 0)).norm(), 0.0, 1e-6);
+  EXPECT_NEAR((ecef_to_enu(north_x.to_ecef({0, 10, 0}), origin) - Eigen::Vector3d(-10, 0, 0)).norm(), 0.0, 1e-6);
+  const Eigen::Vector3d p(3.0, -4.0, 5.0);
+  EXPECT_NEAR((north_x.from_ecef(north_x.to_ecef(p)) - p).norm(), 0.0, 1e-6);
+}
+
+}  // namespace
+}  // namespace skytrace

@@ -29,4 +29,17 @@ struct AzimuthElevation {
                                                  const Geodetic& observer,
                                                  const Eigen::Vector3d& target_ecef_m);
 
+// A local Cartesian frame tied to the Earth the way Gazebo ties a world to it
+// (<spherical_coordinates>): origin at a geodetic point, z up along the ellipsoid normal, and the
+// x axis `heading_deg` counter-clockwise from east (0: x east, y north).
+struct LocalFrame {
+  Geodetic origin;
+  double heading_deg = 0.0;
+
+  // Rotation from ECEF vectors to local vectors.
+  [[nodiscard]] Eigen::Matrix3d ecef_to_local_rotation() const;
+  [[nodiscard]] Eigen::Vector3d to_ecef(const Eigen::Vector3d& local_m) const;
+  [[nodiscard]] Eigen::Vector3d from_ecef(const Eigen::Vector3d& ecef_m) const;
+};
+
 }  // namespace skytrace

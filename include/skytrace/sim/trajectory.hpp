@@ -45,10 +45,7 @@ class InterpolatedTrajectory final : public receiver::KinematicsSource {
 
 // Converts a position setting to ECEF; world ENU needs the world origin (a geodetic point and the
 // heading of the world's x axis from east, counter-clockwise, as Gazebo defines it).
-struct WorldOrigin {
-  Geodetic origin;
-  double heading_deg = 0.0;
-};
+using WorldOrigin = LocalFrame;
 [[nodiscard]] Eigen::Vector3d world_enu_to_ecef(const Eigen::Vector3d& world_m, const WorldOrigin& origin);
 [[nodiscard]] Result<Eigen::Vector3d> position_to_ecef(const PositionSetting& position,
                                                        const std::optional<WorldOrigin>& world);

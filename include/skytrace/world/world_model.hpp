@@ -35,10 +35,7 @@ struct WorldObject {
 
 // Ties the world frame to the Earth exactly as Gazebo's <spherical_coordinates> does: the origin's
 // latitude, longitude and elevation, and the heading of the world x axis counter-clockwise from east.
-struct GeoOrigin {
-  Geodetic origin;
-  double heading_deg = 0.0;
-};
+using GeoOrigin = LocalFrame;
 
 struct WorldModel {
   std::string name;
