@@ -66,19 +66,25 @@ int run_compare(const CompareArgs& args) {
 void register_compare_command(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<CompareArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "compare", "Compare real and simulated RINEX observations per system and signal (text table, JSON)");
-  cmd->add_option("real", args->real_path, "Real observation file (RINEX 2.11, 3.0x, 4.00; .gz allowed)")->required();
+      "compare",
+      "Compare real and simulated RINEX observations per system and signal (text table, JSON)");
+  cmd->add_option("real", args->real_path,
+                  "Real observation file (RINEX 2.11, 3.0x, 4.00; .gz allowed)")
+      ->required();
   cmd->add_option("sim", args->sim_path, "Simulated observation file")->required();
-  cmd->add_option("--nav", args->nav_files,
-                  "RINEX navigation file for the elevation mask (repeat for several); without it: no mask");
+  cmd->add_option(
+      "--nav", args->nav_files,
+      "RINEX navigation file for the elevation mask (repeat for several); without it: no mask");
   cmd->add_option("--min-elevation-deg", args->min_elevation_deg, "Elevation mask (needs --nav)")
       ->capture_default_str();
-  cmd->add_option("--systems", args->systems, "Systems to compare as letters, e.g. GE (default: all common)");
-  cmd->add_option("--signals", args->signals, "Signals to compare, e.g. G1C,E1C (default: all common)");
+  cmd->add_option("--systems", args->systems,
+                  "Systems to compare as letters, e.g. GE (default: all common)");
+  cmd->add_option("--signals", args->signals,
+                  "Signals to compare, e.g. G1C,E1C (default: all common)");
   cmd->add_option("--json", args->json_path, "Also write the numbers as JSON to this file");
   cmd->footer(
-      "Residuals are real minus simulated after subtracting, per epoch and system, the median over the "
-      "system's satellites (receiver clock, inter-system bias). Epochs are matched to 1 ms.");
+      "Residuals are real minus simulated after subtracting, per epoch and system, the median over "
+      "the system's satellites (receiver clock, inter-system bias). Epochs are matched to 1 ms.");
   cmd->callback([args, &exit_code]() { exit_code = run_compare(*args); });
 }
 

@@ -2,7 +2,6 @@
 #include "skytrace/io/compare.hpp"
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
@@ -10,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <unordered_map>
@@ -37,16 +37,20 @@ struct SignalColumns {
 
 SignalColumns signal_columns(const ObservationHeader& header, const Signal& signal) {
   const std::string suffix = signal.code();
-  return {header.type_index(signal.system, "C" + suffix), header.type_index(signal.system, "L" + suffix),
-          header.type_index(signal.system, "D" + suffix), header.type_index(signal.system, "S" + suffix)};
+  return {header.type_index(signal.system, "C" + suffix),
+          header.type_index(signal.system, "L" + suffix),
+          header.type_index(signal.system, "D" + suffix),
+          header.type_index(signal.system, "S" + suffix)};
 }
 
-const ObservationValue* value_at(const SatelliteObservations& s, const std::optional<size_t>& column) {
+const ObservationValue* value_at(const SatelliteObservations& s,
+                                 const std::optional<size_t>& column) {
   if (!column || *column >= s.values.size() || !s.values[*column].value) return nullptr;
   return &s.values[*column];
 }
 
-std::optional<double> number_at(const SatelliteObservations& s, const std::optional<size_t>& column) {
+std::optional<double> number_at(const SatelliteObservations& s,
+                                const std::optional<size_t>& column) {
   const ObservationValue* v = value_at(s, column);
   if (v == nullptr) return std::nullopt;
   return *v->value;
@@ -56,7 +60,8 @@ std::optional<double> number_at(const SatelliteObservations& s, const std::optio
 // for the signal tracks it when any observable is there.
 bool is_tracked(const SatelliteObservations& s, const SignalColumns& c) {
   if (c.code) return value_at(s, c.code) != nullptr;
-  return value_at(s, c.phase) != nullptr || value_at(s, c.doppler) != nullptr || value_at(s, c.strength) != nullptr;
+  return value_at(s, c.phase) != nullptr || value_at(s, c.doppler) != nullptr ||
+         value_at(s, c.strength) != nullptr;
 }
 
 // Signals a file lists for a system (types with a RINEX 3 code of a catalogued signal).
@@ -66,8 +71,10 @@ std::set<Signal> listed_signals(const ObservationHeader& header, GnssSystem syst
   if (it == header.observation_types.end()) return out;
   for (const auto& type : it->second) {
     const char kind = type.kind();
-    if (type.code.size() != 3 || (kind != 'C' && kind != 'L' && kind != 'D' && kind != 'S')) continue;
-    if (auto signal = Signal::from_code(system, std::string_view(type.code).substr(1)); signal) out.insert(*signal);
+    if (type.code.size() != 3 || (kind != 'C' && kind != 'L' && kind != 'D' && kind != 'S'))
+      continue;
+    if (auto signal = Signal::from_code(system, std::string_view(type.code).substr(1)); signal)
+      out.insert(*signal);
   }
   return out;
 }
@@ -93,10 +100,13 @@ std::vector<const ObservationEpoch*> observation_epochs(const ObservationFile& f
   for (const auto& e : file.epochs) {
     if (e.flag == EpochFlag::kOk || e.flag == EpochFlag::kPowerFailure) out.push_back(&e);
   }
-  std::stable_sort(out.begin(), out.end(), [](const auto* a, const auto* b) { return a->time < b->time; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto* a, const auto* b) { return a->time < b->time; });
   // A repeated time keeps its first record.
   out.erase(std::unique(out.begin(), out.end(),
-                        [](const auto* a, const auto* b) { return std::abs(b->time - a->time) <= kEpochMatchTolerance_s; }),
+                        [](const auto* a, const auto* b) {
+                          return std::abs(b->time - a->time) <= kEpochMatchTolerance_s;
+                        }),
             out.end());
   return out;
 }
@@ -208,10 +218,12 @@ class ElevationMask {
       // The position at the epoch is enough for a mask: the ~0.07 s signal travel time moves the
       // satellite by about 0.001 degrees as seen from the ground.
       if (auto state = source_->state(satellite, t); state) {
-        elevation_deg = azimuth_elevation(station_ecef_m_, station_, state->position_m).elevation_deg;
+        elevation_deg =
+            azimuth_elevation(station_ecef_m_, station_, state->position_m).elevation_deg;
       }
       if (std::isnan(elevation_deg)) {
         ++without_position_;
+        ++without_position_by_system_[satellite.system];
       } else if (elevation_deg < min_elevation_deg_) {
         ++below_mask_;
       }
@@ -222,6 +234,9 @@ class ElevationMask {
 
   [[nodiscard]] size_t below_mask() const { return below_mask_; }
   [[nodiscard]] size_t without_position() const { return without_position_; }
+  [[nodiscard]] const std::map<GnssSystem, size_t>& without_position_by_system() const {
+    return without_position_by_system_;
+  }
 
  private:
   const orbits::SatelliteStateSource* source_;
@@ -231,6 +246,7 @@ class ElevationMask {
   std::vector<std::unordered_map<SatelliteId, double>> elevations_deg_;
   size_t below_mask_ = 0;
   size_t without_position_ = 0;
+  std::map<GnssSystem, size_t> without_position_by_system_;
 };
 
 // GLONASS frequency channel per slot from both headers (the real file's wins).
@@ -244,7 +260,8 @@ std::map<int, int> glonass_channels(const ObservationHeader& real, const Observa
 bool strength_in_dbhz(const ObservationHeader& header) {
   std::string unit = header.signal_strength_unit;
   std::erase(unit, ' ');
-  std::transform(unit.begin(), unit.end(), unit.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  std::transform(unit.begin(), unit.end(), unit.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
   return unit.empty() || unit == "DBHZ";
 }
 
@@ -255,20 +272,24 @@ struct SatellitePair {
   const SatelliteObservations* sim = nullptr;
 };
 
-std::vector<SatellitePair> pair_satellites(const ObservationEpoch& real, const ObservationEpoch& sim, GnssSystem system) {
+std::vector<SatellitePair> pair_satellites(const ObservationEpoch& real,
+                                           const ObservationEpoch& sim, GnssSystem system) {
   std::vector<SatellitePair> pairs;
   for (const auto& s : real.satellites) {
     if (s.satellite.system == system) pairs.push_back({s.satellite, &s, nullptr});
   }
-  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) { return a.satellite < b.satellite; });
-  pairs.erase(std::unique(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) { return a.satellite == b.satellite; }),
+  std::sort(pairs.begin(), pairs.end(),
+            [](const auto& a, const auto& b) { return a.satellite < b.satellite; });
+  pairs.erase(std::unique(pairs.begin(), pairs.end(),
+                          [](const auto& a, const auto& b) { return a.satellite == b.satellite; }),
               pairs.end());
   const size_t real_count = pairs.size();
   for (const auto& s : sim.satellites) {
     if (s.satellite.system != system) continue;
     const auto end = pairs.begin() + static_cast<std::ptrdiff_t>(real_count);
-    const auto it = std::lower_bound(pairs.begin(), end, s.satellite,
-                                     [](const SatellitePair& p, const SatelliteId& id) { return p.satellite < id; });
+    const auto it = std::lower_bound(
+        pairs.begin(), end, s.satellite,
+        [](const SatellitePair& p, const SatelliteId& id) { return p.satellite < id; });
     if (it != end && it->satellite == s.satellite) {
       if (it->sim == nullptr) it->sim = &s;
     } else {
@@ -284,13 +305,14 @@ struct FileView {
 };
 
 SignalComparison compare_signal(const Signal& signal, const FileView& real, const FileView& sim,
-                                const std::vector<EpochPair>& pairs, const std::map<int, int>& channels,
-                                ElevationMask& mask) {
+                                const std::vector<EpochPair>& pairs,
+                                const std::map<int, int>& channels, ElevationMask& mask) {
   SignalComparison out;
   out.signal = signal;
   const SignalColumns rc = signal_columns(real.file->header, signal);
   const SignalColumns sc = signal_columns(sim.file->header, signal);
-  const bool compare_cn0 = strength_in_dbhz(real.file->header) && strength_in_dbhz(sim.file->header);
+  const bool compare_cn0 =
+      strength_in_dbhz(real.file->header) && strength_in_dbhz(sim.file->header);
   const SignalInfo* info = find_signal_info(signal);
 
   // Wavelength of a satellite's carrier, NaN for an FDMA satellite whose channel is unknown.
@@ -363,25 +385,30 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
 
       const auto real_doppler = number_at(*sp.real, rc.doppler);
       const auto sim_doppler = number_at(*sp.sim, sc.doppler);
-      const bool has_phase_step = k > 0 && !std::isnan(current_real_cycles[n]) && !std::isnan(current_sim_cycles[n]) &&
-                                  !std::isnan(previous_real_cycles[n]) && !std::isnan(previous_sim_cycles[n]) &&
-                                  real_phase.continuous_since(sp.satellite, pairs[k - 1].real_index) &&
-                                  sim_phase.continuous_since(sp.satellite, pairs[k - 1].sim_index);
+      const bool has_phase_step =
+          k > 0 && !std::isnan(current_real_cycles[n]) && !std::isnan(current_sim_cycles[n]) &&
+          !std::isnan(previous_real_cycles[n]) && !std::isnan(previous_sim_cycles[n]) &&
+          real_phase.continuous_since(sp.satellite, pairs[k - 1].real_index) &&
+          sim_phase.continuous_since(sp.satellite, pairs[k - 1].sim_index);
       if (!(real_doppler && sim_doppler) && !has_phase_step) continue;
       const double lambda_m = wavelength_m(sp.satellite);
       if (std::isnan(lambda_m)) {
         ++out.unknown_channel_satellite_epochs;
         continue;
       }
-      // Range rate is -wavelength * Doppler (the Doppler is positive while the satellite approaches).
-      if (real_doppler && sim_doppler) doppler_diffs_mps.push_back(-lambda_m * (*real_doppler - *sim_doppler));
+      // Range rate is -wavelength * Doppler (the Doppler is positive while the satellite
+      // approaches).
+      if (real_doppler && sim_doppler) {
+        doppler_diffs_mps.push_back(-lambda_m * (*real_doppler - *sim_doppler));
+      }
       if (has_phase_step) {
         const double real_step_m = lambda_m * (current_real_cycles[n] - previous_real_cycles[n]);
         const double sim_step_m = lambda_m * (current_sim_cycles[n] - previous_sim_cycles[n]);
         phase_diffs_m.push_back(real_step_m - sim_step_m);
       }
     }
-    if (!pseudorange_diffs_m.empty() && !append_residuals(pseudorange_diffs_m, pseudorange_residuals_m)) {
+    if (!pseudorange_diffs_m.empty() &&
+        !append_residuals(pseudorange_diffs_m, pseudorange_residuals_m)) {
       ++out.single_satellite_epochs;
     }
     append_residuals(doppler_diffs_mps, doppler_residuals_mps);
@@ -418,34 +445,42 @@ Result<std::vector<Signal>> select_signals(const ObservationFile& real, const Ob
   if (!options.signals.empty()) {
     for (const auto& signal : options.signals) {
       if (!options.systems.empty() && !systems.contains(signal.system)) {
-        return make_error(ErrorCode::kInvalidArgument,
-                          "signal " + signal.to_string() + " does not belong to the selected systems");
+        return make_error(
+            ErrorCode::kInvalidArgument,
+            "signal " + signal.to_string() + " does not belong to the selected systems");
       }
       const auto real_listed = listed_signals(real.header, signal.system);
       const auto sim_listed = listed_signals(sim.header, signal.system);
       if (!real_listed.contains(signal) || !sim_listed.contains(signal)) {
         const bool in_real = real_listed.contains(signal);
         return make_error(ErrorCode::kNotFound,
-                          fmt::format("signal {}: {} has no {} observations (its {} signals: {})", signal.to_string(),
-                                      in_real ? "SIM" : "REAL", signal.to_string(), system_name(signal.system),
+                          fmt::format("signal {}: {} has no {} observations (its {} signals: {})",
+                                      signal.to_string(), in_real ? "SIM" : "REAL",
+                                      signal.to_string(), system_name(signal.system),
                                       signal_names(in_real ? sim_listed : real_listed)));
       }
-      if (std::find(selected.begin(), selected.end(), signal) == selected.end()) selected.push_back(signal);
+      if (std::find(selected.begin(), selected.end(), signal) == selected.end())
+        selected.push_back(signal);
     }
     std::sort(selected.begin(), selected.end());
   } else {
-    std::set_intersection(real_signals.begin(), real_signals.end(), sim_signals.begin(), sim_signals.end(),
-                          std::back_inserter(selected));
+    std::set_intersection(real_signals.begin(), real_signals.end(), sim_signals.begin(),
+                          sim_signals.end(), std::back_inserter(selected));
   }
   if (selected.empty()) {
-    return make_error(ErrorCode::kNotFound, fmt::format("no common signals to compare: REAL has {}; SIM has {}",
-                                                        signal_names(real_signals), signal_names(sim_signals)));
+    return make_error(ErrorCode::kNotFound,
+                      fmt::format("no common signals to compare: REAL has {}; SIM has {}",
+                                  signal_names(real_signals), signal_names(sim_signals)));
   }
   return selected;
 }
 
 nlohmann::json statistics_json(const ResidualStatistics& s) {
-  return {{"count", s.count}, {"abs_p68", s.abs_p68}, {"abs_p95", s.abs_p95}, {"mean", s.mean}, {"rms", s.rms}};
+  return {{"count", s.count},
+          {"abs_p68", s.abs_p68},
+          {"abs_p95", s.abs_p95},
+          {"mean", s.mean},
+          {"rms", s.rms}};
 }
 
 std::string number_cell(double value, int decimals) {
@@ -474,7 +509,8 @@ ResidualStatistics residual_statistics(std::vector<double> residuals) {
     const double rank = p * (n - 1.0);
     const auto lower = static_cast<size_t>(std::floor(rank));
     const size_t upper = std::min(lower + 1, residuals.size() - 1);
-    return residuals[lower] + (rank - static_cast<double>(lower)) * (residuals[upper] - residuals[lower]);
+    return residuals[lower] +
+           (rank - static_cast<double>(lower)) * (residuals[upper] - residuals[lower]);
   };
   s.abs_p68 = percentile(0.68);
   s.abs_p95 = percentile(0.95);
@@ -482,33 +518,39 @@ ResidualStatistics residual_statistics(std::vector<double> residuals) {
 }
 
 double SignalComparison::real_in_sim_fraction() const {
-  return real_tracked == 0 ? kNaN : static_cast<double>(both_tracked) / static_cast<double>(real_tracked);
+  return real_tracked == 0 ? kNaN
+                           : static_cast<double>(both_tracked) / static_cast<double>(real_tracked);
 }
 
 double SignalComparison::sim_in_real_fraction() const {
-  return sim_tracked == 0 ? kNaN : static_cast<double>(both_tracked) / static_cast<double>(sim_tracked);
+  return sim_tracked == 0 ? kNaN
+                          : static_cast<double>(both_tracked) / static_cast<double>(sim_tracked);
 }
 
-Result<ComparisonReport> compare_observations(const ObservationFile& real, const ObservationFile& sim,
+Result<ComparisonReport> compare_observations(const ObservationFile& real,
+                                              const ObservationFile& sim,
                                               const CompareOptions& options) {
   if (!std::isfinite(options.min_elevation_deg) || options.min_elevation_deg < -90.0 ||
       options.min_elevation_deg > 90.0) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("minimum elevation {} deg is outside -90..90", options.min_elevation_deg));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("minimum elevation {} deg is outside -90..90", options.min_elevation_deg));
   }
   FileView real_view{&real, observation_epochs(real)};
   FileView sim_view{&sim, observation_epochs(sim)};
   if (real_view.epochs.empty() || sim_view.epochs.empty()) {
-    return make_error(ErrorCode::kOutOfRange,
-                      std::string("no common epochs: ") + (real_view.epochs.empty() ? "REAL" : "SIM") +
-                          " has no observation epoch");
+    return make_error(ErrorCode::kOutOfRange, std::string("no common epochs: ") +
+                                                  (real_view.epochs.empty() ? "REAL" : "SIM") +
+                                                  " has no observation epoch");
   }
   const auto pairs = match_epochs(real_view.epochs, sim_view.epochs);
   if (pairs.empty()) {
-    return make_error(ErrorCode::kOutOfRange,
-                      fmt::format("no common epochs (matched to 1 ms): REAL covers {} to {}, SIM covers {} to {} GPST",
-                                  time_text(real_view.epochs.front()->time), time_text(real_view.epochs.back()->time),
-                                  time_text(sim_view.epochs.front()->time), time_text(sim_view.epochs.back()->time)));
+    return make_error(
+        ErrorCode::kOutOfRange,
+        fmt::format(
+            "no common epochs (matched to 1 ms): REAL covers {} to {}, SIM covers {} to {} GPST",
+            time_text(real_view.epochs.front()->time), time_text(real_view.epochs.back()->time),
+            time_text(sim_view.epochs.front()->time), time_text(sim_view.epochs.back()->time)));
   }
   auto signals = select_signals(real, sim, options);
   if (!signals) return signals.error();
@@ -516,14 +558,17 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real, const
   Eigen::Vector3d station_ecef_m = Eigen::Vector3d::Zero();
   if (options.satellite_source != nullptr) {
     const auto& approx = real.header.approx_position_ecef_m;
-    if (!approx || Eigen::Vector3d((*approx)[0], (*approx)[1], (*approx)[2]).norm() < kMinimumStationRadius_m) {
-      return make_error(ErrorCode::kNotFound,
-                        "REAL has no usable APPROX POSITION XYZ in its header: the elevation mask needs the "
-                        "receiver position");
+    if (!approx || Eigen::Vector3d((*approx)[0], (*approx)[1], (*approx)[2]).norm() <
+                       kMinimumStationRadius_m) {
+      return make_error(
+          ErrorCode::kNotFound,
+          "REAL has no usable APPROX POSITION XYZ in its header: the elevation mask needs the "
+          "receiver position");
     }
     station_ecef_m = Eigen::Vector3d((*approx)[0], (*approx)[1], (*approx)[2]);
   }
-  ElevationMask mask(options.satellite_source, station_ecef_m, options.min_elevation_deg, pairs.size());
+  ElevationMask mask(options.satellite_source, station_ecef_m, options.min_elevation_deg,
+                     pairs.size());
 
   ComparisonReport report;
   report.real_epochs = real_view.epochs.size();
@@ -539,6 +584,7 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real, const
   }
   report.below_mask_satellite_epochs = mask.below_mask();
   report.without_position_satellite_epochs = mask.without_position();
+  report.without_position_by_system = mask.without_position_by_system();
   return report;
 }
 
@@ -562,9 +608,12 @@ Result<std::vector<GnssSystem>> parse_system_letters(std::string_view text) {
     if (c == ',' || c == ' ') continue;
     auto system = system_from_letter(c);
     if (!system) return system.error().with_context("systems '" + std::string(text) + "'");
-    if (std::find(systems.begin(), systems.end(), *system) == systems.end()) systems.push_back(*system);
+    if (std::find(systems.begin(), systems.end(), *system) == systems.end())
+      systems.push_back(*system);
   }
-  if (systems.empty()) return make_error(ErrorCode::kInvalidArgument, "systems: empty list (expected letters such as GE)");
+  if (systems.empty())
+    return make_error(ErrorCode::kInvalidArgument,
+                      "systems: empty list (expected letters such as GE)");
   return systems;
 }
 
@@ -584,35 +633,50 @@ Result<std::vector<Signal>> parse_signal_list(std::string_view text) {
     }
     start = end + 1;
   }
-  if (signals.empty()) return make_error(ErrorCode::kInvalidArgument, "signals: empty list (expected e.g. G1C,E1C)");
+  if (signals.empty())
+    return make_error(ErrorCode::kInvalidArgument, "signals: empty list (expected e.g. G1C,E1C)");
   return signals;
 }
 
 std::string format_comparison_table(const ComparisonReport& r) {
   std::string out;
   auto line = std::back_inserter(out);
-  fmt::format_to(line, "# REAL: {} ({} epochs)\n", r.real_name.empty() ? "-" : r.real_name, r.real_epochs);
-  fmt::format_to(line, "# SIM:  {} ({} epochs)\n", r.sim_name.empty() ? "-" : r.sim_name, r.sim_epochs);
-  fmt::format_to(line, "# common epochs: {}, {} to {} GPST\n", r.common_epochs, time_text(r.first_common_epoch),
-                 time_text(r.last_common_epoch));
+  fmt::format_to(line, "# REAL: {} ({} epochs)\n", r.real_name.empty() ? "-" : r.real_name,
+                 r.real_epochs);
+  fmt::format_to(line, "# SIM:  {} ({} epochs)\n", r.sim_name.empty() ? "-" : r.sim_name,
+                 r.sim_epochs);
+  fmt::format_to(line, "# common epochs: {}, {} to {} GPST\n", r.common_epochs,
+                 time_text(r.first_common_epoch), time_text(r.last_common_epoch));
   if (r.elevation_mask_applied) {
+    std::string per_system;
+    for (const auto& [system, count] : r.without_position_by_system) {
+      per_system += fmt::format("{}{} {}", per_system.empty() ? " (" : ", ", system_name(system), count);
+    }
+    if (!per_system.empty()) per_system += ")";
     fmt::format_to(line,
-                   "# elevation mask: {:.1f} deg seen from REAL's APPROX POSITION XYZ; dropped {} satellite-epochs "
-                   "below it and {} without an ephemeris\n",
-                   r.min_elevation_deg, r.below_mask_satellite_epochs, r.without_position_satellite_epochs);
+                   "# elevation mask: {:.1f} deg seen from REAL's APPROX POSITION XYZ; dropped {} "
+                   "satellite-epochs below it and {} without an ephemeris{}\n",
+                   r.min_elevation_deg, r.below_mask_satellite_epochs,
+                   r.without_position_satellite_epochs, per_system);
   } else {
     fmt::format_to(line, "# elevation mask: none (no navigation data to compute elevations)\n");
   }
   out +=
-      "# residual = real - sim - median over the system's satellites at the epoch; p68/p95 of |residual|\n"
-      "# pr: pseudorange; dop: Doppler as range rate; dphi: carrier phase change between common epochs;\n"
-      "# cn0: C/N0 (bias = mean real - sim, mad = mean |real - sim|); real_in_sim/sim_in_real: tracked overlap\n";
+      "# residual = real - sim - median over the system's satellites at the epoch; p68/p95 of "
+      "|residual|\n"
+      "# pr: pseudorange; dop: Doppler as range rate; dphi: carrier phase change between common "
+      "epochs;\n"
+      "# cn0: C/N0 (bias = mean real - sim, mad = mean |real - sim|); real_in_sim/sim_in_real: "
+      "tracked overlap\n";
 
-  const std::vector<std::string> header = {
-      "signal",       "pr_n",         "pr_p68_m",     "pr_p95_m",      "pr_mean_m",     "pr_rms_m",
-      "dop_n",        "dop_p68_mps",  "dop_p95_mps",  "dop_mean_mps",  "dop_rms_mps",   "dphi_n",
-      "dphi_p68_m",   "dphi_p95_m",   "dphi_mean_m",  "dphi_rms_m",    "cn0_n",         "cn0_bias_dbhz",
-      "cn0_mad_dbhz", "real_tracked", "sim_tracked",  "real_in_sim_pct", "sim_in_real_pct"};
+  const std::vector<std::string> header = {"signal",          "pr_n",           "pr_p68_m",
+                                           "pr_p95_m",        "pr_mean_m",      "pr_rms_m",
+                                           "dop_n",           "dop_p68_mps",    "dop_p95_mps",
+                                           "dop_mean_mps",    "dop_rms_mps",    "dphi_n",
+                                           "dphi_p68_m",      "dphi_p95_m",     "dphi_mean_m",
+                                           "dphi_rms_m",      "cn0_n",          "cn0_bias_dbhz",
+                                           "cn0_mad_dbhz",    "real_tracked",   "sim_tracked",
+                                           "real_in_sim_pct", "sim_in_real_pct"};
   std::vector<std::vector<std::string>> rows;
   for (const auto& s : r.signals) {
     auto stats = [](std::vector<std::string>& row, const ResidualStatistics& st, int decimals) {
@@ -644,7 +708,8 @@ std::string format_comparison_table(const ComparisonReport& r) {
     std::string text;
     for (size_t c = 0; c < cells.size(); ++c) {
       // The signal name is left-aligned, numbers right-aligned.
-      text += c == 0 ? fmt::format("{:<{}}", cells[c], widths[c]) : fmt::format("  {:>{}}", cells[c], widths[c]);
+      text += c == 0 ? fmt::format("{:<{}}", cells[c], widths[c])
+                     : fmt::format("  {:>{}}", cells[c], widths[c]);
     }
     out += text + "\n";
   };
@@ -660,13 +725,20 @@ std::string comparison_to_json(const ComparisonReport& r) {
   j["common_epochs"] = r.common_epochs;
   j["first_common_epoch_gpst"] = r.first_common_epoch.to_iso8601(TimeScale::kGpst, 3);
   j["last_common_epoch_gpst"] = r.last_common_epoch.to_iso8601(TimeScale::kGpst, 3);
-  j["elevation_mask"] = {{"applied", r.elevation_mask_applied},
-                         {"min_elevation_deg", r.elevation_mask_applied ? nlohmann::json(r.min_elevation_deg) : nlohmann::json()},
-                         {"below_mask_satellite_epochs", r.below_mask_satellite_epochs},
-                         {"without_position_satellite_epochs", r.without_position_satellite_epochs}};
+  nlohmann::json without_position = nlohmann::json::object();
+  for (const auto& [system, count] : r.without_position_by_system) {
+    without_position[std::string(system_name(system))] = count;
+  }
+  j["elevation_mask"] = {
+      {"applied", r.elevation_mask_applied},
+      {"min_elevation_deg",
+       r.elevation_mask_applied ? nlohmann::json(r.min_elevation_deg) : nlohmann::json()},
+      {"below_mask_satellite_epochs", r.below_mask_satellite_epochs},
+      {"without_position_satellite_epochs", r.without_position_satellite_epochs},
+      {"without_position_by_system", without_position}};
   j["residual_definition"] =
-      "real - sim minus the per-epoch median over the system's satellites; abs_p68/abs_p95 are percentiles of "
-      "|residual|; doppler as range rate (-wavelength * D)";
+      "real - sim minus the per-epoch median over the system's satellites; abs_p68/abs_p95 are "
+      "percentiles of |residual|; doppler as range rate (-wavelength * D)";
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& s : r.signals) {
     rows.push_back({{"signal", s.signal.to_string()},
@@ -675,7 +747,9 @@ std::string comparison_to_json(const ComparisonReport& r) {
                     {"doppler_mps", statistics_json(s.doppler_mps)},
                     {"phase_difference_m", statistics_json(s.phase_difference_m)},
                     {"cn0_dbhz",
-                     {{"count", s.cn0_count}, {"bias", s.cn0_bias_dbhz}, {"mean_abs_difference", s.cn0_mean_abs_difference_dbhz}}},
+                     {{"count", s.cn0_count},
+                      {"bias", s.cn0_bias_dbhz},
+                      {"mean_abs_difference", s.cn0_mean_abs_difference_dbhz}}},
                     {"overlap",
                      {{"real_tracked", s.real_tracked},
                       {"sim_tracked", s.sim_tracked},

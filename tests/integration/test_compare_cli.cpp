@@ -2,11 +2,11 @@
 // and against the open-sky contract simulation of the same hour (sane figures, printed), plus the
 // exit codes of bad input.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "process.hpp"
 #include "skytrace/io/rinex_obs.hpp"
@@ -16,7 +16,9 @@ namespace skytrace {
 namespace {
 
 std::filesystem::path esbc_dir() { return test::shared_data_dir() / "real/esbc_2020177"; }
-std::filesystem::path esbc_obs() { return esbc_dir() / "ESBC00DNK_R_20201770000_01D_30S_MO_first1h.rnx"; }
+std::filesystem::path esbc_obs() {
+  return esbc_dir() / "ESBC00DNK_R_20201770000_01D_30S_MO_first1h.rnx";
+}
 std::filesystem::path esbc_nav() { return esbc_dir() / "ESBC00DNK_R_20201770000_01D_MN.rnx"; }
 std::filesystem::path contract_scenario() {
   return test::shared_data_dir().parent_path() / "contract" / "esbc-open-sky.yaml";
@@ -36,7 +38,9 @@ const nlohmann::json* find_row(const nlohmann::json& report, const std::string& 
   return nullptr;
 }
 
-double number(const nlohmann::json& value) { return value.is_number() ? value.get<double>() : std::nan(""); }
+double number(const nlohmann::json& value) {
+  return value.is_number() ? value.get<double>() : std::nan("");
+}
 
 class CompareCli : public ::testing::Test {
  protected:
@@ -52,8 +56,8 @@ class CompareCli : public ::testing::Test {
 
 TEST_F(CompareCli, RealFileAgainstItselfIsZeroWithFullOverlap) {
   const auto json_path = dir_ / "self.json";
-  const auto r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) +
-                                   " --json " + q(json_path));
+  const auto r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " +
+                                   q(esbc_obs()) + " --json " + q(json_path));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("elevation mask: none"), std::string::npos) << r.output;
   const auto report = read_json(json_path);
@@ -70,20 +74,25 @@ TEST_F(CompareCli, RealFileAgainstItselfIsZeroWithFullOverlap) {
       if (row[quantity]["count"].get<int>() == 0) continue;
       EXPECT_EQ(number(row[quantity]["rms"]), 0.0) << name << " " << quantity;
     }
-    if (row["cn0_dbhz"]["count"].get<int>() > 0) EXPECT_EQ(number(row["cn0_dbhz"]["mean_abs_difference"]), 0.0) << name;
+    if (row["cn0_dbhz"]["count"].get<int>() > 0) {
+      EXPECT_EQ(number(row["cn0_dbhz"]["mean_abs_difference"]), 0.0) << name;
+    }
   }
   EXPECT_GT((*find_row(report, "G1C"))["pseudorange_m"]["count"].get<int>(), 800);
   EXPECT_GT((*find_row(report, "G1C"))["phase_difference_m"]["count"].get<int>(), 800);
 }
 
 TEST_F(CompareCli, RealAgainstOpenSkySimulation) {
-  if (!std::filesystem::exists(contract_scenario())) GTEST_SKIP() << "contract scenario absent: " << contract_scenario();
+  if (!std::filesystem::exists(contract_scenario()))
+    GTEST_SKIP() << "contract scenario absent: " << contract_scenario();
   const auto out = dir_ / "sim";
-  const auto run = test::run_command(skytrace_cmd() + " run " + q(contract_scenario()) + " --out " + q(out) + " --quiet");
+  const auto run = test::run_command(skytrace_cmd() + " run " + q(contract_scenario()) + " --out " +
+                                     q(out) + " --quiet");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto json_path = dir_ / "compare.json";
-  const auto r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(out / "obs.rnx") + " --nav " +
-                                   q(esbc_nav()) + " --min-elevation-deg 10 --json " + q(json_path));
+  const auto r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " +
+                                   q(out / "obs.rnx") + " --nav " + q(esbc_nav()) +
+                                   " --min-elevation-deg 10 --json " + q(json_path));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::cout << r.output;
   EXPECT_NE(r.output.find("elevation mask: 10.0 deg"), std::string::npos) << r.output;
@@ -108,10 +117,11 @@ TEST_F(CompareCli, RealAgainstOpenSkySimulation) {
     const double cn0_mad_dbhz = number((*row)["cn0_dbhz"]["mean_abs_difference"]);
     const double real_in_sim = number((*row)["overlap"]["real_in_sim"]);
     const double sim_in_real = number((*row)["overlap"]["sim_in_real"]);
-    std::cout << "[ figures ] " << name << " ESBC real vs open-sky sim, >= 10 deg: pseudorange p68 " << pr_p68_m
-              << " m, p95 " << pr_p95_m << " m; Doppler p68 " << dop_p68_mps << " m/s; phase step p68 "
-              << dphi_p68_m << " m; C/N0 mean |diff| " << cn0_mad_dbhz << " dB-Hz; overlap real in sim "
-              << 100.0 * real_in_sim << " %, sim in real " << 100.0 * sim_in_real << " %\n";
+    std::cout << "[ figures ] " << name << " ESBC real vs open-sky sim, >= 10 deg: pseudorange p68 "
+              << pr_p68_m << " m, p95 " << pr_p95_m << " m; Doppler p68 " << dop_p68_mps
+              << " m/s; phase step p68 " << dphi_p68_m << " m; C/N0 mean |diff| " << cn0_mad_dbhz
+              << " dB-Hz; overlap real in sim " << 100.0 * real_in_sim << " %, sim in real "
+              << 100.0 * sim_in_real << " %\n";
     // Sanity only (the receiver-realism work tunes the figures): finite, a few metres at most for
     // the pseudorange (ionosphere and troposphere model errors, broadcast orbits, multipath).
     EXPECT_TRUE(std::isfinite(pr_p68_m) && std::isfinite(pr_p95_m)) << name;
@@ -125,7 +135,8 @@ TEST_F(CompareCli, RealAgainstOpenSkySimulation) {
 
 TEST_F(CompareCli, BadInputExitCodes) {
   // Unreadable file: input error, the file named.
-  auto r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(dir_ / "missing.rnx"));
+  auto r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " +
+                             q(dir_ / "missing.rnx"));
   EXPECT_EQ(r.exit_code, 3) << r.output;
   EXPECT_NE(r.output.find("missing.rnx"), std::string::npos) << r.output;
 
@@ -143,17 +154,22 @@ TEST_F(CompareCli, BadInputExitCodes) {
   ASSERT_TRUE(written.ok()) << written.error().message;
   r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(later_path));
   EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("REAL covers 2020-06-25T00:00:00 to 2020-06-25T00:59:30, SIM covers 2020-06-26T00:00:00"),
-            std::string::npos)
+  EXPECT_NE(
+      r.output.find(
+          "REAL covers 2020-06-25T00:00:00 to 2020-06-25T00:59:30, SIM covers 2020-06-26T00:00:00"),
+      std::string::npos)
       << r.output;
 
   // A signal the files do not have, a bad system letter.
-  r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) + " --signals G1Z");
+  r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) +
+                        " --signals G1Z");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) + " --signals I5A");
+  r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) +
+                        " --signals I5A");
   EXPECT_EQ(r.exit_code, 3) << r.output;
   EXPECT_NE(r.output.find("I5A"), std::string::npos) << r.output;
-  r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) + " --systems GQ");
+  r = test::run_command(skytrace_cmd() + " compare " + q(esbc_obs()) + " " + q(esbc_obs()) +
+                        " --systems GQ");
   EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 

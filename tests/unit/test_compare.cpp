@@ -2,11 +2,11 @@
 // per epoch + known per-satellite offsets. The clock part must vanish and the per-satellite offsets
 // come out as residuals computed by hand below.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "skytrace/core/constants.hpp"
@@ -20,7 +20,8 @@ namespace {
 
 using G = GnssSystem;
 
-const GnssTime kT0 = GnssTime::from_calendar(CalendarTime{2020, 6, 25, 0, 0, 0.0}, TimeScale::kGpst);
+const GnssTime kT0 =
+    GnssTime::from_calendar(CalendarTime{2020, 6, 25, 0, 0, 0.0}, TimeScale::kGpst);
 const std::array<double, 3> kStationEcef_m = {3582105.2910, 532589.7313, 5232754.8054};
 constexpr double kLambdaL1_m = constants::kSpeedOfLight_mps / 1575.42e6;
 constexpr double kRealInterval_s = 30.0;
@@ -29,17 +30,23 @@ constexpr int kRealEpochs = 10;  // 0 .. 270 s
 constexpr int kSimEpochs = 31;   // 0 .. 300 s: every third one is a real epoch
 
 // Known per-satellite offsets added to the simulation (index = satellite number).
-const std::map<int, double> kGpsPseudorangeOffset_m = {{1, 0.0}, {2, 1.5}, {3, -2.0}, {4, 4.0}, {5, 10.0}, {6, 0.0}};
+const std::map<int, double> kGpsPseudorangeOffset_m = {{1, 0.0}, {2, 1.5},  {3, -2.0},
+                                                       {4, 4.0}, {5, 10.0}, {6, 0.0}};
 const std::map<int, double> kGalileoPseudorangeOffset_m = {{1, 0.2}, {2, -0.2}, {3, 0.4}, {4, 1.0}};
-const std::map<int, double> kGpsDopplerOffset_hz = {{1, 0.0}, {2, 0.5}, {3, -0.25}, {4, 1.0}, {5, 0.125}, {6, 0.0}};
+const std::map<int, double> kGpsDopplerOffset_hz = {{1, 0.0}, {2, 0.5},   {3, -0.25},
+                                                    {4, 1.0}, {5, 0.125}, {6, 0.0}};
 // Phase drift per real interval, in cycles (GPS) and metres (GLONASS).
-const std::map<int, double> kGpsPhaseDrift_cycles = {{1, 0.0}, {2, 0.0}, {3, 0.0}, {4, 0.01}, {5, -0.02}, {6, 0.0}};
+const std::map<int, double> kGpsPhaseDrift_cycles = {{1, 0.0},  {2, 0.0},   {3, 0.0},
+                                                     {4, 0.01}, {5, -0.02}, {6, 0.0}};
 const std::map<int, double> kGlonassRangeRateOffset_mps = {{1, 0.0}, {2, 0.05}, {3, -0.03}};
 const std::map<int, double> kGlonassPhaseDrift_m = {{1, 0.0}, {2, 0.002}, {3, -0.001}};
-const std::map<int, double> kGpsCn0Offset_dbhz = {{1, 1.0}, {2, 2.0}, {3, 3.0}, {4, -1.0}, {5, 0.0}, {6, 0.0}};
+const std::map<int, double> kGpsCn0Offset_dbhz = {{1, 1.0},  {2, 2.0}, {3, 3.0},
+                                                  {4, -1.0}, {5, 0.0}, {6, 0.0}};
 const std::map<int, int> kGlonassChannel = {{1, 1}, {2, -4}, {3, 5}};
 
-double glonass_lambda_m(int slot) { return constants::kSpeedOfLight_mps / (1602.0e6 + 0.5625e6 * kGlonassChannel.at(slot)); }
+double glonass_lambda_m(int slot) {
+  return constants::kSpeedOfLight_mps / (1602.0e6 + 0.5625e6 * kGlonassChannel.at(slot));
+}
 
 ObservationHeader header(bool with_glonass_slots) {
   ObservationHeader h;
@@ -63,7 +70,8 @@ struct Observables {
   double pseudorange_m, phase_cycles, doppler_hz, cn0_dbhz;
 };
 Observables real_observables(G system, int n, double k) {
-  const double system_offset_m = system == G::kGalileo ? 5.0e5 : (system == G::kGlonass ? 7.0e5 : 0.0);
+  const double system_offset_m =
+      system == G::kGalileo ? 5.0e5 : (system == G::kGlonass ? 7.0e5 : 0.0);
   return {2.0e7 + 1000.0 * n + 100.0 * k + system_offset_m, 1.0e8 + 10000.0 * n + 500.25 * k,
           -1000.0 + 10.0 * n + 0.5 * k, 40.0 + n};
 }
@@ -85,7 +93,8 @@ Observables sim_observables(G system, int n, double k) {
     o.phase_cycles += 157.542 * k * k;
     o.doppler_hz += 250.0 + 7.0 * k;
   } else {
-    // GLONASS FDMA: a clock common in metres is a different number of cycles and hertz per satellite.
+    // GLONASS FDMA: a clock common in metres is a different number of cycles and hertz per
+    // satellite.
     const double lambda_m = glonass_lambda_m(n);
     o.pseudorange_m += clock_m - 7.5;
     o.phase_cycles += (clock_phase_m + kGlonassPhaseDrift_m.at(n) * k) / lambda_m;
@@ -112,10 +121,13 @@ std::vector<ObservationEpoch> real_epochs(double time_shift_s = 0.0) {
     ObservationEpoch epoch;
     epoch.time = kT0 + kRealInterval_s * k + time_shift_s;
     for (int n = 1; n <= 5; ++n) {
-      epoch.satellites.push_back(record(G::kGps, n, real_observables(G::kGps, n, k), (n == 2 && e == 6) ? 1 : 0));
+      epoch.satellites.push_back(
+          record(G::kGps, n, real_observables(G::kGps, n, k), (n == 2 && e == 6) ? 1 : 0));
     }
-    for (int n = 1; n <= 4; ++n) epoch.satellites.push_back(record(G::kGalileo, n, real_observables(G::kGalileo, n, k)));
-    for (int n = 1; n <= 3; ++n) epoch.satellites.push_back(record(G::kGlonass, n, real_observables(G::kGlonass, n, k)));
+    for (int n = 1; n <= 4; ++n)
+      epoch.satellites.push_back(record(G::kGalileo, n, real_observables(G::kGalileo, n, k)));
+    for (int n = 1; n <= 3; ++n)
+      epoch.satellites.push_back(record(G::kGlonass, n, real_observables(G::kGlonass, n, k)));
     epochs.push_back(std::move(epoch));
   }
   return epochs;
@@ -132,10 +144,13 @@ std::vector<ObservationEpoch> sim_epochs() {
     epoch.time = kT0 + t_s;
     for (int n = 1; n <= 6; ++n) {
       if (n == 5 && t_s < 150.0) continue;
-      epoch.satellites.push_back(record(G::kGps, n, sim_observables(G::kGps, n, k), 0, !(n == 3 && e == 7)));
+      epoch.satellites.push_back(
+          record(G::kGps, n, sim_observables(G::kGps, n, k), 0, !(n == 3 && e == 7)));
     }
-    for (int n = 1; n <= 4; ++n) epoch.satellites.push_back(record(G::kGalileo, n, sim_observables(G::kGalileo, n, k)));
-    for (int n = 1; n <= 3; ++n) epoch.satellites.push_back(record(G::kGlonass, n, sim_observables(G::kGlonass, n, k)));
+    for (int n = 1; n <= 4; ++n)
+      epoch.satellites.push_back(record(G::kGalileo, n, sim_observables(G::kGalileo, n, k)));
+    for (int n = 1; n <= 3; ++n)
+      epoch.satellites.push_back(record(G::kGlonass, n, sim_observables(G::kGlonass, n, k)));
     epochs.push_back(std::move(epoch));
   }
   return epochs;
@@ -144,7 +159,8 @@ std::vector<ObservationEpoch> sim_epochs() {
 class Compare : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = test::make_temp_dir(std::string("compare_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = test::make_temp_dir(std::string("compare_") +
+                               ::testing::UnitTest::GetInstance()->current_test_info()->name());
     real_ = dir_ / "real.rnx";
     sim_ = dir_ / "sim.rnx";
     // GLONASS SLOT / FRQ # only in the real file: the channels of either file serve.
@@ -185,8 +201,9 @@ TEST_F(Compare, ClockRemovedAndKnownPseudorangeResidualsComeOut) {
   EXPECT_EQ(report->signals[2].signal.to_string(), "E1C");
 
   // GPS: offsets {0, 1.5, -2, 4} (G01-G04) at 0-120 s, median 0.75, residuals -(offset - median) =
-  // {0.75, -0.75, 2.75, -3.25}; with G05 (offset 10) at 150-270 s, median 1.5: {1.5, 0, 3.5, -2.5, -8.5}.
-  // Sorted |r| (45 values): 0 x5, 0.75 x10, 1.5 x5, 2.5 x5, 2.75 x5, 3.25 x5, 3.5 x5, 8.5 x5.
+  // {0.75, -0.75, 2.75, -3.25}; with G05 (offset 10) at 150-270 s, median 1.5: {1.5, 0, 3.5, -2.5,
+  // -8.5}. Sorted |r| (45 values): 0 x5, 0.75 x10, 1.5 x5, 2.5 x5, 2.75 x5, 3.25 x5, 3.5 x5, 8.5
+  // x5.
   const auto& gps = row(*report, "G1C");
   EXPECT_EQ(gps.pseudorange_m.count, 45u);
   EXPECT_NEAR(gps.pseudorange_m.mean, (5 * -0.5 + 5 * -6.0) / 45.0, 1e-6);
@@ -220,8 +237,8 @@ TEST_F(Compare, DopplerInMetresPerSecondWithGlonassChannels) {
   EXPECT_NEAR(gps.doppler_mps.abs_p95, 0.875 * kLambdaL1_m, 1e-9);
 
   // GLONASS: a common 150 + 3k m/s in Hz at each satellite's own wavelength, offsets {0, 0.05,
-  // -0.03} m/s, median 0 -> residuals {0, -0.05, 0.03}. A wrong channel would leave metres per second.
-  // Tolerance: the simulated Doppler is rounded to 0.001 Hz in the file (0.0002 m/s).
+  // -0.03} m/s, median 0 -> residuals {0, -0.05, 0.03}. A wrong channel would leave metres per
+  // second. Tolerance: the simulated Doppler is rounded to 0.001 Hz in the file (0.0002 m/s).
   const auto& glo = row(*report, "R1C");
   EXPECT_EQ(glo.doppler_mps.count, 30u);
   EXPECT_EQ(glo.unknown_channel_satellite_epochs, 0u);
@@ -240,7 +257,8 @@ TEST_F(Compare, EpochDifferencedPhaseSkipsLossOfLockAndGaps) {
   const auto& gps = row(*report, "G1C");
   EXPECT_EQ(gps.phase_difference_m.count, 38u);
   EXPECT_NEAR(gps.phase_difference_m.mean, (9 * -0.01 + 4 * 0.02) * kLambdaL1_m / 38.0, 1e-7);
-  EXPECT_NEAR(gps.phase_difference_m.rms, kLambdaL1_m * std::sqrt((9 * 1e-4 + 4 * 4e-4) / 38.0), 1e-7);
+  EXPECT_NEAR(gps.phase_difference_m.rms, kLambdaL1_m * std::sqrt((9 * 1e-4 + 4 * 4e-4) / 38.0),
+              1e-7);
   EXPECT_NEAR(gps.phase_difference_m.abs_p68, 0.01 * kLambdaL1_m, 1e-7);
   EXPECT_NEAR(gps.phase_difference_m.abs_p95, 0.02 * kLambdaL1_m, 1e-7);
 
@@ -316,12 +334,17 @@ TEST_F(Compare, SystemAndSignalSelection) {
 // every other satellite 60 degrees up.
 class FakeSky final : public orbits::SatelliteStateSource {
  public:
-  [[nodiscard]] Result<orbits::SatelliteState> state(const SatelliteId& satellite, const GnssTime&) const override {
-    if (satellite == SatelliteId{G::kGps, 6}) return make_error(ErrorCode::kNotFound, "no ephemeris for G06");
-    const double elevation_rad = (satellite == SatelliteId{G::kGps, 5} ? 5.0 : 60.0) * constants::kPi / 180.0;
-    const Geodetic station = ecef_to_geodetic(Eigen::Vector3d(kStationEcef_m[0], kStationEcef_m[1], kStationEcef_m[2]));
+  [[nodiscard]] Result<orbits::SatelliteState> state(const SatelliteId& satellite,
+                                                     const GnssTime&) const override {
+    if (satellite == SatelliteId{G::kGps, 6})
+      return make_error(ErrorCode::kNotFound, "no ephemeris for G06");
+    const double elevation_rad =
+        (satellite == SatelliteId{G::kGps, 5} ? 5.0 : 60.0) * constants::kPi / 180.0;
+    const Geodetic station =
+        ecef_to_geodetic(Eigen::Vector3d(kStationEcef_m[0], kStationEcef_m[1], kStationEcef_m[2]));
     orbits::SatelliteState s;
-    s.position_m = enu_to_ecef(2.0e7 * Eigen::Vector3d(0.0, std::cos(elevation_rad), std::sin(elevation_rad)), station);
+    s.position_m = enu_to_ecef(
+        2.0e7 * Eigen::Vector3d(0.0, std::cos(elevation_rad), std::sin(elevation_rad)), station);
     return s;
   }
   [[nodiscard]] std::vector<SatelliteId> satellites() const override { return {}; }
@@ -338,6 +361,7 @@ TEST_F(Compare, ElevationMaskDropsLowAndUnknownSatellites) {
   EXPECT_TRUE(report->elevation_mask_applied);
   EXPECT_EQ(report->below_mask_satellite_epochs, 10u);        // G05 at the 10 common epochs
   EXPECT_EQ(report->without_position_satellite_epochs, 10u);  // G06
+  EXPECT_EQ(report->without_position_by_system, (std::map<GnssSystem, size_t>{{G::kGps, 10u}}));
   const auto& gps = row(*report, "G1C");
   EXPECT_EQ(gps.real_tracked, 40u);
   EXPECT_EQ(gps.sim_tracked, 40u);
@@ -382,16 +406,19 @@ TEST_F(Compare, ClearErrors) {
   auto report = compare_observation_files(real_, later, {});
   ASSERT_FALSE(report.ok());
   EXPECT_EQ(report.error().code, ErrorCode::kOutOfRange);
-  EXPECT_NE(report.error().message.find("REAL covers 2020-06-25T00:00:00 to 2020-06-25T00:04:30"), std::string::npos)
+  EXPECT_NE(report.error().message.find("REAL covers 2020-06-25T00:00:00 to 2020-06-25T00:04:30"),
+            std::string::npos)
       << report.error().message;
-  EXPECT_NE(report.error().message.find("SIM covers 2020-06-26T00:00:00"), std::string::npos) << report.error().message;
+  EXPECT_NE(report.error().message.find("SIM covers 2020-06-26T00:00:00"), std::string::npos)
+      << report.error().message;
 
   // No common signals.
   auto galileo_only = header(false);
   galileo_only.observation_types.erase(G::kGps);
   galileo_only.observation_types.erase(G::kGlonass);
   std::vector<ObservationEpoch> epochs = real_epochs();
-  for (auto& e : epochs) std::erase_if(e.satellites, [](const auto& s) { return s.satellite.system != G::kGalileo; });
+  for (auto& e : epochs)
+    std::erase_if(e.satellites, [](const auto& s) { return s.satellite.system != G::kGalileo; });
   const auto galileo = dir_ / "galileo.rnx";
   ASSERT_TRUE(write_rinex_obs(galileo, galileo_only, epochs).ok());
   CompareOptions gps_only;
@@ -399,7 +426,8 @@ TEST_F(Compare, ClearErrors) {
   report = compare_observation_files(real_, galileo, gps_only);
   ASSERT_FALSE(report.ok());
   EXPECT_EQ(report.error().code, ErrorCode::kNotFound);
-  EXPECT_NE(report.error().message.find("no common signals"), std::string::npos) << report.error().message;
+  EXPECT_NE(report.error().message.find("no common signals"), std::string::npos)
+      << report.error().message;
 
   // Unreadable file: the message says which one.
   report = compare_observation_files(real_, dir_ / "missing.rnx", {});
@@ -419,7 +447,8 @@ TEST_F(Compare, TableAndJsonCarryTheSameNumbers) {
   std::string header_line;
   while (std::getline(lines, line)) {
     if (line.rfind("signal", 0) == 0) header_line = line;
-    if (line.rfind("G1C", 0) == 0 || line.rfind("E1C", 0) == 0 || line.rfind("R1C", 0) == 0) rows[line.substr(0, 3)] = line;
+    if (line.rfind("G1C", 0) == 0 || line.rfind("E1C", 0) == 0 || line.rfind("R1C", 0) == 0)
+      rows[line.substr(0, 3)] = line;
   }
   ASSERT_EQ(rows.size(), 3u) << table;
   // Aligned: every row as long as the header.

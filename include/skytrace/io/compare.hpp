@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -94,18 +95,20 @@ struct ComparisonReport {
   // dropped because the satellite source had no state for them.
   size_t below_mask_satellite_epochs = 0;
   size_t without_position_satellite_epochs = 0;
+  std::map<GnssSystem, size_t> without_position_by_system;  // the same, per system (non-zero only)
   std::vector<SignalComparison> signals;  // ordered by system (G R E C J I S) then signal
 };
 
 // Compares two files already read. Errors: no common epochs (kOutOfRange, naming both spans), no
 // common signals or a requested signal missing (kNotFound), mask requested without APPROX
 // POSITION XYZ in the real file (kNotFound).
-[[nodiscard]] Result<ComparisonReport> compare_observations(const ObservationFile& real, const ObservationFile& sim,
+[[nodiscard]] Result<ComparisonReport> compare_observations(const ObservationFile& real,
+                                                            const ObservationFile& sim,
                                                             const CompareOptions& options);
 // Reads both files (errors say which of REAL and SIM failed) and compares them.
-[[nodiscard]] Result<ComparisonReport> compare_observation_files(const std::filesystem::path& real_path,
-                                                                 const std::filesystem::path& sim_path,
-                                                                 const CompareOptions& options);
+[[nodiscard]] Result<ComparisonReport> compare_observation_files(
+    const std::filesystem::path& real_path, const std::filesystem::path& sim_path,
+    const CompareOptions& options);
 
 // "GE" -> {GPS, Galileo}; unknown letters are kInvalidArgument.
 [[nodiscard]] Result<std::vector<GnssSystem>> parse_system_letters(std::string_view text);
