@@ -108,6 +108,8 @@ std::string_view to_string(SatelliteStatus status) {
     case SatelliteStatus::kBelowMask: return "below_mask";
     case SatelliteStatus::kNoEphemeris: return "no_ephemeris";
     case SatelliteStatus::kNoSignal: return "no_signal";
+    case SatelliteStatus::kBlocked: return "blocked";
+    case SatelliteStatus::kAttenuated: return "attenuated";
   }
   return "?";
 }
@@ -130,6 +132,17 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
     const bool wanted = std::any_of(settings_.signals.begin(), settings_.signals.end(),
                                     [&](const Signal& s) { return s.system == sat.system; });
     if (wanted) satellites_.push_back(sat);
+  }
+}
+
+void ObservationGenerator::set_world(const PathQuery* world, const LocalFrame& frame) {
+  world_ = world;
+  world_frame_ = frame;
+}
+
+void ObservationGenerator::arcs_lost(const SatelliteId& sat) {
+  for (auto& [key, arc] : arcs_) {
+    if (key.first == sat) arc.active = false;
   }
 }
 
@@ -163,6 +176,18 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   const Eigen::Matrix3d rx_to_enu = ecef_to_enu_rotation(rx_geodetic);
   const std::optional<orbits::KlobucharCoefficients>& klobuchar = ephemerides_.data().ionosphere.gps;
 
+  // Satellites above the mask wait here for the world's verdict before their signals are measured.
+  struct Pending {
+    size_t index = 0;
+    std::optional<RecordState> record;
+    bool precise_truth = false;
+    GnssTime transmit_time;
+    double range_m = 0.0;
+    double range_rate_mps = 0.0;
+    Eigen::Vector3d line_of_sight = Eigen::Vector3d::Zero();  // ECEF unit vector, receiver to satellite
+  };
+  std::vector<Pending> pending;
+  pending.reserve(satellites_.size());
   epoch.satellites.reserve(satellites_.size());
   for (const SatelliteId& sat : satellites_) {
     SatelliteObservation obs;
@@ -255,6 +280,43 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
           atmosphere::klobuchar_delay_l1_m(*klobuchar, epoch.true_time, rx_geodetic, obs.direction).value_or(0.0);
     }
 
+    pending.push_back(Pending{epoch.satellites.size(), std::move(*record), precise_truth, transmit_time, range_m,
+                              range_rate_mps, line_of_sight});
+    epoch.satellites.push_back(std::move(obs));
+  }
+
+  // The world: what happens to each signal on its way to the antenna, all satellites in one batch.
+  std::vector<RayOutcome> outcomes;
+  if (world_ != nullptr && !pending.empty()) {
+    const Eigen::Matrix3d to_world = world_frame_.ecef_to_local_rotation();
+    std::vector<Eigen::Vector3d> directions;
+    directions.reserve(pending.size());
+    for (const Pending& p : pending) directions.push_back(to_world * p.line_of_sight);
+    outcomes = world_->trace(world_frame_.from_ecef(rx_m), directions);
+  }
+
+  for (size_t pending_index = 0; pending_index < pending.size(); ++pending_index) {
+    Pending& p = pending[pending_index];
+    SatelliteObservation& obs = epoch.satellites[p.index];
+    const SatelliteId sat = obs.satellite;
+    const std::optional<RecordState> record = std::move(p.record);
+    const bool precise_truth = p.precise_truth;
+    const GnssTime transmit_time = p.transmit_time;
+    const double range_m = p.range_m;
+    const double range_rate_mps = p.range_rate_mps;
+    double attenuation_db = 0.0;
+    if (!outcomes.empty()) {
+      const RayOutcome& outcome = outcomes[pending_index];
+      if (outcome.blocked) {
+        obs.status = SatelliteStatus::kBlocked;
+        obs.detail = outcome.blocking_object;
+        arcs_lost(sat);
+        continue;
+      }
+      obs.vegetation_path_m = outcome.vegetation_path_m;
+      obs.vegetation_attenuation_db = outcome.vegetation_attenuation_db;
+      attenuation_db = outcome.vegetation_attenuation_db;
+    }
     for (const Signal& signal : settings_.signals) {
       if (signal.system != sat.system) continue;
       const SignalInfo* info = signal_info_.at(signal);
@@ -298,7 +360,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       const double sin_el = std::sin(obs.direction.elevation_deg * std::numbers::pi / 180.0);
       const double cn0_dbhz = settings_.profile.cn0_horizon_dbhz +
                               (settings_.profile.cn0_zenith_dbhz - settings_.profile.cn0_horizon_dbhz) *
-                                  std::sqrt(std::max(sin_el, 0.0));
+                                  std::sqrt(std::max(sin_el, 0.0)) -
+                              attenuation_db;
       if (settings_.profile.tracking_threshold_dbhz > 0.0 && cn0_dbhz < settings_.profile.tracking_threshold_dbhz) continue;
       m.cn0_dbhz = quantize(cn0_dbhz, settings_.profile.cn0_resolution_dbhz);
 
@@ -345,10 +408,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.signals.push_back(m);
     }
     if (obs.signals.empty()) {
-      obs.status = SatelliteStatus::kNoSignal;
-      obs.detail = "no listed signal tracked";
+      obs.status = attenuation_db > 0.0 ? SatelliteStatus::kAttenuated : SatelliteStatus::kNoSignal;
+      obs.detail = attenuation_db > 0.0 ? "below the tracking threshold after vegetation" : "no listed signal tracked";
     }
-    epoch.satellites.push_back(std::move(obs));
   }
   last_tag_ = tag;
   return epoch;

@@ -13,7 +13,10 @@ Result<ReceiverProfile> builtin_profile(const std::string& name) {
   ReceiverProfile p;
   p.name = name;
   if (name == "ideal") {
-    return p;  // no noise, ideal clock, every signal above the mask
+    // No noise, ideal clock, every signal above the mask in open sky (C/N0 33 dB-Hz at the
+    // horizon); signals attenuated by vegetation below 25 dB-Hz are lost.
+    p.tracking_threshold_dbhz = 25.0;
+    return p;
   }
   if (name == "septentrio-polarx5") {
     // Provisional geodetic receiver: narrow correlator, carrier-aided DLL, OCXO-class steered clock.

@@ -277,7 +277,18 @@ constexpr const char* kTruthHeader =
     "time_gpst,receiver,sat,signal,status,az_deg,el_deg,range_m,range_rate_mps,sat_clock_m,relativistic_m,"
     "group_delay_m,iono_m,tropo_m,rx_clock_m,code_noise_m,phase_noise_m,doppler_noise_mps,ambiguity_cycles,"
     "pseudorange_m,carrier_phase_cycles,doppler_hz,cn0_dbhz,rx_x_m,rx_y_m,rx_z_m,rx_vx_mps,rx_vy_mps,rx_vz_mps,"
-    "rx_clock_drift_mps\n";
+    "rx_clock_drift_mps,vegetation_attenuation_db,detail\n";
+
+// A CSV cell: quoted when it holds a comma or a quote.
+std::string csv_text(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
 
 void append_truth(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
   const double c = constants::kSpeedOfLight_mps;
@@ -304,17 +315,18 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
                                              sat.status == receiver::SatelliteStatus::kNoSignal
                                          ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
                                          : std::string(",");
-      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{}\n", time, receiver_name, sat_name, status,
-                     geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part);
+      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{}\n", time, receiver_name, sat_name,
+                     status, geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part,
+                     sat.vegetation_attenuation_db, csv_text(sat.detail));
       continue;
     }
     for (const auto& m : sat.signals) {
       fmt::format_to(std::back_inserter(out),
-                     "{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.5f},{:.5f},{},{:.4f},{:.4f},{:.4f},{:.3f},{}\n",
+                     "{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.5f},{:.5f},{},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.2f},\n",
                      time, receiver_name, sat_name, m.signal.to_string(), status, geometry, m.group_delay_m,
                      m.ionosphere_code_m, sat.troposphere_m, rx_clock, m.code_noise_m, m.phase_noise_m,
                      m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
-                     m.cn0_dbhz, receiver_part);
+                     m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);
     }
   }
 }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "skytrace/core/frames.hpp"
+#include "skytrace/core/path_query.hpp"
 #include "skytrace/core/random.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/orbits/broadcast.hpp"
@@ -47,7 +48,14 @@ struct GeneratorSettings {
   int receiver_index = 0;  // keys the random streams of several receivers apart
 };
 
-enum class SatelliteStatus { kTracked, kBelowMask, kNoEphemeris, kNoSignal };
+enum class SatelliteStatus {
+  kTracked,     // at least one signal observed
+  kBelowMask,   // below the elevation mask
+  kNoEphemeris, // the receiver holds no valid ephemeris
+  kNoSignal,    // transmits none of the listed signals
+  kBlocked,     // the world blocks the line of sight (detail: the blocking object)
+  kAttenuated,  // vegetation lowers every signal below the tracking threshold
+};
 [[nodiscard]] std::string_view to_string(SatelliteStatus status);
 
 struct SignalMeasurement {
@@ -81,6 +89,8 @@ struct SatelliteObservation {
   double relativistic_m = 0.0;     // c * periodic relativistic clock term
   double troposphere_m = 0.0;
   double ionosphere_l1_m = 0.0;    // group delay on 1575.42 MHz
+  double vegetation_path_m = 0.0;  // path length through vegetation
+  double vegetation_attenuation_db = 0.0;
   Eigen::Vector3d satellite_position_m = Eigen::Vector3d::Zero();  // at transmission, frame at reception
   std::vector<SignalMeasurement> signals;
 };
@@ -102,6 +112,10 @@ class ObservationGenerator {
   ObservationGenerator(GeneratorSettings settings, const orbits::BroadcastEphemerides& ephemerides,
                        std::shared_ptr<const KinematicsSource> kinematics,
                        const orbits::SatelliteStateSource* truth_orbits = nullptr);
+
+  // The world the receiver is in (nullptr: open sky) and the frame of its coordinates. The query
+  // must outlive the generator.
+  void set_world(const PathQuery* world, const LocalFrame& frame);
 
   // Observations at the receiver time tag `tag`.
   [[nodiscard]] Result<EpochObservations> observe(const GnssTime& tag);
@@ -126,6 +140,8 @@ class ObservationGenerator {
     explicit SignalStreams(std::uint64_t key) : noise(key) {}
   };
 
+  // Ends every carrier arc of a satellite (its signals are blocked).
+  void arcs_lost(const SatelliteId& sat);
   // Whether the satellite transmits the signal, cached per GPST day.
   bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
 
@@ -135,6 +151,8 @@ class ObservationGenerator {
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
+  const PathQuery* world_ = nullptr;
+  LocalFrame world_frame_;
   std::shared_ptr<const KinematicsSource> kinematics_;
   ReceiverClock clock_;
   std::optional<GnssTime> last_tag_;
