@@ -40,6 +40,7 @@ int run(const RunArgs& args) {
   }
   auto summary = sim::run_scenario(*scenario, args.out_dir, options);
   if (!summary) return report_error(summary.error());
+  for (const auto& warning : summary->warnings) std::cerr << "skytrace run: warning: " << warning << "\n";
   if (!args.quiet) {
     std::cout << fmt::format("skytrace run: {} epochs, {} satellite-epochs, {} signal observations in {:.2f} s\n",
                              summary->epochs, summary->satellite_epochs, summary->observations, summary->wall_time_s);

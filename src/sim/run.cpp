@@ -22,6 +22,7 @@
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/trajectory.hpp"
+#include "skytrace/sim/world_setup.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -152,7 +153,9 @@ Eigen::Vector3d antenna_point(const Eigen::Vector3d& marker_m, const ReceiverSet
   return marker_m + to_enu.transpose() * offset_enu;
 }
 
-std::optional<WorldOrigin> world_origin(const Scenario& s) {
+// The frame of world_enu_m coordinates: the loaded world's, else the scenario's origin keys.
+std::optional<WorldOrigin> world_origin(const Scenario& s, const std::optional<LoadedWorld>& world) {
+  if (world) return world->frame;
   if (s.world.latitude_deg && s.world.longitude_deg) {
     return WorldOrigin{Geodetic{*s.world.latitude_deg, *s.world.longitude_deg, s.world.elevation_m.value_or(0.0)},
                        s.world.heading_deg.value_or(0.0)};
@@ -175,8 +178,8 @@ struct ReceiverRun {
 };
 
 Result<std::shared_ptr<const receiver::KinematicsSource>> make_kinematics(const Scenario& s, const ReceiverSettings& r,
+                                                                          const std::optional<WorldOrigin>& world,
                                                                           Eigen::Vector3d& marker_m) {
-  const auto world = world_origin(s);
   if (r.position) {
     auto ecef = position_to_ecef(*r.position, world);
     if (!ecef) {
@@ -409,10 +412,8 @@ Result<orbits::NavigationData> load_navigation(const Scenario& s) {
 
 Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& out_dir, const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
-  if (s.world.sdf) {
-    return make_error(ErrorCode::kUnsupported,
-                      s.world.sdf->string() + ": loading 3D worlds arrives with the world layer; this build simulates open sky only");
-  }
+  auto world = load_world(s);
+  if (!world) return world.error();
   auto navigation = load_navigation(s);
   if (!navigation) return navigation.error();
   if (s.models.ionosphere == "klobuchar" && !navigation->ionosphere.gps) {
@@ -444,8 +445,16 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   for (size_t i = 0; i < s.receivers.size(); ++i) {
     ReceiverRun& rx = receivers[i];
     rx.settings = &s.receivers[i];
-    auto kinematics = make_kinematics(s, *rx.settings, rx.marker_m);
+    auto kinematics = make_kinematics(s, *rx.settings, world_origin(s, *world), rx.marker_m);
     if (!kinematics) return kinematics.error();
+    if (*world) {
+      auto start_position = (*kinematics)->at(s.time.start);
+      if (start_position) {
+        if (auto inside = check_outside_objects(**world, start_position->position_m, rx.settings->name); !inside) {
+          return inside.error().with_context(s.source.string());
+        }
+      }
+    }
     rx.kinematics = *kinematics;
     auto profile = receiver::builtin_profile(rx.settings->profile);
     if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
@@ -461,6 +470,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     g.receiver_index = static_cast<int>(i);
     rx.generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), ephemerides, rx.kinematics,
                                                                      precise ? &*precise : nullptr);
+    if (*world) rx.generator->set_world((*world)->scene.get(), (*world)->frame);
     rx.file_name = s.receivers.size() == 1 ? "obs.rnx" : "obs_" + rx.settings->name + ".rnx";
     rx.header = make_header(s, rx, ephemerides, s.output.rinex_version);
     rx.columns = signal_columns(rx.header);
@@ -578,6 +588,14 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   j["signal_observations"] = summary.observations;
   j["navigation_records_used"] = used.record_count();
   j["wall_time_s"] = summary.wall_time_s;
+  if (*world) {
+    const LoadedWorld& w = **world;
+    j["world"] = {{"name", w.name},       {"objects", w.objects},     {"buildings", w.buildings},
+                  {"trees", w.trees},     {"triangles", w.triangles}, {"warnings", w.warnings},
+                  {"origin", {w.frame.origin.latitude_deg, w.frame.origin.longitude_deg, w.frame.origin.height_m}},
+                  {"heading_deg", w.frame.heading_deg}};
+    summary.warnings = w.warnings;
+  }
   j["configuration"] = nlohmann::json::parse(scenario_to_json(s));
   if (auto st = write_file_atomically(staging->file("summary.json"), j.dump(2) + "\n"); !st) return st.error();
 

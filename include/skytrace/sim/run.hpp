@@ -29,6 +29,7 @@ struct RunSummary {
   std::int64_t observations = 0;  // signal observations (each with code, phase, Doppler, C/N0)
   double wall_time_s = 0.0;
   std::vector<std::filesystem::path> outputs;
+  std::vector<std::string> warnings;  // e.g. world models that were skipped
 };
 
 // Loads the navigation data a scenario names (files, or the nominal constellation for its span).

@@ -1,0 +1,35 @@
+// The scenario's 3D world: loaded, turned into a scene, tied to the Earth.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "skytrace/core/error.hpp"
+#include "skytrace/core/frames.hpp"
+#include "skytrace/core/path_query.hpp"
+#include "skytrace/sim/scenario.hpp"
+
+namespace skytrace::sim {
+
+struct LoadedWorld {
+  std::string name;
+  LocalFrame frame;                     // world frame on the Earth (scenario keys override the file)
+  std::shared_ptr<const PathQuery> scene;
+  std::size_t objects = 0, buildings = 0, trees = 0, triangles = 0;
+  std::vector<std::string> warnings;    // what the loader skipped
+};
+
+// Loads world.sdf when the scenario has one (nullopt otherwise). Errors name the file; a world
+// without <spherical_coordinates> needs world.latitude_deg and world.longitude_deg.
+[[nodiscard]] Result<std::optional<LoadedWorld>> load_world(const Scenario& scenario);
+
+// Refuses a receiver position inside a closed opaque object (nearly every ray from it leaves
+// through the inside of one surface), naming the object.
+[[nodiscard]] Status check_outside_objects(const LoadedWorld& world, const Eigen::Vector3d& position_ecef_m,
+                                           const std::string& receiver_name);
+
+}  // namespace skytrace::sim
