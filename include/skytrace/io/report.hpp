@@ -1,0 +1,116 @@
+// The run report: one self-contained HTML page (inline CSS and SVG, no script, no external URL)
+// with a polar sky plot of the sky mask and the satellite tracks, the number of tracked satellites
+// over time per system, C/N0 over time and the scenario summary; and the sky plot alone as an SVG
+// document.
+//
+// The builder knows nothing of the simulation types: the run loop feeds one ReportSample per
+// satellite and epoch. Memory stays bounded however long the run: each track keeps at most about
+// max_points_per_track points (every other point is dropped when the track is full, status changes
+// are kept preferentially) and the satellite-count series is thinned the same way.
+//
+// Sky plot geometry (so that figures can be checked): the plot's centre is the zenith at SVG
+// coordinates (0, 0), the horizon is the circle of radius 100, north is up and east right:
+//   x = r sin(azimuth), y = -r cos(azimuth), r = 100 (90 - elevation) / 90.
+// Samples below the horizon are not drawn.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "skytrace/core/satellite.hpp"
+#include "skytrace/core/time.hpp"
+
+namespace skytrace::io {
+
+struct ReportSample {
+  GnssTime time;
+  SatelliteId satellite;
+  double azimuth_deg = 0.0;    // clockwise from north
+  double elevation_deg = 0.0;
+  // "tracked", "blocked", "attenuated" (vegetation dropped every signal), "below_mask",
+  // "no_ephemeris", "no_signal", ... (the receiver layer's status names).
+  std::string status;
+  double cn0_dbhz = std::numeric_limits<double>::quiet_NaN();  // first signal's C/N0 when tracked
+  double vegetation_attenuation_db = 0.0;
+};
+
+struct ReportMeta {
+  std::string scenario_name;
+  std::string receiver_name;
+  GnssTime start;
+  GnssTime end;
+  double interval_s = 0.0;
+  std::vector<std::pair<std::string, std::string>> summary_rows;  // key, value, in order
+  // Obstruction elevation at azimuths 0, step, 2 step, ... (deg); empty: open sky.
+  std::vector<double> sky_mask_elevation_deg;
+  double sky_mask_azimuth_step_deg = 0.0;
+  std::vector<std::string> warnings;
+};
+
+// How a sample is drawn on the sky plot.
+enum class TrackClass : std::uint8_t {
+  kLineOfSight,     // tracked, no vegetation on the path (green)
+  kVegetation,      // tracked through vegetation (orange)
+  kVegetationLost,  // "attenuated": vegetation dropped every signal (brown)
+  kBlocked,         // "blocked" (red)
+  kOther,           // below the mask, no ephemeris, ... (grey)
+};
+[[nodiscard]] TrackClass classify(const ReportSample& sample);
+
+class ReportBuilder {
+ public:
+  explicit ReportBuilder(double max_points_per_track = 2000);
+
+  // Samples of one satellite are expected in time order (one older than that satellite's latest
+  // is counted in ignored_samples() and otherwise ignored); epochs in time order for the counts.
+  void add(const ReportSample& sample);
+
+  // The self-contained page.
+  [[nodiscard]] std::string html(const ReportMeta& meta) const;
+  // The sky plot alone, as a standalone SVG document (same drawing as in the page).
+  [[nodiscard]] std::string sky_plot_svg(const ReportMeta& meta) const;
+
+  [[nodiscard]] size_t ignored_samples() const { return ignored_samples_; }
+  // Points currently held for a satellite's track (0 if unknown): shows the memory bound.
+  [[nodiscard]] size_t track_points(const SatelliteId& satellite) const;
+
+  struct TrackPoint {
+    double time_s = 0.0;  // GPST seconds since the GPS epoch (plots only)
+    float azimuth_deg = 0.0F;
+    float elevation_deg = 0.0F;
+    float cn0_dbhz = 0.0F;  // NaN when not tracked
+    TrackClass track_class = TrackClass::kOther;
+  };
+  struct Track {
+    std::vector<TrackPoint> points;  // decimated history
+    TrackPoint latest;               // the newest sample, kept or not (labels sit there)
+    size_t samples_seen = 0;
+    size_t stride = 1;  // every stride-th sample is kept (plus status changes)
+  };
+  struct CountPoint {
+    double time_s = 0.0;
+    std::array<std::uint16_t, kAllSystems.size()> tracked{};  // per GnssSystem
+  };
+
+ private:
+  void flush_pending_epoch();
+  void compact_track(Track& track) const;
+
+  size_t max_points_;
+  std::map<SatelliteId, Track> tracks_;
+  std::vector<CountPoint> counts_;  // decimated, in time order
+  CountPoint pending_;              // the epoch being filled
+  bool has_pending_ = false;
+  size_t epochs_seen_ = 0;
+  size_t count_stride_ = 1;
+  std::array<bool, kAllSystems.size()> systems_seen_{};
+  size_t ignored_samples_ = 0;
+};
+
+}  // namespace skytrace::io
