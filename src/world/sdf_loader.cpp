@@ -1,0 +1,1178 @@
+// Gazebo SDF worlds through sdformat 12: tessellated primitives, meshes, polylines and heightmaps
+// placed by their resolved poses, materials from custom elements, rules and defaults, and the
+// <spherical_coordinates> origin.
+#include <sdf/sdf.hh>
+
+#include <console_bridge/console.h>
+#include <expat.h>
+#include <jpeglib.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <csetjmp>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include "skytrace/world/loaders.hpp"
+
+namespace skytrace::world {
+
+namespace fs = std::filesystem;
+
+// -------------------------------------------------------------------------------------------------
+// Primitives
+
+namespace {
+
+// Surface of revolution around z from a profile of (radius, z) points going from top to bottom;
+// entries of zero radius are poles (one vertex). x and y are scaled to make ellipsoids.
+TriangleMesh lathe(const std::vector<std::pair<double, double>>& profile, int segments, double scale_x, double scale_y) {
+  TriangleMesh mesh;
+  std::vector<std::vector<int>> rings;  // vertex indices per profile entry (one for a pole)
+  for (const auto& [radius, z] : profile) {
+    std::vector<int> ring;
+    if (radius == 0.0) {
+      ring.push_back(static_cast<int>(mesh.vertices_m.size()));
+      mesh.vertices_m.emplace_back(0.0F, 0.0F, static_cast<float>(z));
+    } else {
+      for (int j = 0; j < segments; ++j) {
+        const double phi = 2.0 * std::numbers::pi * j / segments;
+        ring.push_back(static_cast<int>(mesh.vertices_m.size()));
+        mesh.vertices_m.emplace_back(static_cast<float>(scale_x * radius * std::cos(phi)),
+                                     static_cast<float>(scale_y * radius * std::sin(phi)), static_cast<float>(z));
+      }
+    }
+    rings.push_back(std::move(ring));
+  }
+  for (std::size_t k = 0; k + 1 < rings.size(); ++k) {
+    const auto& upper = rings[k];
+    const auto& lower = rings[k + 1];
+    for (int j = 0; j < segments; ++j) {
+      const auto j0 = static_cast<std::size_t>(j);
+      const auto j1 = static_cast<std::size_t>((j + 1) % segments);
+      if (upper.size() == 1 && lower.size() == 1) continue;
+      if (upper.size() == 1) {
+        mesh.triangles.emplace_back(upper[0], lower[j0], lower[j1]);
+      } else if (lower.size() == 1) {
+        mesh.triangles.emplace_back(upper[j0], lower[0], upper[j1]);
+      } else {
+        mesh.triangles.emplace_back(upper[j0], lower[j0], lower[j1]);
+        mesh.triangles.emplace_back(upper[j0], lower[j1], upper[j1]);
+      }
+    }
+  }
+  return mesh;
+}
+
+}  // namespace
+
+TriangleMesh make_box(const Eigen::Vector3d& size_m) {
+  TriangleMesh mesh;
+  const Eigen::Vector3d half = 0.5 * size_m;
+  for (int i = 0; i < 8; ++i) {  // bit 0: +x, bit 1: +y, bit 2: +z
+    mesh.vertices_m.emplace_back(static_cast<float>((i & 1) != 0 ? half.x() : -half.x()),
+                                 static_cast<float>((i & 2) != 0 ? half.y() : -half.y()),
+                                 static_cast<float>((i & 4) != 0 ? half.z() : -half.z()));
+  }
+  // Each face counter-clockwise seen from outside.
+  constexpr int kQuads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  for (const auto& q : kQuads) {
+    mesh.triangles.emplace_back(q[0], q[1], q[2]);
+    mesh.triangles.emplace_back(q[0], q[2], q[3]);
+  }
+  return mesh;
+}
+
+TriangleMesh make_cylinder(double radius_m, double length_m, int segments) {
+  segments = std::max(segments, 3);
+  const double half = 0.5 * length_m;
+  return lathe({{0.0, half}, {radius_m, half}, {radius_m, -half}, {0.0, -half}}, segments, 1.0, 1.0);
+}
+
+TriangleMesh make_ellipsoid(const Eigen::Vector3d& radii_m, int segments, int rings) {
+  segments = std::max(segments, 3);
+  rings = std::max(rings, 2);
+  std::vector<std::pair<double, double>> profile;
+  for (int k = 0; k <= rings; ++k) {
+    const double theta = std::numbers::pi * k / rings;
+    profile.emplace_back(k == 0 || k == rings ? 0.0 : std::sin(theta), radii_m.z() * std::cos(theta));
+  }
+  return lathe(profile, segments, radii_m.x(), radii_m.y());
+}
+
+TriangleMesh make_capsule(double radius_m, double length_m, int segments, int rings) {
+  segments = std::max(segments, 3);
+  const int half_rings = std::max(rings / 2, 1);
+  const double half = 0.5 * length_m;
+  std::vector<std::pair<double, double>> profile;
+  for (int k = 0; k <= half_rings; ++k) {  // top hemisphere, pole to equator
+    const double theta = 0.5 * std::numbers::pi * k / half_rings;
+    profile.emplace_back(k == 0 ? 0.0 : radius_m * std::sin(theta), half + radius_m * std::cos(theta));
+  }
+  for (int k = 0; k <= half_rings; ++k) {  // bottom hemisphere, equator to pole
+    const double theta = 0.5 * std::numbers::pi + 0.5 * std::numbers::pi * k / half_rings;
+    profile.emplace_back(k == half_rings ? 0.0 : radius_m * std::sin(theta), -half + radius_m * std::cos(theta));
+  }
+  return lathe(profile, segments, 1.0, 1.0);
+}
+
+TriangleMesh make_plane(const Eigen::Vector3d& normal, const Eigen::Vector2d& size_m) {
+  const Eigen::Vector3d n = normal.norm() > 0.0 ? Eigen::Vector3d(normal.normalized()) : Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX() - n * n.x();
+  if (x_axis.norm() < 1e-6) x_axis = Eigen::Vector3d::UnitY() - n * n.y();
+  x_axis.normalize();
+  const Eigen::Vector3d y_axis = n.cross(x_axis);
+  TriangleMesh mesh;
+  for (const auto& [sx, sy] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
+    mesh.vertices_m.push_back((0.5 * sx * size_m.x() * x_axis + 0.5 * sy * size_m.y() * y_axis).cast<float>());
+  }
+  mesh.triangles.emplace_back(0, 1, 2);
+  mesh.triangles.emplace_back(0, 2, 3);
+  return mesh;
+}
+
+Result<TriangleMesh> make_height_grid(const std::vector<double>& heights_m, int rows, int columns, double size_x_m,
+                                      double size_y_m) {
+  if (rows < 2 || columns < 2 || heights_m.size() != static_cast<std::size_t>(rows) * static_cast<std::size_t>(columns)) {
+    return make_error(ErrorCode::kInvalidArgument, "height grid: need at least 2 x 2 heights, rows * columns of them");
+  }
+  TriangleMesh mesh;
+  mesh.vertices_m.reserve(heights_m.size());
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < columns; ++c) {
+      const double x = -0.5 * size_x_m + size_x_m * c / (columns - 1);
+      const double y = 0.5 * size_y_m - size_y_m * r / (rows - 1);
+      mesh.vertices_m.emplace_back(static_cast<float>(x), static_cast<float>(y),
+                                   static_cast<float>(heights_m[static_cast<std::size_t>(r * columns + c)]));
+    }
+  }
+  for (int r = 0; r + 1 < rows; ++r) {
+    for (int c = 0; c + 1 < columns; ++c) {
+      const int v00 = r * columns + c;
+      const int v01 = v00 + 1;
+      const int v10 = v00 + columns;
+      const int v11 = v10 + 1;
+      mesh.triangles.emplace_back(v00, v10, v11);  // counter-clockwise seen from above
+      mesh.triangles.emplace_back(v00, v11, v01);
+    }
+  }
+  return mesh;
+}
+
+// -------------------------------------------------------------------------------------------------
+// Geographic origin (gz-math SphericalCoordinates, LOCAL2: x = east cos h + north sin h)
+
+Geodetic world_point_to_geodetic(const GeoOrigin& origin, const Eigen::Vector3d& world_m) {
+  const double h = origin.heading_deg * std::numbers::pi / 180.0;
+  const Eigen::Vector3d enu(world_m.x() * std::cos(h) - world_m.y() * std::sin(h),
+                            world_m.x() * std::sin(h) + world_m.y() * std::cos(h), world_m.z());
+  return ecef_to_geodetic(enu_to_ecef(enu, origin.origin));
+}
+
+Eigen::Vector3d geodetic_to_world_point(const GeoOrigin& origin, const Geodetic& point) {
+  const double h = origin.heading_deg * std::numbers::pi / 180.0;
+  const Eigen::Vector3d enu = ecef_to_enu(geodetic_to_ecef(point), origin.origin);
+  return {enu.x() * std::cos(h) + enu.y() * std::sin(h), -enu.x() * std::sin(h) + enu.y() * std::cos(h), enu.z()};
+}
+
+// -------------------------------------------------------------------------------------------------
+// SDF loading
+
+namespace {
+
+// sdformat writes its diagnostics to a process-wide console; the library must not print, so they
+// are captured for the duration of a load and turned into errors or warnings. When a file is not
+// valid SDF, sdformat also tries it as URDF, whose parser logs through console_bridge: those
+// messages (about a missing <robot>) are dropped. One load at a time touches the consoles.
+class ConsoleCapture {
+ public:
+  ConsoleCapture() : lock_(mutex()) {
+    auto& stream = sdf::Console::Instance()->GetMsgStream();
+    previous_ = stream.GetStream();
+    stream.SetStream(&buffer_);
+    console_bridge::useOutputHandler(&silent_);
+  }
+  ~ConsoleCapture() {
+    console_bridge::restorePreviousOutputHandler();
+    sdf::Console::Instance()->GetMsgStream().SetStream(previous_);
+  }
+  ConsoleCapture(const ConsoleCapture&) = delete;
+  ConsoleCapture& operator=(const ConsoleCapture&) = delete;
+
+  // Captured lines without terminal colour codes.
+  [[nodiscard]] std::vector<std::string> lines() const {
+    std::vector<std::string> out;
+    std::istringstream in(buffer_.str());
+    std::string line;
+    while (std::getline(in, line)) {
+      std::string clean;
+      for (std::size_t i = 0; i < line.size(); ++i) {
+        if (line[i] == '\x1b') {
+          while (i < line.size() && line[i] != 'm') ++i;
+          continue;
+        }
+        clean.push_back(line[i]);
+      }
+      if (clean.find_first_not_of(" \t") != std::string::npos) out.push_back(clean);
+    }
+    return out;
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex console_mutex;
+    return console_mutex;
+  }
+  class Silent final : public console_bridge::OutputHandler {
+   public:
+    void log(const std::string& /*text*/, console_bridge::LogLevel /*level*/, const char* /*filename*/,
+             int /*line*/) override {}
+  };
+  std::lock_guard<std::mutex> lock_;
+  std::ostringstream buffer_;
+  std::ostream* previous_ = nullptr;
+  Silent silent_;
+};
+
+// Well-formedness and the root element, checked with expat before sdformat sees the file: sdformat
+// reports XML errors only on its console and would try the file as URDF.
+Status check_xml(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return make_error(ErrorCode::kIo, path.string() + ": cannot open the SDF file");
+  std::ostringstream content;
+  content << in.rdbuf();
+  const std::string text = content.str();
+  struct State {
+    std::string root;
+  } state;
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(XML_ParserCreate(nullptr),
+                                                                                       &XML_ParserFree);
+  XML_SetUserData(parser.get(), &state);
+  XML_SetStartElementHandler(parser.get(), [](void* data, const XML_Char* name, const XML_Char** /*attributes*/) {
+    auto* s = static_cast<State*>(data);
+    if (s->root.empty()) s->root = name;
+  });
+  if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), XML_TRUE) == XML_STATUS_ERROR) {
+    return make_error(ErrorCode::kParse, path.string() + ":" + std::to_string(XML_GetCurrentLineNumber(parser.get())) +
+                                             ":" + std::to_string(XML_GetCurrentColumnNumber(parser.get())) +
+                                             ": malformed XML: " + XML_ErrorString(XML_GetErrorCode(parser.get())));
+  }
+  if (state.root != "sdf") {
+    return make_error(ErrorCode::kParse, path.string() + ": not an SDF file (root element <" + state.root + ">, expected <sdf>)");
+  }
+  return Ok{};
+}
+
+std::vector<fs::path> split_path_list(const char* value) {
+  std::vector<fs::path> out;
+  if (value == nullptr) return out;
+  std::string list(value);
+  std::size_t start = 0;
+  while (start <= list.size()) {
+    const std::size_t end = std::min(list.find(':', start), list.size());
+    if (end > start) out.emplace_back(list.substr(start, end - start));
+    start = end + 1;
+  }
+  return out;
+}
+
+// model://, file:// and relative URIs to files, the way Gazebo searches them.
+class Resolver {
+ public:
+  explicit Resolver(const SdfLoadOptions& options) {
+    dirs_ = options.model_paths;
+    if (options.use_environment_paths) {
+      for (const char* variable : {"GAZEBO_MODEL_PATH", "GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "SDF_PATH"}) {
+        for (auto& dir : split_path_list(std::getenv(variable))) dirs_.push_back(std::move(dir));
+      }
+    }
+  }
+
+  [[nodiscard]] const std::vector<fs::path>& dirs() const { return dirs_; }
+
+  // The file or folder a URI names; nullopt when nothing exists. `base_dir` is the folder of the
+  // SDF file that holds the URI (relative URIs are relative to it, as in SDF 1.7+).
+  [[nodiscard]] std::optional<fs::path> resolve(const std::string& uri, const fs::path& base_dir) const {
+    std::error_code ec;
+    const auto exists = [&](const fs::path& p) { return fs::exists(p, ec); };
+    if (uri.rfind("model://", 0) == 0) {
+      const std::string rest = uri.substr(8);
+      for (const auto& dir : dirs_) {
+        if (exists(dir / rest)) return dir / rest;
+      }
+      return std::nullopt;
+    }
+    if (uri.rfind("http://", 0) == 0 || uri.rfind("https://", 0) == 0) return std::nullopt;
+    std::string plain = uri.rfind("file://", 0) == 0 ? uri.substr(7) : uri;
+    const fs::path p(plain);
+    if (p.is_absolute()) return exists(p) ? std::optional<fs::path>(p) : std::nullopt;
+    if (!base_dir.empty() && exists(base_dir / p)) return base_dir / p;
+    for (const auto& dir : dirs_) {
+      if (exists(dir / p)) return dir / p;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::vector<fs::path> dirs_;
+};
+
+Eigen::Isometry3d to_isometry(const ignition::math::Pose3d& pose) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.translation() = Eigen::Vector3d(pose.Pos().X(), pose.Pos().Y(), pose.Pos().Z());
+  const auto& q = pose.Rot();
+  out.linear() = Eigen::Quaterniond(q.W(), q.X(), q.Y(), q.Z()).normalized().toRotationMatrix();
+  return out;
+}
+
+std::string where(const sdf::ElementPtr& element) {
+  if (!element) return "";
+  std::string out = element->FilePath();
+  if (const auto line = element->LineNumber()) out += ":" + std::to_string(*line);
+  return out;
+}
+
+std::string error_text(const sdf::Error& error) {
+  std::string out;
+  if (error.FilePath()) out += *error.FilePath();
+  if (error.LineNumber()) out += ":" + std::to_string(*error.LineNumber());
+  if (!out.empty()) out += ": ";
+  return out + error.Message();
+}
+
+// SDFormat needs unique model names among siblings; worlds saved by Gazebo classic (PX4's test
+// cities) repeat them. Later copies get "_2", "_3"... so that every copy is loaded.
+void rename_duplicate_models(const sdf::ElementPtr& parent, std::vector<std::string>& warnings) {
+  std::map<std::string, int> count;
+  std::set<std::string> taken;
+  for (auto child = parent->GetFirstElement(); child; child = child->GetNextElement()) {
+    if (child->HasAttribute("name")) taken.insert(child->GetAttribute("name")->GetAsString());
+  }
+  std::map<std::string, int> renamed;
+  for (auto model = parent->GetFirstElement(); model; model = model->GetNextElement()) {
+    if (model->GetName() == "model") {
+      const std::string name = model->GetAttribute("name")->GetAsString();
+      if (++count[name] > 1) {
+        int suffix = count[name];
+        while (taken.count(name + "_" + std::to_string(suffix)) != 0) ++suffix;
+        const std::string fresh = name + "_" + std::to_string(suffix);
+        model->GetAttribute("name")->SetFromString(fresh);
+        taken.insert(fresh);
+        ++renamed[name];
+      }
+      rename_duplicate_models(model, warnings);
+    }
+  }
+  for (const auto& [name, copies] : renamed) {
+    warnings.push_back(where(parent) + ": " + std::to_string(copies + 1) + " models named '" + name +
+                       "' (SDFormat needs unique names, Gazebo classic accepted them): copies renamed '" + name +
+                       "_2'...");
+  }
+}
+
+// Gazebo classic restores the model poses saved in a world's <state>; so do we, for top-level
+// models with unique names.
+std::map<std::string, ignition::math::Pose3d> state_poses(const sdf::ElementPtr& world) {
+  std::map<std::string, ignition::math::Pose3d> poses;
+  for (auto state = world->GetElementImpl("state"); state; state = state->GetNextElement("state")) {
+    for (auto model = state->GetElementImpl("model"); model; model = model->GetNextElement("model")) {
+      if (model->HasElement("pose") && model->HasAttribute("name")) {
+        poses[model->GetAttribute("name")->GetAsString()] = model->GetElementImpl("pose")->Get<ignition::math::Pose3d>();
+      }
+    }
+  }
+  return poses;
+}
+
+// --- heightmap images -----------------------------------------------------------------------------
+
+struct GrayImage {
+  int width = 0;
+  int height = 0;
+  std::vector<double> values;  // [0, 1], row 0 at the top
+};
+
+struct JpegErrorManager {
+  jpeg_error_mgr manager;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+// libjpeg reports fatal errors through longjmp; the buffers live outside the jump's reach.
+bool decode_jpeg(std::FILE* file, jpeg_decompress_struct& info, JpegErrorManager& errors, std::vector<unsigned char>& pixels,
+                 int& width, int& height) {
+  info.err = jpeg_std_error(&errors.manager);
+  errors.manager.error_exit = [](j_common_ptr common) {
+    auto* manager = reinterpret_cast<JpegErrorManager*>(common->err);
+    (*common->err->format_message)(common, manager->message);
+    std::longjmp(manager->jump, 1);
+  };
+  if (setjmp(errors.jump) != 0) {
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
+  jpeg_create_decompress(&info);
+  jpeg_stdio_src(&info, file);
+  jpeg_read_header(&info, TRUE);
+  info.out_color_space = JCS_GRAYSCALE;
+  jpeg_start_decompress(&info);
+  width = static_cast<int>(info.output_width);
+  height = static_cast<int>(info.output_height);
+  pixels.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  while (info.output_scanline < info.output_height) {
+    JSAMPROW row = pixels.data() + static_cast<std::size_t>(info.output_scanline) * static_cast<std::size_t>(width);
+    jpeg_read_scanlines(&info, &row, 1);
+  }
+  jpeg_finish_decompress(&info);
+  jpeg_destroy_decompress(&info);
+  return true;
+}
+
+Result<GrayImage> read_gray_image(const fs::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  GrayImage image;
+  if (extension == ".png") {
+    png_image png{};
+    png.version = PNG_IMAGE_VERSION;
+    if (png_image_begin_read_from_file(&png, path.string().c_str()) == 0) {
+      return make_error(ErrorCode::kParse, path.string() + ": cannot read the PNG image: " + png.message);
+    }
+    // 16-bit images (DEM-like heightmaps) keep their 16 bits; 8-bit ones are read as 8-bit gray.
+    const bool sixteen = (png.format & PNG_FORMAT_FLAG_LINEAR) != 0;
+    png.format = sixteen ? PNG_FORMAT_LINEAR_Y : PNG_FORMAT_GRAY;
+    image.width = static_cast<int>(png.width);
+    image.height = static_cast<int>(png.height);
+    const std::size_t count = static_cast<std::size_t>(png.width) * png.height;
+    if (sixteen) {
+      std::vector<png_uint_16> pixels(count);
+      if (png_image_finish_read(&png, nullptr, pixels.data(), 0, nullptr) == 0) {
+        return make_error(ErrorCode::kParse, path.string() + ": cannot decode the PNG image: " + png.message);
+      }
+      for (const auto v : pixels) image.values.push_back(v / 65535.0);
+    } else {
+      std::vector<png_byte> pixels(count);
+      if (png_image_finish_read(&png, nullptr, pixels.data(), 0, nullptr) == 0) {
+        return make_error(ErrorCode::kParse, path.string() + ": cannot decode the PNG image: " + png.message);
+      }
+      for (const auto v : pixels) image.values.push_back(v / 255.0);
+    }
+    return image;
+  }
+  if (extension == ".jpg" || extension == ".jpeg") {
+    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(path.string().c_str(), "rb"), &std::fclose);
+    if (!file) return make_error(ErrorCode::kIo, path.string() + ": cannot open the JPEG image");
+    jpeg_decompress_struct info{};
+    JpegErrorManager errors{};
+    std::vector<unsigned char> pixels;
+    if (!decode_jpeg(file.get(), info, errors, pixels, image.width, image.height)) {
+      return make_error(ErrorCode::kParse, path.string() + ": cannot decode the JPEG image: " + errors.message);
+    }
+    for (const auto v : pixels) image.values.push_back(v / 255.0);
+    return image;
+  }
+  return make_error(ErrorCode::kUnsupported,
+                    path.string() + ": heightmap format not supported (PNG and JPEG images only; DEM files are not)");
+}
+
+// --- the walk ---------------------------------------------------------------------------------------
+
+struct MeshEntry {
+  Result<TriangleMesh> mesh = TriangleMesh{};
+  std::optional<Result<TriangleMesh>> hull;
+};
+
+// What an object inherits from its enclosing models.
+struct Chain {
+  std::vector<std::string> names;  // outer to inner
+  std::vector<std::string> uris;   // model:// identity of each model (include URI or model folder), may be empty
+  std::vector<sdf::ElementPtr> elements;
+  bool is_static = false;
+};
+
+struct Geometry {
+  std::string name;
+  sdf::ElementPtr element;  // the <collision> or <visual>
+  const sdf::Geometry* geometry = nullptr;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // in the link frame
+};
+
+struct BuiltShape {
+  TriangleMesh mesh;
+  bool is_ground = false;  // plane or heightmap
+  bool is_closed = true;   // primitives and prisms are volumes; meshes, planes and heightmaps may not be
+  std::string mesh_uri;
+  std::string submesh;
+  // Meshes: the cached file and the instance's scale, to build the vegetation hull once per file.
+  std::shared_ptr<MeshEntry> mesh_entry;
+  Eigen::Vector3f scale = Eigen::Vector3f::Ones();
+};
+
+BuiltShape solid(TriangleMesh mesh) {
+  BuiltShape shape;
+  shape.mesh = std::move(mesh);
+  return shape;
+}
+
+class SdfWalker {
+ public:
+  SdfWalker(const SdfLoadOptions& options, const Resolver& resolver, WorldModel& world, fs::path world_file)
+      : options_(options), resolver_(resolver), world_(world), world_file_(std::move(world_file)) {}
+
+  void model(const sdf::Model& model, const Eigen::Isometry3d& world_from_model, Chain chain) {
+    chain.names.push_back(model.Name());
+    chain.uris.push_back(model_identity(model.Element()));
+    chain.elements.push_back(model.Element());
+    chain.is_static = chain.is_static || model.Static();
+    const std::size_t first_object = world_.objects.size();
+
+    for (uint64_t l = 0; l < model.LinkCount(); ++l) {
+      const sdf::Link* link = model.LinkByIndex(l);
+      ignition::math::Pose3d link_pose;
+      const auto errors = link->SemanticPose().Resolve(link_pose);
+      if (!errors.empty()) {
+        warn(where(link->Element()) + ": link " + join(chain.names) + "/" + link->Name() +
+             " skipped, its pose cannot be resolved: " + error_text(errors.front()));
+        continue;
+      }
+      const Eigen::Isometry3d world_from_link = world_from_model * to_isometry(link_pose);
+      for (const Geometry& geometry : geometries(*link)) {
+        const std::string object_name = join(chain.names) + "/" + link->Name() + "/" + geometry.name;
+        auto shapes = build(geometry, object_name);
+        for (auto& shape : shapes) {
+          WorldObject object;
+          object.name = object_name;
+          object.pose = world_from_link * geometry.pose;
+          object.is_static = chain.is_static;
+          object.mesh = std::move(shape.mesh);
+          if (!assign_material(object, chain, *link, geometry, shape)) continue;
+          world_.objects.push_back(std::move(object));
+        }
+      }
+    }
+    classify_buildings(first_object, chain);
+
+    for (uint64_t n = 0; n < model.ModelCount(); ++n) {
+      const sdf::Model* nested = model.ModelByIndex(n);
+      ignition::math::Pose3d nested_pose;
+      const auto errors = nested->SemanticPose().Resolve(nested_pose);
+      if (!errors.empty()) {
+        warn(where(nested->Element()) + ": model " + join(chain.names) + "/" + nested->Name() +
+             " skipped, its pose cannot be resolved: " + error_text(errors.front()));
+        continue;
+      }
+      this->model(*nested, world_from_model * to_isometry(nested_pose), chain);
+    }
+  }
+
+  void finish() {
+    for (const auto& [uri, info] : missing_meshes_) {
+      warn(info.first + ": mesh " + uri + " not found, " + std::to_string(info.second) +
+           " geometr" + (info.second == 1 ? "y" : "ies") + " skipped" + search_note());
+    }
+  }
+
+  [[nodiscard]] std::string search_note() const {
+    std::string note = " (searched: ";
+    if (resolver_.dirs().empty()) return note + "no model paths)";
+    for (std::size_t i = 0; i < resolver_.dirs().size(); ++i) note += (i > 0 ? ", " : "") + resolver_.dirs()[i].string();
+    return note + ")";
+  }
+
+ private:
+  static std::string join(const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : "/") + n;
+    return out;
+  }
+
+  void warn(std::string message) { world_.warnings.push_back(std::move(message)); }
+
+  // The model:// URI the model came from (its <include>), or "model://<folder>" of its file when it
+  // comes from another file than the world.
+  std::string model_identity(const sdf::ElementPtr& element) const {
+    if (!element) return "";
+    if (const auto include = element->GetIncludeElement(); include && include->HasElement("uri")) {
+      return include->GetElementImpl("uri")->Get<std::string>();
+    }
+    const fs::path file(element->FilePath());
+    if (!file.empty() && file != world_file_) return "model://" + file.parent_path().filename().string();
+    return "";
+  }
+
+  std::vector<Geometry> geometries(const sdf::Link& link) const {
+    std::vector<Geometry> out;
+    const bool collisions = options_.geometry != GeometrySource::kVisual;
+    if (collisions) {
+      for (uint64_t c = 0; c < link.CollisionCount(); ++c) {
+        const sdf::Collision* collision = link.CollisionByIndex(c);
+        out.push_back({collision->Name(), collision->Element(), collision->Geom(), pose_of(collision->SemanticPose())});
+      }
+    }
+    if (options_.geometry == GeometrySource::kVisual ||
+        (options_.geometry == GeometrySource::kCollisionElseVisual && link.CollisionCount() == 0)) {
+      for (uint64_t v = 0; v < link.VisualCount(); ++v) {
+        const sdf::Visual* visual = link.VisualByIndex(v);
+        out.push_back({visual->Name(), visual->Element(), visual->Geom(), pose_of(visual->SemanticPose())});
+      }
+    }
+    return out;
+  }
+
+  static Eigen::Isometry3d pose_of(const sdf::SemanticPose& semantic) {
+    ignition::math::Pose3d pose;
+    // Collisions and visuals resolve relative to their link; an unresolvable frame was already
+    // reported by sdformat as an error, which stops the load.
+    (void)semantic.Resolve(pose);
+    return to_isometry(pose);
+  }
+
+  std::vector<BuiltShape> build(const Geometry& geometry, const std::string& object_name) {
+    std::vector<BuiltShape> out;
+    const sdf::Geometry& g = *geometry.geometry;
+    const int segments = options_.round_segments;
+    const int rings = options_.round_rings;
+    switch (g.Type()) {
+      case sdf::GeometryType::BOX: {
+        const auto s = g.BoxShape()->Size();
+        out.push_back(solid(make_box({s.X(), s.Y(), s.Z()})));
+        break;
+      }
+      case sdf::GeometryType::CYLINDER:
+        out.push_back(solid(make_cylinder(g.CylinderShape()->Radius(), g.CylinderShape()->Length(), segments)));
+        break;
+      case sdf::GeometryType::SPHERE: {
+        const double r = g.SphereShape()->Radius();
+        out.push_back(solid(make_ellipsoid({r, r, r}, segments, rings)));
+        break;
+      }
+      case sdf::GeometryType::CAPSULE:
+        out.push_back(solid(make_capsule(g.CapsuleShape()->Radius(), g.CapsuleShape()->Length(), segments, rings)));
+        break;
+      case sdf::GeometryType::ELLIPSOID: {
+        const auto r = g.EllipsoidShape()->Radii();
+        out.push_back(solid(make_ellipsoid({r.X(), r.Y(), r.Z()}, segments, rings)));
+        break;
+      }
+      case sdf::GeometryType::PLANE: {
+        const sdf::Plane* plane = g.PlaneShape();
+        const auto n = plane->Normal();
+        Eigen::Vector2d size(plane->Size().X(), plane->Size().Y());
+        const auto size_element = plane->Element() ? plane->Element()->GetElementImpl("size") : nullptr;
+        if (!size_element || !size_element->GetValue() || !size_element->GetValue()->GetSet()) {
+          size = Eigen::Vector2d::Constant(options_.infinite_plane_size_m);  // Gazebo's plane is infinite
+        }
+        BuiltShape shape = solid(make_plane({n.X(), n.Y(), n.Z()}, size));
+        shape.is_ground = true;
+        shape.is_closed = false;
+        out.push_back(std::move(shape));
+        break;
+      }
+      case sdf::GeometryType::MESH: {
+        if (auto shape = mesh(*g.MeshShape(), object_name)) out.push_back(std::move(*shape));
+        break;
+      }
+      case sdf::GeometryType::HEIGHTMAP: {
+        if (auto shape = heightmap(*g.HeightmapShape(), object_name)) out.push_back(std::move(*shape));
+        break;
+      }
+      case sdf::GeometryType::EMPTY:
+      default: {
+        const sdf::ElementPtr element = g.Element();
+        if (element && element->HasElement("polyline")) {
+          polylines(element, object_name, out);
+        } else if (element && element->HasElement("image")) {
+          warn(where(geometry.element) + ": " + object_name + ": <image> geometry skipped (not supported)");
+        }
+        break;
+      }
+    }
+    return out;
+  }
+
+  std::optional<BuiltShape> mesh(const sdf::Mesh& mesh, const std::string& object_name) {
+    const fs::path base = fs::path(mesh.FilePath()).parent_path();
+    const std::string uri = mesh.Uri();
+    const auto resolved = resolver_.resolve(uri, base);
+    if (!resolved) {
+      auto& entry = missing_meshes_[uri];
+      if (entry.second++ == 0) entry.first = where(mesh.Element()) + ": " + object_name;
+      return std::nullopt;
+    }
+    const std::string key = resolved->string() + "|" + mesh.Submesh() + "|" + (mesh.CenterSubmesh() ? "c" : "");
+    auto& entry = mesh_cache_[key];
+    if (!entry) {
+      entry = std::make_shared<MeshEntry>();
+      entry->mesh = read_selected(*resolved, mesh.Submesh(), mesh.CenterSubmesh());
+    }
+    if (!entry->mesh.ok()) {
+      warn(where(mesh.Element()) + ": " + object_name + " skipped: " + entry->mesh.error().message);
+      return std::nullopt;
+    }
+    const auto s = mesh.Scale();
+    const Eigen::Vector3f scale(static_cast<float>(s.X()), static_cast<float>(s.Y()), static_cast<float>(s.Z()));
+    if (!(scale.array().abs() > 0.0F).all() || !scale.allFinite()) {
+      warn(where(mesh.Element()) + ": " + object_name + " skipped: mesh scale has a zero component");
+      return std::nullopt;
+    }
+    BuiltShape shape;
+    shape.mesh = *entry->mesh;
+    shape.is_closed = false;
+    shape.mesh_uri = uri;
+    shape.submesh = mesh.Submesh();
+    scale_mesh(shape.mesh, scale);
+    shape.mesh_entry = entry;
+    shape.scale = scale;
+    return shape;
+  }
+
+  static void scale_mesh(TriangleMesh& mesh, const Eigen::Vector3f& scale) {
+    for (auto& v : mesh.vertices_m) v = v.cwiseProduct(scale);
+    if (scale.x() * scale.y() * scale.z() < 0.0F) {  // a mirror flips the winding
+      for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+    }
+  }
+
+  static Result<TriangleMesh> read_selected(const fs::path& path, const std::string& submesh, bool center) {
+    auto parts = read_mesh_file(path);
+    if (!parts.ok()) return parts.error();
+    TriangleMesh merged;
+    for (const auto& part : *parts) {
+      if (!submesh.empty() && part.node_name != submesh && part.mesh_name != submesh) continue;
+      const int base = static_cast<int>(merged.vertices_m.size());
+      merged.vertices_m.insert(merged.vertices_m.end(), part.mesh.vertices_m.begin(), part.mesh.vertices_m.end());
+      for (const auto& t : part.mesh.triangles) merged.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+    }
+    if (merged.triangles.empty()) {
+      return make_error(ErrorCode::kNotFound, path.string() + ": no submesh named '" + submesh + "'");
+    }
+    if (center && !submesh.empty()) {
+      // Gazebo's <center>: the submesh's bounding box centre moves to the origin.
+      Eigen::Vector3f low = merged.vertices_m.front();
+      Eigen::Vector3f high = low;
+      for (const auto& v : merged.vertices_m) {
+        low = low.cwiseMin(v);
+        high = high.cwiseMax(v);
+      }
+      const Eigen::Vector3f middle = 0.5F * (low + high);
+      for (auto& v : merged.vertices_m) v -= middle;
+    }
+    return merged;
+  }
+
+  std::optional<BuiltShape> heightmap(const sdf::Heightmap& heightmap, const std::string& object_name) {
+    const fs::path base = fs::path(heightmap.FilePath()).parent_path();
+    const auto resolved = resolver_.resolve(heightmap.Uri(), base);
+    if (!resolved) {
+      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap " + heightmap.Uri() + " not found, skipped" +
+           search_note());
+      return std::nullopt;
+    }
+    auto image = read_gray_image(*resolved);
+    if (!image.ok()) {
+      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap skipped: " + image.error().message);
+      return std::nullopt;
+    }
+    const auto size = heightmap.Size();
+    const auto position = heightmap.Position();
+    std::vector<double> heights_m;
+    heights_m.reserve(image->values.size());
+    // Gazebo: brightness 0..1 maps to 0..size.z above the heightmap's position.
+    for (const double v : image->values) heights_m.push_back(position.Z() + v * size.Z());
+    auto grid = make_height_grid(heights_m, image->height, image->width, size.X(), size.Y());
+    if (!grid.ok()) {
+      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap skipped: " + grid.error().message);
+      return std::nullopt;
+    }
+    for (auto& v : grid->vertices_m) {
+      v.x() += static_cast<float>(position.X());
+      v.y() += static_cast<float>(position.Y());
+    }
+    BuiltShape shape;
+    shape.mesh = std::move(*grid);
+    shape.is_ground = true;
+    shape.is_closed = false;
+    return shape;
+  }
+
+  // <polyline>: the first is the outline, later ones inside it are holes, others separate prisms;
+  // all extruded from z = 0 up to their height, as Gazebo does.
+  void polylines(const sdf::ElementPtr& geometry, const std::string& object_name, std::vector<BuiltShape>& out) {
+    struct Line {
+      Ring2 points;
+      double height_m = 0.0;
+    };
+    std::vector<Line> lines;
+    for (auto polyline = geometry->GetElementImpl("polyline"); polyline; polyline = polyline->GetNextElement("polyline")) {
+      Line line;
+      line.height_m = polyline->HasElement("height") ? polyline->GetElementImpl("height")->Get<double>() : 1.0;
+      for (auto point = polyline->GetElementImpl("point"); point; point = point->GetNextElement("point")) {
+        const auto p = point->Get<ignition::math::Vector2d>();
+        line.points.emplace_back(p.X(), p.Y());
+      }
+      lines.push_back(std::move(line));
+    }
+    if (lines.empty()) return;
+    const auto inside = [](const Ring2& ring, const Eigen::Vector2d& p) {
+      bool in = false;
+      for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+        if ((ring[i].y() > p.y()) != (ring[j].y() > p.y()) &&
+            p.x() < (ring[j].x() - ring[i].x()) * (p.y() - ring[i].y()) / (ring[j].y() - ring[i].y()) + ring[i].x()) {
+          in = !in;
+        }
+      }
+      return in;
+    };
+    PolygonWithHoles first{lines.front().points, {}};
+    std::vector<const Line*> separate;
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      if (!lines[i].points.empty() && inside(first.outer, lines[i].points.front())) {
+        first.holes.push_back(lines[i].points);
+      } else {
+        separate.push_back(&lines[i]);
+      }
+    }
+    const auto add = [&](const PolygonWithHoles& polygon, double height_m) {
+      auto prism = extrude_polygon(polygon, 0.0, height_m);
+      if (!prism.ok()) {
+        warn(where(geometry) + ": " + object_name + ": polyline skipped: " + prism.error().message);
+        return;
+      }
+      out.push_back(solid(std::move(*prism)));
+    };
+    add(first, lines.front().height_m);
+    for (const Line* line : separate) add(PolygonWithHoles{line->points, {}}, line->height_m);
+  }
+
+  // Reads <skytrace:material class="..." attenuation_db_per_m="..." kind="..."/> or
+  // <skytrace:vegetation attenuation_db_per_m="..."/> directly under `element`.
+  struct CustomMaterial {
+    Material material;
+    std::optional<ObjectKind> kind;
+  };
+  std::optional<CustomMaterial> custom_material(const sdf::ElementPtr& element, const std::string& object_name) {
+    if (!element) return std::nullopt;
+    const auto attribute = [](const sdf::ElementPtr& e, const std::string& key) -> std::optional<std::string> {
+      if (!e->HasAttribute(key)) return std::nullopt;
+      return e->GetAttribute(key)->GetAsString();
+    };
+    const auto attenuation = [&](const sdf::ElementPtr& e, double fallback) {
+      const auto text = attribute(e, "attenuation_db_per_m");
+      if (!text) return fallback;
+      char* end = nullptr;
+      const double value = std::strtod(text->c_str(), &end);
+      if (end == text->c_str() || *end != '\0' || !(value >= 0.0) || !std::isfinite(value)) {
+        warn(where(element) + ": " + object_name + ": attenuation_db_per_m='" + *text +
+             "' is not a non-negative number, " + std::to_string(fallback) + " dB/m used");
+        return fallback;
+      }
+      return value;
+    };
+    if (const auto vegetation = element->FindElement("skytrace:vegetation")) {
+      return CustomMaterial{
+          Material{MaterialClass::kVegetation, attenuation(vegetation, options_.vegetation_attenuation_db_per_m)},
+          ObjectKind::kTree};
+    }
+    const auto custom = element->FindElement("skytrace:material");
+    if (!custom) return std::nullopt;
+    CustomMaterial out;
+    if (const auto name = attribute(custom, "class")) {
+      auto parsed = parse_material_class(*name);
+      if (!parsed.ok()) {
+        warn(where(element) + ": " + object_name + ": <skytrace:material> ignored: " + parsed.error().message);
+        return std::nullopt;
+      }
+      out.material.material_class = *parsed;
+    } else {
+      warn(where(element) + ": " + object_name + ": <skytrace:material> without a class attribute ignored");
+      return std::nullopt;
+    }
+    if (out.material.is_vegetation()) {
+      out.material.attenuation_db_per_m = attenuation(custom, options_.vegetation_attenuation_db_per_m);
+    }
+    if (const auto kind = attribute(custom, "kind")) {
+      for (const ObjectKind k : {ObjectKind::kBuilding, ObjectKind::kTree, ObjectKind::kGround, ObjectKind::kOther}) {
+        if (object_kind_name(k) == *kind) out.kind = k;
+      }
+      if (!out.kind) warn(where(element) + ": " + object_name + ": kind='" + *kind + "' ignored (building, tree, ground, other)");
+    }
+    return out;
+  }
+
+  // Scenario rules, then custom elements (collision, link, models inner to outer), then defaults.
+  // Returns false when the object must be dropped (vegetation without a volume).
+  bool assign_material(WorldObject& object, const Chain& chain, const sdf::Link& link, const Geometry& geometry,
+                       BuiltShape& shape) {
+    std::vector<std::string> names = {object.name};
+    names.insert(names.end(), chain.names.begin(), chain.names.end());
+    names.insert(names.end(), chain.uris.begin(), chain.uris.end());
+    if (!shape.mesh_uri.empty()) names.push_back(shape.mesh_uri);
+    if (!shape.submesh.empty()) names.push_back(shape.submesh);
+
+    std::optional<ObjectKind> kind;
+    bool decided = false;
+    if (const MaterialRule* rule = match_material_rule(options_.material_rules, names)) {
+      object.material = rule->material;
+      kind = rule->kind;
+      decided = true;
+    }
+    if (!decided) {
+      std::vector<sdf::ElementPtr> carriers = {geometry.element, link.Element()};
+      carriers.insert(carriers.end(), chain.elements.rbegin(), chain.elements.rend());
+      for (const auto& carrier : carriers) {
+        if (auto custom = custom_material(carrier, object.name)) {
+          object.material = custom->material;
+          kind = custom->kind;
+          decided = true;
+          break;
+        }
+      }
+    }
+    if (!decided) {
+      const bool vegetation = std::any_of(chain.names.begin(), chain.names.end(), name_suggests_vegetation) ||
+                              std::any_of(chain.uris.begin(), chain.uris.end(), name_suggests_vegetation) ||
+                              name_suggests_vegetation(shape.mesh_uri) || name_suggests_vegetation(shape.submesh);
+      if (shape.is_ground) {
+        object.material = Material{MaterialClass::kGround, 0.0};
+      } else if (vegetation) {
+        object.material = Material{MaterialClass::kVegetation, options_.vegetation_attenuation_db_per_m};
+      } else {
+        object.material = Material{MaterialClass::kConcrete, 0.0};
+      }
+    }
+    if (object.material.is_vegetation() && shape.is_ground) {
+      warn(object.name + ": a plane or heightmap cannot be vegetation (no volume), kept as opaque ground");
+      object.material = Material{MaterialClass::kGround, 0.0};
+    }
+    if (object.material.is_vegetation() && !shape.is_closed && options_.vegetation_convex_hull) {
+      if (!make_vegetation_volume(object, shape)) return false;
+    }
+    if (kind) {
+      object.kind = *kind;
+    } else if (object.material.is_vegetation()) {
+      object.kind = ObjectKind::kTree;
+    } else if (shape.is_ground || object.material.material_class == MaterialClass::kGround) {
+      object.kind = ObjectKind::kGround;
+    } else {
+      object.kind = ObjectKind::kOther;  // buildings are decided per model in classify_buildings
+      unclassified_.insert(world_.objects.size());
+    }
+    return true;
+  }
+
+  // The convex hull of the (scaled) mesh: hulls commute with scaling, so the hull of the unscaled
+  // mesh is computed once per mesh file and scaled per instance.
+  bool make_vegetation_volume(WorldObject& object, const BuiltShape& shape) {
+    if (shape.mesh_entry == nullptr) return true;
+    auto& entry = *shape.mesh_entry;
+    if (!entry.hull) entry.hull = convex_hull(entry.mesh->vertices_m);
+    if (!entry.hull->ok()) {
+      warn(object.name + ": vegetation skipped, its mesh has no volume: " + entry.hull->error().message);
+      return false;
+    }
+    object.mesh = **entry.hull;
+    scale_mesh(object.mesh, shape.scale);
+    return true;
+  }
+
+  // A model names itself a building, or is static, tall and wide enough.
+  void classify_buildings(std::size_t first_object, const Chain& chain) {
+    std::vector<std::size_t> candidates;
+    for (std::size_t i = first_object; i < world_.objects.size(); ++i) {
+      if (unclassified_.count(i) != 0) candidates.push_back(i);
+    }
+    if (candidates.empty()) return;
+    bool building = std::any_of(chain.names.begin(), chain.names.end(), name_suggests_building) ||
+                    std::any_of(chain.uris.begin(), chain.uris.end(), name_suggests_building);
+    if (!building && chain.is_static) {
+      Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+      Eigen::Vector3d high = -low;
+      for (const std::size_t i : candidates) {
+        for (const auto& v : world_.objects[i].mesh.vertices_m) {
+          const Eigen::Vector3d p = world_.objects[i].pose * v.cast<double>();
+          low = low.cwiseMin(p);
+          high = high.cwiseMax(p);
+        }
+      }
+      const Eigen::Vector3d extent = high - low;
+      building = extent.z() >= options_.building_min_height_m &&
+                 extent.x() * extent.y() >= options_.building_min_footprint_m2;
+    }
+    if (building) {
+      for (const std::size_t i : candidates) world_.objects[i].kind = ObjectKind::kBuilding;
+    }
+  }
+
+  const SdfLoadOptions& options_;
+  const Resolver& resolver_;
+  WorldModel& world_;
+  fs::path world_file_;
+  std::map<std::string, std::shared_ptr<MeshEntry>> mesh_cache_;
+  std::map<std::string, std::pair<std::string, int>> missing_meshes_;  // uri -> (first place, count)
+  std::set<std::size_t> unclassified_;
+};
+
+}  // namespace
+
+Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& options) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return make_error(ErrorCode::kIo, path.string() + ": SDF file not found");
+  if (auto xml = check_xml(path); !xml.ok()) return xml.error();
+  if (options.round_segments < 3 || options.round_rings < 2 || !(options.infinite_plane_size_m > 0.0)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      path.string() + ": SDF options: at least 3 segments, 2 rings and a positive plane size");
+  }
+
+  const Resolver resolver(options);
+  WorldModel world;
+  ConsoleCapture console;
+
+  sdf::ParserConfig config;
+  config.SetWarningsPolicy(sdf::EnforcementPolicy::WARN);
+  config.SetFindCallback([&resolver](const std::string& uri) -> std::string {
+    if (uri.rfind("model://", 0) != 0) return "";
+    const auto found = resolver.resolve(uri, {});
+    return found ? found->string() : std::string();
+  });
+
+  // Parse to an element tree first: duplicate model names are made unique before the DOM load.
+  sdf::Errors errors;
+  const sdf::SDFPtr parsed = sdf::readFile(path.string(), config, errors);
+  std::map<std::string, std::pair<std::string, int>> missing_models;  // uri -> (first place, count)
+  std::vector<std::string> fatal;
+  const auto sort_errors = [&](const sdf::Errors& list) {
+    for (const auto& error : list) {
+      if (error.Code() == sdf::ErrorCode::URI_LOOKUP) {
+        // "Unable to find uri[model://x]": the include is skipped, as Gazebo does.
+        const std::string message = error.Message();
+        const auto open = message.find('[');
+        const auto close = message.rfind(']');
+        const std::string uri =
+            open != std::string::npos && close != std::string::npos && close > open ? message.substr(open + 1, close - open - 1) : message;
+        auto& entry = missing_models[uri];
+        if (entry.second++ == 0) {
+          entry.first = (error.FilePath() ? *error.FilePath() : path.string()) +
+                        (error.LineNumber() ? ":" + std::to_string(*error.LineNumber()) : std::string());
+        }
+      } else {
+        fatal.push_back(error_text(error));
+      }
+    }
+  };
+  sort_errors(errors);
+  const auto fail = [&](const std::string& what) -> Result<WorldModel> {
+    std::string message = path.string() + ": " + what;
+    for (const auto& line : fatal) message += "\n  " + line;
+    for (const auto& line : console.lines()) message += "\n  sdformat: " + line;
+    return make_error(ErrorCode::kParse, message);
+  };
+  if (!parsed || !fatal.empty()) return fail("malformed SDF");
+
+  sdf::ElementPtr world_element;
+  for (auto element = parsed->Root()->GetElementImpl("world"); element; element = element->GetNextElement("world")) {
+    if (options.world_name.empty() || element->GetAttribute("name")->GetAsString() == options.world_name) {
+      world_element = element;
+      break;
+    }
+  }
+  if (!options.world_name.empty() && !world_element) {
+    return make_error(ErrorCode::kNotFound, path.string() + ": no world named '" + options.world_name + "'");
+  }
+  std::map<std::string, ignition::math::Pose3d> saved_poses;
+  if (world_element) {
+    rename_duplicate_models(world_element, world.warnings);
+    saved_poses = state_poses(world_element);
+  }
+
+  sdf::Root root;
+  sort_errors(root.Load(parsed, config));
+  if (!fatal.empty()) return fail("invalid SDF");
+
+  for (const auto& [uri, info] : missing_models) {
+    world.warnings.push_back(info.first + ": model " + uri + " not found, " + std::to_string(info.second) +
+                             " include" + (info.second == 1 ? "" : "s") + " skipped");
+  }
+
+  SdfWalker walker(options, resolver, world, path);
+  if (world_element) {
+    const sdf::World* sdf_world = nullptr;
+    for (uint64_t w = 0; w < root.WorldCount(); ++w) {
+      if (root.WorldByIndex(w)->Element() == world_element || root.WorldByIndex(w)->Name() ==
+                                                                    world_element->GetAttribute("name")->GetAsString()) {
+        sdf_world = root.WorldByIndex(w);
+        break;
+      }
+    }
+    if (sdf_world == nullptr) return fail("the world could not be loaded");
+    world.name = sdf_world->Name();
+
+    if (const auto* sc = sdf_world->SphericalCoordinates()) {
+      if (sc->Surface() != ignition::math::SphericalCoordinates::EARTH_WGS84) {
+        world.warnings.push_back(where(world_element) + ": <spherical_coordinates> not on EARTH_WGS84, ignored");
+      } else {
+        GeoOrigin origin;
+        origin.origin.latitude_deg = sc->LatitudeReference().Degree();
+        origin.origin.longitude_deg = sc->LongitudeReference().Degree();
+        origin.origin.height_m = sc->ElevationReference();
+        origin.heading_deg = sc->HeadingOffset().Degree();
+        world.geo_origin = origin;
+        const auto element = world_element->GetElementImpl("spherical_coordinates");
+        if (element && element->HasElement("world_frame_orientation")) {
+          const auto orientation = element->GetElementImpl("world_frame_orientation")->Get<std::string>();
+          if (orientation != "ENU") {
+            world.warnings.push_back(where(element) + ": world_frame_orientation " + orientation +
+                                     " read as ENU (the only orientation Gazebo implements)");
+          }
+        }
+      }
+    }
+
+    for (uint64_t m = 0; m < sdf_world->ModelCount(); ++m) {
+      const sdf::Model* model = sdf_world->ModelByIndex(m);
+      ignition::math::Pose3d pose;
+      const auto pose_errors = model->SemanticPose().Resolve(pose);
+      if (!pose_errors.empty()) {
+        world.warnings.push_back(where(model->Element()) + ": model " + model->Name() +
+                                 " skipped, its pose cannot be resolved: " + error_text(pose_errors.front()));
+        continue;
+      }
+      if (const auto saved = saved_poses.find(model->Name()); saved != saved_poses.end()) pose = saved->second;
+      walker.model(*model, to_isometry(pose), Chain{});
+    }
+    std::size_t roads = 0;
+    for (auto road = world_element->GetElementImpl("road"); road; road = road->GetNextElement("road")) ++roads;
+    if (roads > 0) {
+      world.warnings.push_back(where(world_element) + ": " + std::to_string(roads) +
+                               " <road> element(s) skipped (flat ribbons on the ground do not block signals)");
+    }
+    if (sdf_world->ActorCount() > 0) {
+      world.warnings.push_back(where(world_element) + ": " + std::to_string(sdf_world->ActorCount()) +
+                               " <actor> element(s) skipped (animated people are not obstacles here)");
+    }
+  } else if (const sdf::Model* model = root.Model()) {
+    world.name = model->Name();
+    ignition::math::Pose3d pose;
+    (void)model->SemanticPose().Resolve(pose);
+    walker.model(*model, to_isometry(pose), Chain{});
+  } else {
+    return make_error(ErrorCode::kNotFound, path.string() + ": the SDF file holds no world and no model");
+  }
+  walker.finish();
+  if (!world.geo_origin && !options.geo_origin) {
+    world.warnings.push_back(path.string() + ": no <spherical_coordinates>: the world is not tied to the Earth");
+  }
+  if (options.geo_origin) world.geo_origin = options.geo_origin;
+  for (const auto& line : console.lines()) world.warnings.push_back("sdformat: " + line);
+  return world;
+}
+
+}  // namespace skytrace::world
