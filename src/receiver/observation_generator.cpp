@@ -174,7 +174,6 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   const Eigen::Vector3d& rx_v_mps = epoch.receiver.velocity_mps;
   const Geodetic rx_geodetic = ecef_to_geodetic(rx_m);
   const Eigen::Matrix3d rx_to_enu = ecef_to_enu_rotation(rx_geodetic);
-  const std::optional<orbits::KlobucharCoefficients>& klobuchar = ephemerides_.data().ionosphere.gps;
 
   // Satellites above the mask wait here for the world's verdict before their signals are measured.
   struct Pending {
@@ -275,9 +274,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     if (settings_.troposphere_saastamoinen) {
       obs.troposphere_m = atmosphere::saastamoinen_delay_m(rx_geodetic, obs.direction.elevation_deg).value_or(0.0);
     }
-    if (settings_.ionosphere_klobuchar && klobuchar) {
-      obs.ionosphere_l1_m =
-          atmosphere::klobuchar_delay_l1_m(*klobuchar, epoch.true_time, rx_geodetic, obs.direction).value_or(0.0);
+    if (settings_.ionosphere) {
+      auto delay = settings_.ionosphere->delay_l1_m(epoch.true_time, rx_geodetic, obs.direction);
+      if (!delay) return delay.error().with_context(sat.to_string());
+      obs.ionosphere_l1_m = delay->value_or(0.0);
     }
 
     pending.push_back(Pending{epoch.satellites.size(), std::move(*record), precise_truth, transmit_time, range_m,

@@ -13,6 +13,7 @@
 #include <random>
 #include <set>
 
+#include "skytrace/atmosphere/ionex.hpp"
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/io/rinex_obs.hpp"
@@ -416,6 +417,14 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   if (!world) return world.error();
   auto navigation = load_navigation(s);
   if (!navigation) return navigation.error();
+  std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;
+  if (s.models.ionosphere == "ionex") {
+    auto maps = atmosphere::read_ionex(*s.models.ionex_file);
+    if (!maps) return maps.error();
+    ionosphere = std::make_shared<atmosphere::IonexIonosphere>(std::move(*maps));
+  } else if (s.models.ionosphere == "klobuchar" && navigation->ionosphere.gps) {
+    ionosphere = std::make_shared<atmosphere::KlobucharIonosphere>(*navigation->ionosphere.gps);
+  }
   if (s.models.ionosphere == "klobuchar" && !navigation->ionosphere.gps) {
     return make_error(ErrorCode::kNotFound,
                       "models.ionosphere is klobuchar but no navigation file has GPS Klobuchar coefficients "
@@ -462,7 +471,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     g.signals = rx.settings->signals;
     g.elevation_mask_deg = rx.settings->elevation_mask_deg;
     g.profile = *profile;
-    g.ionosphere_klobuchar = s.models.ionosphere == "klobuchar";
+    g.ionosphere = ionosphere;
     g.troposphere_saastamoinen = s.models.troposphere == "saastamoinen";
     g.noise = s.models.noise;
     g.ideal_clock = s.models.receiver_clock == "ideal";

@@ -262,8 +262,12 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   }
 
   if (auto models = root.child("models")) {
-    models->expect_keys({"ionosphere", "troposphere", "receiver_clock", "noise", "multipath"});
-    if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar"});
+    models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath"});
+    if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
+    if (auto c = models->child("ionex_file")) s.models.ionex_file = existing_file(*c, base);
+    if (s.models.ionosphere == "ionex" && !s.models.ionex_file) {
+      models->fail("models.ionosphere is ionex: give the map in models.ionex_file");
+    }
     if (auto c = models->child("troposphere")) s.models.troposphere = c->as_choice({"none", "saastamoinen"});
     if (auto c = models->child("receiver_clock")) {
       s.models.receiver_clock = c->as_choice({"ideal", "profile", "tcxo", "ocxo"});
@@ -376,6 +380,7 @@ std::string scenario_to_json(const Scenario& s) {
                     {"precise_clocks", paths(s.ephemeris.precise_clocks)},
                     {"nominal", s.ephemeris.nominal}};
   j["models"] = {{"ionosphere", s.models.ionosphere},
+                 {"ionex_file", s.models.ionex_file ? s.models.ionex_file->string() : ""},
                  {"troposphere", s.models.troposphere},
                  {"receiver_clock", s.models.receiver_clock},
                  {"noise", s.models.noise},

@@ -75,6 +75,10 @@ TEST(Scenario, BadValuesNamePathAndLine) {
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("time.start"), std::string::npos) << r.error().message;
 
+  r = parse(std::string(kMinimal) + "models:\n  ionosphere: ionex\n");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("models.ionex_file"), std::string::npos) << r.error().message;
+
   r = parse("time: [unclosed");
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("YAML syntax error"), std::string::npos) << r.error().message;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "skytrace/atmosphere/ionosphere.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/core/path_query.hpp"
 #include "skytrace/core/random.hpp"
@@ -40,7 +41,8 @@ struct GeneratorSettings {
   std::vector<Signal> signals;
   double elevation_mask_deg = 5.0;
   ReceiverProfile profile;
-  bool ionosphere_klobuchar = true;
+  // The ionosphere the signals cross (nullptr: none); Klobuchar or an IONEX map.
+  std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;
   bool troposphere_saastamoinen = true;
   bool noise = false;
   bool ideal_clock = true;
