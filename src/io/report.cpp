@@ -433,7 +433,8 @@ void ReportBuilder::add(const ReportSample& sample) {
                                                         : std::numeric_limits<float>::quiet_NaN(),
                          classify(sample)};
   const bool on_stride = track.samples_seen % track.stride == 0;
-  const bool class_change = !track.points.empty() && point.track_class != track.points.back().track_class;
+  const bool class_change =
+      track.keep_changes && !track.points.empty() && point.track_class != track.points.back().track_class;
   if (class_change && track.latest.time_s > track.points.back().time_s) {
     // Keep the last sample of the previous class too, so the change is drawn where it happened.
     track.points.push_back(track.latest);
@@ -493,6 +494,7 @@ void ReportBuilder::compact_track(Track& track) const {
     kept.clear();
     for (size_t i = 0; i < n; i += 2) kept.push_back(points[i]);
     if ((n - 1) % 2 != 0) kept.push_back(points[n - 1]);
+    track.keep_changes = false;
   }
   points = std::move(kept);
   track.stride *= 2;

@@ -249,12 +249,14 @@ TEST(Report, DecimationBoundsMemoryAndOutput) {
 }
 
 TEST(Report, DecimationKeepsShortStatusChangesAndStaysBoundedWhenStatusFlickers) {
-  // A 3-sample blockage among 100,000 samples still shows on the plot.
-  const auto blip = circling(100, 100000, [](int k) { return std::string(k >= 50000 && k < 50003 ? "blocked" : "tracked"); });
+  // One-sample blockages among 100,000 samples still show on the plot.
+  const auto blip = circling(100, 100000, [](int k) {
+    return std::string(k == 30001 || k == 50000 || k == 70003 || k == 90010 ? "blocked" : "tracked");
+  });
   EXPECT_LE(blip.track_points(SatelliteId::parse("C20").value()), 100U);
   ReportMeta meta;
   meta.interval_s = 1.0;
-  EXPECT_EQ(polylines_coloured(blip.sky_plot_svg(meta), kRed), 1U);
+  EXPECT_EQ(polylines_coloured(blip.sky_plot_svg(meta), kRed), 4U);
   // A status changing at every sample cannot grow memory either.
   const auto flicker = circling(100, 100000, [](int k) { return std::string(k % 2 == 0 ? "blocked" : "tracked"); });
   EXPECT_LE(flicker.track_points(SatelliteId::parse("C20").value()), 100U);

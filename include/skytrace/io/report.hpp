@@ -92,6 +92,9 @@ class ReportBuilder {
     TrackPoint latest;               // the newest sample, kept or not (labels sit there)
     size_t samples_seen = 0;
     size_t stride = 1;  // every stride-th sample is kept (plus status changes)
+    // Status changes are kept beyond the stride until they alone would fill the track (a status
+    // flickering at every sample): from then on plain decimation.
+    bool keep_changes = true;
   };
   struct CountPoint {
     double time_s = 0.0;
