@@ -16,6 +16,7 @@
 #include "skytrace/atmosphere/ionex.hpp"
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/text_file.hpp"
+#include "skytrace/io/report.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/nominal.hpp"
@@ -498,7 +499,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
 
   RunSummary summary;
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  // Writes one computed epoch of one receiver: RINEX, counts, truth.
+  io::ReportBuilder report;  // of the first receiver
+  // Writes one computed epoch of one receiver: RINEX, counts, truth, report.
   auto write_epoch = [&](std::int64_t index, size_t receiver_index, const receiver::EpochObservations& epoch) -> Status {
     ReceiverRun& rx = receivers[receiver_index];
     const io::ObservationEpoch record = to_rinex(epoch, rx.header, rx.columns);
@@ -514,6 +516,20 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       if (truth_buffer.size() > (1u << 20)) {
         truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
         truth_buffer.clear();
+      }
+    }
+    if (receiver_index == 0) {
+      for (const auto& sat : epoch.satellites) {
+        if (sat.status == receiver::SatelliteStatus::kNoEphemeris) continue;
+        io::ReportSample sample;
+        sample.time = epoch.receiver_time;
+        sample.satellite = sat.satellite;
+        sample.azimuth_deg = sat.direction.azimuth_deg;
+        sample.elevation_deg = sat.direction.elevation_deg;
+        sample.status = std::string(receiver::to_string(sat.status));
+        if (!sat.signals.empty()) sample.cn0_dbhz = sat.signals.front().cn0_dbhz;
+        sample.vegetation_attenuation_db = sat.vegetation_attenuation_db;
+        report.add(sample);
       }
     }
     if (receiver_index + 1 == receivers.size()) {
@@ -587,6 +603,41 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   const orbits::NavigationData used = used_navigation(ephemerides.data(), receivers);
   if (auto st = write_file_atomically(staging->file("nav.rnx"), orbits::format_rinex3_nav(used)); !st) return st.error();
 
+  {
+    io::ReportMeta meta;
+    meta.scenario_name = s.name;
+    meta.receiver_name = receivers.front().settings->name;
+    meta.start = s.time.start;
+    meta.end = s.time.start + s.time.duration_s;
+    meta.interval_s = s.time.interval_s;
+    meta.summary_rows = {{"epochs", std::to_string(summary.epochs)},
+                         {"tracked satellite-epochs", std::to_string(summary.satellite_epochs)},
+                         {"signal observations", std::to_string(summary.observations)},
+                         {"receiver profile", receivers.front().settings->profile},
+                         {"ionosphere", s.models.ionosphere},
+                         {"troposphere", s.models.troposphere},
+                         {"seed", std::to_string(s.seed)}};
+    for (const auto& [system, count] : summary.satellite_epochs_per_system) {
+      meta.summary_rows.emplace_back(system + " satellite-epochs", std::to_string(count));
+    }
+    if (*world) {
+      const LoadedWorld& w = **world;
+      meta.summary_rows.emplace_back("world", w.name + " (" + std::to_string(w.objects) + " objects, " +
+                                                  std::to_string(w.buildings) + " buildings, " + std::to_string(w.trees) +
+                                                  " trees)");
+      meta.warnings = w.warnings;
+      auto start_position = receivers.front().kinematics->at(s.time.start);
+      if (start_position) {
+        constexpr double kMaskStep_deg = 2.0;
+        if (auto mask = world_sky_mask_deg(w, start_position->position_m, kMaskStep_deg)) {
+          meta.sky_mask_elevation_deg = *mask;
+          meta.sky_mask_azimuth_step_deg = kMaskStep_deg;
+        }
+      }
+    }
+    if (auto st = write_file_atomically(staging->file("report.html"), report.html(meta)); !st) return st.error();
+    if (auto st = write_file_atomically(staging->file("skyplot.svg"), report.sky_plot_svg(meta)); !st) return st.error();
+  }
   summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   nlohmann::json j;
   j["skytrace_version"] = kVersion;

@@ -68,4 +68,17 @@ Status check_outside_objects(const LoadedWorld& world, const Eigen::Vector3d& po
   return Ok{};
 }
 
+Result<std::vector<double>> world_sky_mask_deg(const LoadedWorld& world, const Eigen::Vector3d& position_ecef_m,
+                                               double azimuth_step_deg) {
+  // The sky mask is drawn in the receiver's azimuths; the world frame's x axis is `heading` from east.
+  auto mask = world::sky_mask_elevation_deg(*world.scene, world.frame.from_ecef(position_ecef_m), azimuth_step_deg);
+  if (!mask || world.frame.heading_deg == 0.0) return mask;
+  // Rotate: world-frame azimuths are measured from the world's y axis; shift to north.
+  const auto n = static_cast<long>(mask->size());
+  std::vector<double> rotated(mask->size());
+  const long shift = std::lround(-world.frame.heading_deg / azimuth_step_deg);
+  for (long i = 0; i < n; ++i) rotated[static_cast<size_t>(((i + shift) % n + n) % n)] = (*mask)[static_cast<size_t>(i)];
+  return rotated;
+}
+
 }  // namespace skytrace::sim

@@ -32,4 +32,8 @@ struct LoadedWorld {
 [[nodiscard]] Status check_outside_objects(const LoadedWorld& world, const Eigen::Vector3d& position_ecef_m,
                                            const std::string& receiver_name);
 
+// The obstruction elevation per azimuth (0, step, 2 step, ... degrees) seen from a point.
+[[nodiscard]] Result<std::vector<double>> world_sky_mask_deg(const LoadedWorld& world, const Eigen::Vector3d& position_ecef_m,
+                                                             double azimuth_step_deg);
+
 }  // namespace skytrace::sim
