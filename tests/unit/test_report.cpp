@@ -298,6 +298,19 @@ TEST(Report, SatelliteCountsPerSystem) {
   }
 }
 
+TEST(Report, EmptyRunGivesAValidPage) {
+  const ReportBuilder builder;
+  ReportMeta meta;
+  meta.start = t0();
+  meta.end = t0();
+  const auto html = builder.html(meta);
+  EXPECT_EQ(tag_balance_problem(html), "");
+  EXPECT_NE(html.find("id=\"skyplot\""), std::string::npos);
+  EXPECT_EQ(html.find("nan"), std::string::npos);
+  EXPECT_EQ(html.find("inf"), std::string::npos);
+  EXPECT_EQ(tag_balance_problem(builder.sky_plot_svg(meta)), "");
+}
+
 TEST(Report, OutOfOrderSamplesAreCountedAndReported) {
   ReportBuilder builder;
   builder.add(sample(60, "G01", 40.0, 40.0, "tracked"));
