@@ -273,8 +273,13 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
   const Scenes scenes(random_world.world);
   ASSERT_TRUE(scenes.embree && scenes.brute);
   EXPECT_EQ(scenes.embree->stats().triangles, 1500U + 30U * 12U);
+  // The same world without blocking details (occlusion tests where no vegetation is crossed).
+  EmbreeSceneOptions visibility_only;
+  visibility_only.blocking_details = false;
+  auto visibility = EmbreeScene::build(random_world.world, visibility_only);
+  ASSERT_TRUE(visibility.ok());
   RandomStream random(stream_key(20240611, {2}));
-  int rays = 0, excluded = 0, blocked = 0, with_vegetation = 0;
+  int rays = 0, excluded = 0, blocked = 0, with_vegetation = 0, occlusion_only = 0;
   double worst_distance_m = 0.0, worst_vegetation_m = 0.0;
   for (int batch = 0; batch < 250; ++batch) {
     const Eigen::Vector3d origin = uniform_vector(random, 60.0);
@@ -282,6 +287,7 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
     for (int i = 0; i < 48; ++i) directions.push_back(unit_vector(random));
     const auto fast = scenes.embree->trace(origin, directions);
     const auto reference = scenes.brute->trace(origin, directions);
+    const auto quick = (*visibility)->trace(origin, directions);
     for (std::size_t i = 0; i < directions.size(); ++i) {
       ++rays;
       if (grazes_an_edge(random_world, origin, directions[i], 1e-6)) {
@@ -291,6 +297,13 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
       SCOPED_TRACE(::testing::Message() << "origin " << origin.transpose() << " direction "
                                         << directions[i].transpose());
       ASSERT_EQ(fast[i].blocked, reference[i].blocked);
+      ASSERT_EQ(quick[i].blocked, reference[i].blocked);
+      EXPECT_NEAR(quick[i].vegetation_path_m, reference[i].vegetation_path_m, 1e-4);
+      // Details only where a vegetation crossing needed the distance to the first opaque hit.
+      if (quick[i].blocked && quick[i].blocking_object.empty()) ++occlusion_only;
+      if (!quick[i].blocking_object.empty()) {
+        EXPECT_EQ(quick[i].blocking_object, fast[i].blocking_object);
+      }
       if (fast[i].blocked) {
         ++blocked;
         EXPECT_EQ(fast[i].blocking_object, reference[i].blocking_object);
@@ -314,10 +327,12 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
   EXPECT_GT(blocked, rays / 5);
   EXPECT_LT(blocked, rays * 4 / 5);
   EXPECT_GT(with_vegetation, rays / 20);
+  EXPECT_GT(occlusion_only, blocked / 10);
   RecordProperty("rays", rays);
   RecordProperty("excluded_grazing", excluded);
   std::cout << "random rays: " << rays << " compared, " << excluded << " grazing excluded, " << blocked
-            << " blocked, " << with_vegetation << " through vegetation; worst distance difference "
+            << " blocked (" << occlusion_only << " by an occlusion test alone without details), "
+            << with_vegetation << " through vegetation; worst distance difference "
             << worst_distance_m << " m, worst vegetation path difference " << worst_vegetation_m << " m\n";
 }
 
