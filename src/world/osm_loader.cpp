@@ -43,6 +43,7 @@ struct PreparedPolygon {
   std::vector<Eigen::Vector2d> points;
   std::vector<std::vector<int>> rings;  // [0] outer
   double eps_area_m2 = 0.0;             // areas below this are zero
+  double flat_m = 0.0;                  // a vertex this close to the line of its neighbours is flat
 };
 
 std::vector<int> clean_ring(const std::vector<Eigen::Vector2d>& points, int begin, int end) {
@@ -89,6 +90,9 @@ Result<PreparedPolygon> prepare_polygon(const PolygonWithHoles& polygon) {
   }
   const double size_m = std::max((high - low).norm(), 1e-300);
   prepared.eps_area_m2 = 1e-12 * size_m * size_m;
+  // Geographic projections bend straight runs of nodes by micrometres: such vertices (and
+  // zero-width spikes) are removed when clipping stalls, not left to block every ear.
+  prepared.flat_m = 1e-6 * size_m;
 
   for (std::size_t r = 0; r < spans.size(); ++r) {
     std::vector<int> ring = clean_ring(prepared.points, spans[r].first, spans[r].second);
@@ -200,7 +204,8 @@ class EarClipper {
     bool again = false;
     do {
       again = false;
-      if (next(p) != p && (same_place(p, next(p)) || area(prev(p), p, next(p)) == 0.0)) {
+      if (next(p) != p && (same_place(p, next(p)) || std::abs(area(prev(p), p, next(p))) <=
+                                                         prepared_.flat_m * (at(next(p)) - at(prev(p))).norm())) {
         remove(p);
         p = end = prev(p);
         if (p == next(p)) break;
@@ -446,15 +451,18 @@ Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bot
       mesh.vertices_m.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(z));
     }
   }
-  // Walls: outer ring counter-clockwise and holes clockwise both put the solid on the left, so
-  // (a, b, b') faces outward.
-  for (const auto& ring : prepared->rings) {
-    for (std::size_t i = 0; i < ring.size(); ++i) {
-      const int a = ring[i];
-      const int b = ring[(i + 1) % ring.size()];
-      mesh.triangles.emplace_back(a, b, b + n);
-      mesh.triangles.emplace_back(a, b + n, a + n);
-    }
+  // Walls stand on the roof's boundary: the edges of its triangles without a twin (bridges and
+  // inner diagonals come in pairs). Boundary edges run counter-clockwise around the solid seen
+  // from above (outer ring counter-clockwise, holes clockwise), so (a, b, b') faces outward, and
+  // walls follow the roof exactly even where clipping dropped a spike or a flat vertex.
+  std::set<std::pair<int, int>> edges;
+  for (const auto& t : *cap) {
+    for (int k = 0; k < 3; ++k) edges.emplace(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]);
+  }
+  for (const auto& [a, b] : edges) {
+    if (edges.count({b, a}) != 0) continue;
+    mesh.triangles.emplace_back(a, b, b + n);
+    mesh.triangles.emplace_back(a, b + n, a + n);
   }
   for (const auto& t : *cap) {
     mesh.triangles.emplace_back(t[0] + n, t[1] + n, t[2] + n);  // roof, facing up
@@ -524,6 +532,7 @@ struct OsmArea {
   std::string name;  // "way/1", "relation/2"
   std::map<std::string, std::string> tags;
   std::vector<LatLonPolygon> polygons;
+  std::string rejected;  // "way/1 (...): osmium rejected it (why)" when built from the raw outline
 };
 
 struct OsmTree {
@@ -586,6 +595,9 @@ struct Collector : osmium::handler::Handler {
   std::vector<OsmTree> trees;
   // Candidates that should give an area, to name those that did not.
   std::map<std::string, std::string> candidates;  // name -> description
+  // Closed candidate ways as drawn, for those osmium's assembler rejects (a self-touching outline
+  // is still an obstacle).
+  std::map<std::string, OsmArea> raw_ways;
   osmium::Box data_box;
   bool load_woods = true;
   bool load_trees = true;
@@ -601,10 +613,22 @@ struct Collector : osmium::handler::Handler {
   void way(const osmium::Way& way) {
     const auto tags = tags_of(way.tags());
     if (is_building(tags) || (load_woods && is_wood(tags))) {
-      candidates.emplace("way/" + std::to_string(way.id()),
-                         (is_building(tags) ? "building=" + tags.at("building") : std::string("wood")) + ", " +
-                             std::to_string(way.nodes().size()) + " node(s), " +
-                             (way.nodes().size() >= 4 && way.is_closed() ? "closed" : "not a closed ring"));
+      const std::string name = "way/" + std::to_string(way.id());
+      const bool closed = way.nodes().size() >= 4 && way.is_closed();
+      candidates.emplace(name, (is_building(tags) ? "building=" + tags.at("building") : std::string("wood")) + ", " +
+                                   std::to_string(way.nodes().size()) + " node(s), " +
+                                   (closed ? "closed" : "not a closed ring"));
+      if (!closed) return;
+      OsmArea raw;
+      raw.name = name;
+      raw.tags = tags;
+      raw.polygons.emplace_back();
+      for (const auto& nr : way.nodes()) {
+        if (!nr.location().valid()) return;
+        raw.polygons.back().outer.points_deg.emplace_back(nr.location().lat(), nr.location().lon());
+      }
+      for (const auto& nr : way.nodes()) data_box.extend(nr.location());
+      raw_ways.emplace(name, std::move(raw));
     }
   }
   void relation(const osmium::Relation& relation) {
@@ -730,10 +754,15 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
   for (const auto& area : collector.areas) collector.candidates.erase(area.name);
   for (const auto& [name, description] : collector.candidates) {
     const auto problem = problems.problems.find(name);
-    world.warnings.push_back(name + " (" + description + ") skipped: " +
-                             (problem != problems.problems.end()
-                                  ? problem->second
-                                  : std::string("no area could be built (members missing from the extract?)")));
+    const std::string reason = problem != problems.problems.end()
+                                   ? problem->second
+                                   : std::string("no area could be built (members missing from the extract?)");
+    if (auto raw = collector.raw_ways.find(name); raw != collector.raw_ways.end()) {
+      raw->second.rejected = name + " (" + description + "): osmium rejected it (" + reason + ")";
+      collector.areas.push_back(std::move(raw->second));
+      continue;
+    }
+    world.warnings.push_back(name + " (" + description + ") skipped: " + reason);
   }
 
   // Origin: given, else the file's bounds, else the data.
@@ -831,7 +860,10 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
       for (const auto& hole : polygon.holes) projected.holes.push_back(project(hole));
       auto prism = extrude_polygon(projected, ground_z_m + bottom_m, ground_z_m + top_m);
       if (!prism.ok()) {
-        warnings.push_back(area.name + " skipped: " + prism.error().message);
+        warnings.push_back(area.rejected.empty()
+                               ? area.name + " skipped: " + prism.error().message
+                               : area.rejected + " and its outline as drawn fails too (" + prism.error().message +
+                                     "): skipped");
         failed = true;
         break;
       }
@@ -840,6 +872,7 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
       for (const auto& t : prism->triangles) object.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
     }
     if (failed) continue;
+    if (!area.rejected.empty()) warnings.push_back(area.rejected + "; built from its outline as drawn");
     centre_mesh(object);
     if (object.kind == ObjectKind::kBuilding) ++buildings;
     world.objects.push_back(std::move(object));

@@ -912,6 +912,8 @@ std::string tiny_osm(bool with_buildings) {
   xml += osm_square(17, 48.0015, 11.0007, 48.0017, 11.0009);
   xml += osm_square(21, 47.9990, 11.0010, 47.9995, 11.0015);
   xml += osm_square(25, 47.9990, 11.0000, 47.9992, 11.0002);
+  xml += osm_square(29, 48.0024, 11.0000, 48.0028, 11.0004);
+  xml += osm_node(33, 48.0026, 11.0000) + osm_node(34, 48.0027, 11.0000);
   xml += osm_node(40, 47.9985, 11.0000, tag("natural", "tree") + tag("height", "10") + tag("diameter_crown", "4"));
   xml += osm_node(41, 47.9985, 11.0005, tag("natural", "tree"));
   if (with_buildings) {
@@ -920,6 +922,9 @@ std::string tiny_osm(bool with_buildings) {
     xml += osm_way(3, {9, 10, 11, 12, 9}, tag("building", "yes") + tag("building:material", "glass"));
     xml += osm_way(4, {1}, tag("building", "yes"));
     xml += osm_way(5, {25, 26, 27, 28, 25}, tag("building", "no"));
+    // The west side runs down, back up and down again: osmium rejects the overlapping segments,
+    // the outline as drawn is still a square.
+    xml += osm_way(6, {29, 30, 31, 32, 33, 34, 29}, tag("building", "yes") + tag("height", "5"));
     xml += osm_way(20, {13, 14, 15, 16, 13}, "");
     xml += osm_way(21, {17, 18, 19, 20, 17}, "");
     xml += "<relation id=\"10\" version=\"1\"><member type=\"way\" ref=\"20\" role=\"outer\"/>"
@@ -956,7 +961,7 @@ TEST(WorldOsm, BuildingsMultipolygonTreesAndWoods) {
   EXPECT_NEAR(origin.longitude_deg, 11.0005, 1e-9);
 
   const auto summary = summarize_world(world);
-  EXPECT_EQ(summary.buildings, 4U) << all_warnings(world);  // ways 1, 2, 3 and relation 10
+  EXPECT_EQ(summary.buildings, 5U) << all_warnings(world);  // ways 1, 2, 3, 6 and relation 10
   EXPECT_EQ(summary.trees, 3U);                              // two tree nodes and the wood
 
   const auto height_of = [&](const std::string& name) {
@@ -1008,6 +1013,11 @@ TEST(WorldOsm, BuildingsMultipolygonTreesAndWoods) {
   EXPECT_NEAR(object_bounds(*wood).second.z(), 15.0, 1e-5);
 
   EXPECT_EQ(find_object(world, "way/5"), nullptr);  // building=no
+  const auto* redrawn = find_object(world, "way/6");
+  ASSERT_NE(redrawn, nullptr);
+  EXPECT_TRUE(is_closed_consistent(redrawn->mesh));
+  EXPECT_NEAR(signed_volume_m3(redrawn->mesh) / 5.0, square_area_m2(48.0024, 11.0, 48.0028, 11.0004, origin), 0.05);
+  EXPECT_TRUE(has_warning(world, "way/6 (building=yes, 7 node(s), closed): osmium rejected it")) << all_warnings(world);
   EXPECT_TRUE(has_warning(world, "way/4 (building=yes, 1 node(s), not a closed ring) skipped")) << all_warnings(world);
   EXPECT_TRUE(has_warning(world, "relation/11")) << all_warnings(world);
 }
