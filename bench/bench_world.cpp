@@ -9,12 +9,15 @@
 #include <cmath>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
+#include <string>
 #include <limits>
 #include <memory>
 #include <numbers>
 #include <vector>
 
 #include "skytrace/core/random.hpp"
+#include "skytrace/world/loaders.hpp"
 #include "skytrace/world/scene.hpp"
 
 namespace {
@@ -130,6 +133,10 @@ const City& plain_city() {
   static const City city = make_city(0, false);
   return city;
 }
+const City& city_with_truck() {
+  static const City city = make_city(0, true);
+  return city;
+}
 const City& green_city() {
   static const City city = make_city(400, false);
   return city;
@@ -163,6 +170,10 @@ BENCHMARK(BM_SceneTrace)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName
 void BM_SceneTraceWithTrees(benchmark::State& state) { trace_batches(state, green_city()); }
 BENCHMARK(BM_SceneTraceWithTrees)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
 
+// One movable object: the static geometry is then traversed through an instance.
+void BM_SceneTraceWithMovable(benchmark::State& state) { trace_batches(state, city_with_truck()); }
+BENCHMARK(BM_SceneTraceWithMovable)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
+
 // Raw Embree on the same triangles, as one would write it by hand: one geometry per object in the
 // world frame, the same robust scene flag, one rtcOccluded1 or rtcIntersect1 per ray.
 class RawEmbree {
@@ -172,8 +183,8 @@ class RawEmbree {
       : device_(rtcNewDevice(nullptr)), scene_(rtcNewScene(device_)) {
     rtcSetSceneFlags(scene_, flags);
     rtcSetSceneBuildQuality(scene_, quality);
+    // Every object, vegetation included, as plain triangles: the same scene the API traverses.
     for (const auto& object : world.objects) {
-      if (object.material.is_vegetation()) continue;
       RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
       auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                                    3 * sizeof(float), object.mesh.vertices_m.size()));
@@ -312,8 +323,7 @@ double thread_cpu_s() {
 // through EmbreeScene::trace, then through raw rtcOccluded1 on the same triangles (same scene
 // flags), then raw rtcIntersect1 (the raw query that finds what details report), and reports
 // api_over_raw = rtcOccluded1 time / API time (goal >= 0.7) and api_over_raw_intersect.
-void BM_ApiOverRawOccluded(benchmark::State& state) {
-  const City& city = plain_city();
+void api_over_raw(benchmark::State& state, const City& city) {
   EmbreeSceneOptions options;
   options.blocking_details = state.range(0) != 0;
   auto scene = EmbreeScene::build(city.world, options);
@@ -356,12 +366,76 @@ void BM_ApiOverRawOccluded(benchmark::State& state) {
   state.counters["api_over_raw"] = raw_s / api_s;
   state.counters["api_over_raw_intersect"] = raw_intersect_s / api_s;
   state.counters["blocked_count_differences"] = disagreements;
+  state.counters["blocked_share"] = 0.0;
+  int blocked = 0;
+  for (std::size_t b = 0; b < city.batches.size(); ++b) {
+    for (const auto& o : (*scene)->trace(city.origins[b], city.batches[b])) blocked += o.blocked ? 1 : 0;
+  }
+  state.counters["blocked_share"] = static_cast<double>(blocked) / (kBatches * kDirectionsPerBatch);
 }
+
+void BM_ApiOverRawOccluded(benchmark::State& state) { api_over_raw(state, plain_city()); }
 BENCHMARK(BM_ApiOverRawOccluded)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
+
+std::filesystem::path shared_file(const std::string& relative) {
+  const char* env = std::getenv("SKYTRACE_SHARED_DATA");
+  const std::filesystem::path base = env != nullptr && *env != '\0' ? env : SKYTRACE_DEFAULT_SHARED_DATA;
+  return base / relative;
+}
+
+// The citysim world of ../shared/data (Gazebo's simple_city.world with its models: terrain,
+// buildings, trees as vegetation hulls), receivers 1.5 m above whatever is below a random point of
+// the central part of the world. Empty world when the data is absent.
+const City& citysim() {
+  static const City city = [] {
+    City out;
+    const auto path = shared_file("worlds/citysim/simple_city.world");
+    if (!std::filesystem::exists(path)) return out;
+    SdfLoadOptions options;
+    options.model_paths = {shared_file("worlds/models")};
+    options.use_environment_paths = false;
+    auto world = load_sdf_world(path, options);
+    if (!world.ok()) return out;
+    out.world = std::move(*world);
+    auto scene = EmbreeScene::build(out.world);
+    if (!scene.ok()) return City{};
+    const auto [low, high] = world_bounds(out.world);
+    RandomStream random(stream_key(42, {2}));
+    while (static_cast<int>(out.origins.size()) < kBatches) {
+      const double x = low.x() + (high.x() - low.x()) * (0.25 + 0.5 * random.uniform());
+      const double y = low.y() + (high.y() - low.y()) * (0.25 + 0.5 * random.uniform());
+      const Eigen::Vector3d above(x, y, high.z() + 10.0);
+      const auto down = (*scene)->trace(above, {Eigen::Vector3d(0, 0, -1)});
+      if (!down[0].blocked) continue;
+      out.origins.push_back(down[0].blocking_point_m + Eigen::Vector3d(0, 0, 1.5));
+      std::vector<Eigen::Vector3d> directions;
+      for (int d = 0; d < kDirectionsPerBatch; ++d) {
+        directions.push_back(enu_direction(360.0 * random.uniform(), 5.0 + 85.0 * random.uniform()));
+      }
+      out.batches.push_back(std::move(directions));
+    }
+    return out;
+  }();
+  return city;
+}
+
+void BM_CitysimApiOverRawOccluded(benchmark::State& state) {
+  const City& city = citysim();
+  if (city.batches.empty()) return state.SkipWithError("citysim world absent or not loadable (set SKYTRACE_SHARED_DATA)");
+  auto scene = EmbreeScene::build(city.world);
+  if (!scene.ok()) return state.SkipWithError(scene.error().message.c_str());
+  const SceneStats stats = (*scene)->stats();
+  state.counters["objects"] = static_cast<double>(stats.objects);
+  state.counters["movable"] = static_cast<double>(stats.movable_objects);
+  state.counters["vegetation"] = static_cast<double>(stats.vegetation_objects);
+  state.counters["triangles"] = static_cast<double>(stats.triangles);
+  api_over_raw(state, city);
+}
+BENCHMARK(BM_CitysimApiOverRawOccluded)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
 
 // Moving one truck between epochs in the full city: new instance transform and a top-level commit.
 void BM_SetObjectPose(benchmark::State& state) {
-  static const City city = make_city(0, true);
+  const City& city = city_with_truck();
   auto scene = EmbreeScene::build(city.world);
   if (!scene.ok()) return state.SkipWithError(scene.error().message.c_str());
   double y_m = 100.0;

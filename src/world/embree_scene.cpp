@@ -1,17 +1,21 @@
 // EmbreeScene: the only file of skytrace that sees Embree.
 //
-// Layout: two layers, one for opaque objects and one for vegetation, each with its own top-level
-// scene, so that the common case (no vegetation) costs exactly one Embree query per ray. In a
-// layer without movable objects the static objects are triangle geometries directly in the
-// top-level scene (vertices already in the world frame). In a layer with movable objects the
-// static geometries go into one child scene instanced once, and every movable object is a scene of
-// its own with an instance in the top level: a new pose then rebuilds only the top-level structure
-// over a handful of instances, not the static BVH.
+// Layout. The main top-level scene holds every object, opaque and vegetation. Without movable
+// objects the static objects are triangle geometries directly in it (vertices already in the world
+// frame). With movable objects the static geometries go into one child scene instanced once, and
+// every movable object is a scene of its own with an instance in the top level: a new pose then
+// rebuilds only the top-level structure over a handful of instances, not the static BVH.
 //
-// Vegetation: an intersection filter records every crossing and rejects it, so one traversal per
-// ray collects all crossings to infinity. The number of crossings of a closed volume tells whether
-// the origin is inside (odd) whatever the mesh's winding; the pieces inside are then clipped at
-// the first opaque hit.
+// One Embree query per ray. Without vegetation: rtcIntersect1 (closest hit, for the details) or
+// rtcOccluded1 (visibility only). With vegetation: rtcIntersect1 in the main scene, where an
+// intersection filter on the vegetation geometries records each crossing and rejects it, so the
+// traversal goes on to the closest opaque hit and meets every vegetation crossing before it.
+//
+// Whether the origin lies inside a vegetation volume is decided once per batch (all rays of a batch
+// share the origin) in a second, vegetation-only scene: the number of crossings of a closed volume
+// along a ray to infinity is odd from inside, whatever the mesh's winding; three rays vote. Each
+// ray's pieces inside a volume then follow from that state and its crossings before the first
+// opaque hit.
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -90,7 +94,8 @@ struct SceneObject {
   std::vector<Eigen::Vector3i> triangles;  // non-degenerate only; the index is Embree's primID
   std::size_t triangle_count = 0;
   std::vector<TrianglePlane> planes;  // per Embree primID
-  unsigned instance = kInvalidId;  // movable: its instance id in the layer's top-level scene
+  RTCGeometry geometry = nullptr;     // during the build only
+  RTCScene own_scene = nullptr;       // movable objects: their scene, instanced in the layers
 };
 
 void set_instance_transform(RTCGeometry instance, const Eigen::Isometry3d& pose) {
@@ -141,21 +146,20 @@ void init_ray(RTCRayHit& ray_hit, const Eigen::Vector3f& origin, const Eigen::Ve
   ray_hit.hit.instID[0] = kInvalidId;
 }
 
-// One top-level scene (opaque or vegetation) and how its ids lead back to world objects.
+// One top-level scene and how its ids lead back to world objects.
 struct Layer {
   RTCScene top = nullptr;
-  RTCScene static_scene = nullptr;           // the static child scene when the layer has movables
-  unsigned static_instance = kInvalidId;     // its instance id in `top`
-  std::vector<RTCScene> movable_scenes;      // one per movable object
+  RTCScene static_scene = nullptr;        // the static child scene when the layer has movables
+  unsigned static_instance = kInvalidId;  // its instance id in `top`
   std::vector<std::uint32_t> object_of_static_geometry;  // geometry id -> index in objects
   std::vector<std::uint32_t> object_of_instance;         // top-level instance id -> index in objects
+  std::vector<unsigned> instance_of_object;              // index in objects -> instance id
   bool empty = true;
 
   Layer() = default;
   Layer(const Layer&) = delete;
   Layer& operator=(const Layer&) = delete;
   ~Layer() {
-    for (RTCScene scene : movable_scenes) rtcReleaseScene(scene);
     if (static_scene != nullptr) rtcReleaseScene(static_scene);
     if (top != nullptr) rtcReleaseScene(top);
   }
@@ -171,6 +175,12 @@ void map_id(std::vector<std::uint32_t>& table, unsigned id, std::size_t object) 
   table[id] = static_cast<std::uint32_t>(object);
 }
 
+// Crossing directions of the per-batch test of the origin inside vegetation: up and two skewed
+// directions (unlikely to run along a modelled edge), unit vectors.
+const std::array<Eigen::Vector3d, 3> kInsideTestDirections = {
+    Eigen::Vector3d(0.0, 0.0, 1.0), Eigen::Vector3d(0.5773502691896258, 0.4082482904638631, 0.7071067811865475),
+    Eigen::Vector3d(-0.6123724356957945, -0.3535533905932738, 0.7071067811865476)};
+
 // Owns the device; declared first in Impl so that it is released after the scenes.
 struct DeviceHandle {
   RTCDevice device = nullptr;
@@ -185,13 +195,22 @@ struct DeviceHandle {
 }  // namespace
 
 struct EmbreeScene::Impl {
-  DeviceHandle device_handle;
+  DeviceHandle device_handle;  // first: released after everything else
   RTCDevice device = nullptr;
-  Layer opaque;
-  Layer vegetation;
+  Layer main;
+  Layer vegetation;  // vegetation only, for the test of the origin inside a volume
   std::vector<SceneObject> objects;
   SceneStats stats;
   EmbreeSceneOptions options;
+
+  Impl() = default;
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  ~Impl() {
+    for (auto& object : objects) {
+      if (object.own_scene != nullptr) rtcReleaseScene(object.own_scene);
+    }
+  }
 
   Status check_device(const std::string& step) const {
     const RTCError code = rtcGetDeviceError(device);
@@ -199,8 +218,17 @@ struct EmbreeScene::Impl {
     return make_error(ErrorCode::kInvalidArgument, "Embree failed while " + step + ": " + device_error_text(code));
   }
 
-  // A committed triangle geometry of the object's mesh (world frame for static objects).
-  RTCGeometry make_triangles(const SceneObject& object) const {
+  RTCScene new_scene(bool top_with_instances) const {
+    RTCScene scene = rtcNewScene(device);
+    // Robust traversal: watertight edges, so rays never slip between two triangles of a wall.
+    rtcSetSceneFlags(scene, top_with_instances ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC : RTC_SCENE_FLAG_ROBUST);
+    if (top_with_instances) rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+    return scene;
+  }
+
+  // The committed triangle geometry of an object (world frame for static objects), and for a
+  // movable object its own committed scene.
+  void make_geometry(SceneObject& object) const {
     RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
         geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), object.vertices_m.size()));
@@ -220,15 +248,12 @@ struct EmbreeScene::Impl {
     }
     if (object.material.is_vegetation()) rtcSetGeometryIntersectFilterFunction(geometry, record_vegetation_crossing);
     rtcCommitGeometry(geometry);
-    return geometry;
-  }
-
-  RTCScene new_scene(bool top_with_instances) const {
-    RTCScene scene = rtcNewScene(device);
-    // Robust traversal: watertight edges, so rays never slip between two triangles of a wall.
-    rtcSetSceneFlags(scene, top_with_instances ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC : RTC_SCENE_FLAG_ROBUST);
-    if (top_with_instances) rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
-    return scene;
+    object.geometry = geometry;
+    if (!object.is_static) {
+      object.own_scene = new_scene(false);
+      rtcAttachGeometry(object.own_scene, geometry);
+      rtcCommitScene(object.own_scene);
+    }
   }
 
   RTCGeometry new_instance(RTCScene child, const Eigen::Isometry3d& pose) const {
@@ -240,43 +265,33 @@ struct EmbreeScene::Impl {
     return instance;
   }
 
-  void build_layer(Layer& layer, bool vegetation_layer) {
+  // Builds a layer of the objects for which `wanted` is true (their geometries already made).
+  template <typename Wanted>
+  void build_layer(Layer& layer, Wanted wanted) const {
     bool has_movable = false;
     for (const auto& object : objects) {
-      if (object.material.is_vegetation() != vegetation_layer || object.triangle_count == 0) continue;
+      if (object.triangle_count == 0 || !wanted(object)) continue;
       layer.empty = false;
       has_movable = has_movable || !object.is_static;
     }
+    layer.instance_of_object.assign(objects.size(), kInvalidId);
     layer.top = new_scene(has_movable);
-    if (layer.empty) {
-      rtcCommitScene(layer.top);
-      return;
-    }
     RTCScene static_target = layer.top;
     if (has_movable) {
       layer.static_scene = new_scene(false);
       static_target = layer.static_scene;
     }
     for (std::size_t index = 0; index < objects.size(); ++index) {
-      SceneObject& object = objects[index];
-      if (object.material.is_vegetation() != vegetation_layer || object.triangle_count == 0) continue;
-      RTCGeometry triangles = make_triangles(object);
-      object.vertices_m = {};
-      object.triangles = {};
+      const SceneObject& object = objects[index];
+      if (object.triangle_count == 0 || !wanted(object)) continue;
       if (object.is_static) {
-        map_id(layer.object_of_static_geometry, rtcAttachGeometry(static_target, triangles), index);
-        rtcReleaseGeometry(triangles);
+        map_id(layer.object_of_static_geometry, rtcAttachGeometry(static_target, object.geometry), index);
         continue;
       }
-      RTCScene own = new_scene(false);
-      rtcAttachGeometry(own, triangles);
-      rtcReleaseGeometry(triangles);
-      rtcCommitScene(own);
-      layer.movable_scenes.push_back(own);
-      RTCGeometry instance = new_instance(own, object.pose);
-      object.instance = rtcAttachGeometry(layer.top, instance);
+      RTCGeometry instance = new_instance(object.own_scene, object.pose);
+      layer.instance_of_object[index] = rtcAttachGeometry(layer.top, instance);
       rtcReleaseGeometry(instance);
-      map_id(layer.object_of_instance, object.instance, index);
+      map_id(layer.object_of_instance, layer.instance_of_object[index], index);
     }
     if (layer.static_scene != nullptr) {
       rtcCommitScene(layer.static_scene);
@@ -309,14 +324,10 @@ struct EmbreeScene::Impl {
     return std::isfinite(refined_m) && refined_m >= 0.0 && consistent ? refined_m : embree_t_m;
   }
 
-  [[nodiscard]] const TrianglePlane* plane_of(const RTCHit& hit) const {
-    return objects[opaque.object_index(hit.instID[0], hit.geomID)].planes.data() + hit.primID;
-  }
-
   // Fills the opaque part of the outcome from Embree's closest hit.
   void describe_blocking(const RTCRayHit& ray_hit, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                          RayOutcome& outcome) const {
-    const SceneObject& object = objects[opaque.object_index(ray_hit.hit.instID[0], ray_hit.hit.geomID)];
+    const SceneObject& object = objects[main.object_index(ray_hit.hit.instID[0], ray_hit.hit.geomID)];
     Eigen::Vector3d normal;
     const double distance_m =
         refine_hit(object, ray_hit.hit.primID, origin, direction, static_cast<double>(ray_hit.ray.tfar), normal);
@@ -328,50 +339,111 @@ struct EmbreeScene::Impl {
     outcome.blocking_normal = normal;
   }
 
-  // Sums the vegetation crossed by one ray before `stop_m` (first opaque hit or infinity).
-  void add_vegetation(std::vector<VegetationCrossing>& crossings, const Eigen::Vector3d& origin,
-                      const Eigen::Vector3d& direction, double stop_m, RayOutcome& outcome) const {
+  // Sorts the crossings by object and distance (refined), and merges the duplicates a ray through
+  // an edge shared by two triangles produces. Returns the number kept (at the front).
+  std::size_t sort_crossings(const Layer& layer, std::vector<VegetationCrossing>& crossings,
+                             const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
     Eigen::Vector3d normal;
     for (auto& crossing : crossings) {
-      crossing.object = vegetation.object_index(crossing.instance, crossing.geometry);
+      crossing.object = layer.object_index(crossing.instance, crossing.geometry);
       crossing.t_m = refine_hit(objects[crossing.object], crossing.triangle, origin, direction, crossing.t_m, normal);
     }
     std::sort(crossings.begin(), crossings.end(), [](const VegetationCrossing& x, const VegetationCrossing& y) {
       return x.object != y.object ? x.object < y.object : x.t_m < y.t_m;
     });
-    std::size_t begin = 0;
-    while (begin < crossings.size()) {
-      std::size_t end = begin;
-      while (end < crossings.size() && crossings[end].object == crossings[begin].object) ++end;
-      // Distinct crossings of one volume, in order along the ray.
-      std::size_t count = 0;
-      double previous_m = -kInfinity;
-      bool previous_facing = false;
-      for (std::size_t i = begin; i < end; ++i) {
-        const double t_m = crossings[i].t_m;
-        if (count > 0 && t_m - previous_m <= kDuplicateCrossingM && crossings[i].facing_ray == previous_facing) continue;
-        crossings[begin + count] = crossings[i];
-        ++count;
-        previous_m = t_m;
-        previous_facing = crossings[i].facing_ray;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < crossings.size(); ++i) {
+      if (kept > 0) {
+        const VegetationCrossing& last = crossings[kept - 1];
+        if (last.object == crossings[i].object && crossings[i].t_m - last.t_m <= kDuplicateCrossingM &&
+            last.facing_ray == crossings[i].facing_ray) {
+          continue;
+        }
       }
-      // An odd number of crossings to infinity: the origin is inside the volume.
-      bool inside = count % 2 == 1;
+      crossings[kept++] = crossings[i];
+    }
+    return kept;
+  }
+
+  // The vegetation objects that contain `origin` (sorted indices): an odd number of crossings to
+  // infinity along at least two of three directions.
+  std::vector<std::uint32_t> vegetation_around(const Eigen::Vector3d& origin) const {
+    std::vector<std::uint32_t> inside;
+    if (vegetation.empty) return inside;
+    std::vector<VegetationCrossing> crossings;
+    VegetationContext context{};
+    rtcInitIntersectContext(&context.base);
+    context.crossings = &crossings;
+    std::vector<std::pair<std::uint32_t, int>> votes;  // object, number of rays with odd crossings
+    const Eigen::Vector3f origin_f = origin.cast<float>();
+    for (const auto& direction : kInsideTestDirections) {
+      crossings.clear();
+      RTCRayHit ray_hit;
+      init_ray(ray_hit, origin_f, direction);
+      rtcIntersect1(vegetation.top, &context.base, &ray_hit);
+      const std::size_t kept = sort_crossings(vegetation, crossings, origin, direction);
+      for (std::size_t begin = 0; begin < kept;) {
+        std::size_t end = begin;
+        while (end < kept && crossings[end].object == crossings[begin].object) ++end;
+        if ((end - begin) % 2 == 1) {
+          auto it = std::find_if(votes.begin(), votes.end(), [&](const auto& v) { return v.first == crossings[begin].object; });
+          if (it == votes.end()) {
+            votes.emplace_back(crossings[begin].object, 1);
+          } else {
+            ++it->second;
+          }
+        }
+        begin = end;
+      }
+    }
+    for (const auto& [object, count] : votes) {
+      if (count >= 2) inside.push_back(object);
+    }
+    std::sort(inside.begin(), inside.end());
+    return inside;
+  }
+
+  // Adds the vegetation met by one ray before `stop_m` (the first opaque hit, or infinity), from
+  // its crossings and the volumes around the origin.
+  void add_vegetation(std::vector<VegetationCrossing>& crossings, const std::vector<std::uint32_t>& around,
+                      const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double stop_m,
+                      RayOutcome& outcome) const {
+    // Crossings found before the traversal met the closest opaque hit may lie beyond it.
+    std::erase_if(crossings, [&](const VegetationCrossing& c) { return !(c.t_m <= stop_m * (1.0 + 1e-6) + 1e-6); });
+    const std::size_t kept = sort_crossings(main, crossings, origin, direction);
+    auto add = [&](std::uint32_t object, double length_m) {
+      outcome.vegetation_path_m += length_m;
+      outcome.vegetation_attenuation_db += length_m * objects[object].material.attenuation_db_per_m;
+    };
+    std::size_t begin = 0;
+    std::size_t next_around = 0;
+    // Volumes around the origin that this ray never leaves before stop_m.
+    auto add_untouched_around = [&](std::uint32_t below) {
+      for (; next_around < around.size() && around[next_around] < below; ++next_around) {
+        if (std::isfinite(stop_m)) add(around[next_around], stop_m);
+      }
+    };
+    while (begin < kept) {
+      const std::uint32_t object = crossings[begin].object;
+      std::size_t end = begin;
+      while (end < kept && crossings[end].object == object) ++end;
+      add_untouched_around(object);
+      bool inside = next_around < around.size() && around[next_around] == object;
+      if (inside) ++next_around;
       double entry_m = 0.0;
       double length_m = 0.0;
-      for (std::size_t i = begin; i < begin + count; ++i) {
-        const double t_m = crossings[i].t_m;
-        if (inside) {
-          length_m += std::max(0.0, std::min(t_m, stop_m) - std::min(entry_m, stop_m));
-        } else {
-          entry_m = t_m;
-        }
+      for (std::size_t i = begin; i < end; ++i) {
+        const double t_m = std::min(crossings[i].t_m, stop_m);
+        if (inside) length_m += std::max(0.0, t_m - entry_m);
+        entry_m = t_m;
         inside = !inside;
       }
-      outcome.vegetation_path_m += length_m;
-      outcome.vegetation_attenuation_db += length_m * objects[crossings[begin].object].material.attenuation_db_per_m;
+      // Still inside at the opaque hit (a trunk or a wall within the crown).
+      if (inside && std::isfinite(stop_m)) length_m += std::max(0.0, stop_m - entry_m);
+      add(object, length_m);
       begin = end;
     }
+    add_untouched_around(kNoObject);
   }
 };
 
@@ -387,6 +459,7 @@ Result<std::unique_ptr<EmbreeScene>> EmbreeScene::build(const WorldModel& world,
     return make_error(ErrorCode::kUnsupported, "Embree device could not be created: " +
                                                    device_error_text(rtcGetDeviceError(nullptr)));
   }
+  impl->objects.reserve(world.objects.size());
   for (const auto& source : world.objects) {
     SceneObject object;
     object.name = source.name;
@@ -400,36 +473,41 @@ Result<std::unique_ptr<EmbreeScene>> EmbreeScene::build(const WorldModel& world,
     }
     object.triangles.reserve(source.mesh.triangles.size());
     for (const auto& tri : source.mesh.triangles) {
-      // Degeneracy is judged in the world frame, as BruteForceScene does.
-      Eigen::Vector3d a = object.vertices_m[static_cast<std::size_t>(tri[0])];
-      Eigen::Vector3d b = object.vertices_m[static_cast<std::size_t>(tri[1])];
-      Eigen::Vector3d c = object.vertices_m[static_cast<std::size_t>(tri[2])];
-      if (!object.is_static) {
-        a = object.pose * a;
-        b = object.pose * b;
-        c = object.pose * c;
-      }
-      if (triangle_is_degenerate(a, b, c)) {
+      const Eigen::Vector3d& p0 = object.vertices_m[static_cast<std::size_t>(tri[0])];
+      const Eigen::Vector3d& p1 = object.vertices_m[static_cast<std::size_t>(tri[1])];
+      const Eigen::Vector3d& p2 = object.vertices_m[static_cast<std::size_t>(tri[2])];
+      // Judged in the world frame, as BruteForceScene does.
+      const bool degenerate = object.is_static
+                                  ? triangle_is_degenerate(p0, p1, p2)
+                                  : triangle_is_degenerate(object.pose * p0, object.pose * p1, object.pose * p2);
+      if (degenerate) {
         ++impl->stats.degenerate_triangles;
         continue;
       }
       object.triangles.push_back(tri);
       // The plane in the frame of the Embree geometry (world for static, object for movable).
-      const Eigen::Vector3d& p0 = object.vertices_m[static_cast<std::size_t>(tri[0])];
-      const Eigen::Vector3d normal = (object.vertices_m[static_cast<std::size_t>(tri[1])] - p0)
-                                         .cross(object.vertices_m[static_cast<std::size_t>(tri[2])] - p0)
-                                         .normalized();
+      const Eigen::Vector3d normal = (p1 - p0).cross(p2 - p0).normalized();
       object.planes.push_back(TrianglePlane{normal, normal.dot(p0)});
     }
+    object.triangle_count = object.triangles.size();
     ++impl->stats.objects;
     if (!object.is_static) ++impl->stats.movable_objects;
     if (object.material.is_vegetation()) ++impl->stats.vegetation_objects;
-    object.triangle_count = object.triangles.size();
     impl->stats.triangles += object.triangle_count;
     impl->objects.push_back(std::move(object));
   }
-  impl->build_layer(impl->opaque, false);
-  impl->build_layer(impl->vegetation, true);
+  for (auto& object : impl->objects) {
+    if (object.triangle_count > 0) impl->make_geometry(object);
+  }
+  impl->build_layer(impl->main, [](const SceneObject&) { return true; });
+  impl->build_layer(impl->vegetation, [](const SceneObject& object) { return object.material.is_vegetation(); });
+  // The layers hold the geometries now; our copies of the meshes are no longer needed.
+  for (auto& object : impl->objects) {
+    if (object.geometry != nullptr) rtcReleaseGeometry(object.geometry);
+    object.geometry = nullptr;
+    object.vertices_m = {};
+    object.triangles = {};
+  }
   if (auto status = impl->check_device("building the scene of world '" + world.name + "'"); !status.ok()) {
     return status.error();
   }
@@ -441,15 +519,17 @@ Status EmbreeScene::set_object_pose(const std::string& name, const Eigen::Isomet
     return make_error(ErrorCode::kInvalidArgument, "pose of world object '" + name + "' is not finite");
   }
   Impl& impl = *impl_;
-  for (auto& object : impl.objects) {
+  for (std::size_t index = 0; index < impl.objects.size(); ++index) {
+    SceneObject& object = impl.objects[index];
     if (object.name != name || object.is_static) continue;
     object.pose = pose;
-    if (object.instance == kInvalidId) return Ok{};  // no triangles: nothing in Embree
-    const Layer& layer = object.material.is_vegetation() ? impl.vegetation : impl.opaque;
-    RTCGeometry instance = rtcGetGeometry(layer.top, object.instance);
-    set_instance_transform(instance, pose);
-    rtcCommitGeometry(instance);
-    rtcCommitScene(layer.top);
+    for (Layer* layer : {&impl.main, &impl.vegetation}) {
+      if (layer->instance_of_object.empty() || layer->instance_of_object[index] == kInvalidId) continue;
+      RTCGeometry instance = rtcGetGeometry(layer->top, layer->instance_of_object[index]);
+      set_instance_transform(instance, pose);
+      rtcCommitGeometry(instance);
+      rtcCommitScene(layer->top);
+    }
     return impl.check_device("moving world object '" + name + "'");
   }
   const bool exists =
@@ -465,65 +545,46 @@ std::vector<RayOutcome> EmbreeScene::trace(const Eigen::Vector3d& origin_m,
                                            const std::vector<Eigen::Vector3d>& directions) const {
   const Impl& impl = *impl_;
   std::vector<RayOutcome> outcomes(directions.size());
-  const Eigen::Vector3f origin_f = origin_m.cast<float>();
-
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // every ray of a batch leaves the same point
-  std::vector<VegetationCrossing> crossings;
-  VegetationContext vegetation_context{};
-  rtcInitIntersectContext(&vegetation_context.base);
-  vegetation_context.crossings = &crossings;
-
-  // Rays go in chunks: first the closest-hit queries of the chunk, prefetching the plane of each
-  // hit triangle, then the outcomes, so that the plane's memory access overlaps the traversal of
-  // the next rays (it was 15 % of the time of trace when read right after each query).
-  constexpr std::size_t kChunk = 16;
-  const bool details = impl.options.blocking_details && !impl.opaque.empty;
-  std::array<RTCRayHit, kChunk> opaque_hits;
-  std::array<Eigen::Vector3d, kChunk> units;
-  std::array<bool, kChunk> valid{};
-  for (std::size_t first = 0; first < directions.size(); first += kChunk) {
-    const std::size_t count = std::min(kChunk, directions.size() - first);
-    for (std::size_t k = 0; k < count; ++k) {
-      valid[k] = unit_direction(origin_m, directions[first + k], units[k]);
-      if (!valid[k] || !details) continue;
-      init_ray(opaque_hits[k], origin_f, units[k]);
-      rtcIntersect1(impl.opaque.top, &context, &opaque_hits[k]);
-      if (opaque_hits[k].hit.geomID != kInvalidId) __builtin_prefetch(impl.plane_of(opaque_hits[k].hit));
+  if (impl.main.empty || !origin_m.allFinite()) {
+    for (std::size_t i = 0; i < directions.size(); ++i) {
+      Eigen::Vector3d unit;
+      if (!unit_direction(origin_m, directions[i], unit)) {
+        outcomes[i].blocked = true;
+        outcomes[i].blocking_object = std::string(kInvalidRayObject);
+      }
     }
-    for (std::size_t k = 0; k < count; ++k) {
-      RayOutcome& outcome = outcomes[first + k];
-      if (!valid[k]) {
-        outcome.blocked = true;
-        outcome.blocking_object = std::string(kInvalidRayObject);
-        continue;
-      }
-      const Eigen::Vector3d& direction = units[k];
-      RTCRayHit ray_hit;
-      crossings.clear();
-      if (!impl.vegetation.empty) {
-        init_ray(ray_hit, origin_f, direction);
-        rtcIntersect1(impl.vegetation.top, &vegetation_context.base, &ray_hit);
-      }
-      if (details) {
-        if (opaque_hits[k].hit.geomID != kInvalidId) impl.describe_blocking(opaque_hits[k], origin_m, direction, outcome);
-      } else if (!impl.opaque.empty) {
-        init_ray(ray_hit, origin_f, direction);
-        if (!crossings.empty()) {
-          // Vegetation needs the distance to the first opaque hit.
-          rtcIntersect1(impl.opaque.top, &context, &ray_hit);
-          if (ray_hit.hit.geomID != kInvalidId) impl.describe_blocking(ray_hit, origin_m, direction, outcome);
-        } else {
-          // Visibility only: any opaque hit will do.
-          rtcOccluded1(impl.opaque.top, &context, &ray_hit.ray);
-          outcome.blocked = ray_hit.ray.tfar < 0.0F;  // Embree's mark of an occluded ray
-        }
-      }
-      if (!crossings.empty()) {
-        impl.add_vegetation(crossings, origin_m, direction, outcome.blocked ? outcome.blocking_distance_m : kInfinity,
-                            outcome);
-      }
+    return outcomes;
+  }
+  const Eigen::Vector3f origin_f = origin_m.cast<float>();
+  std::vector<VegetationCrossing> crossings;
+  VegetationContext context{};
+  rtcInitIntersectContext(&context.base);
+  context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // every ray of a batch leaves the same point
+  context.crossings = &crossings;
+  const bool with_vegetation = !impl.vegetation.empty;
+  const std::vector<std::uint32_t> around = impl.vegetation_around(origin_m);
+
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    RayOutcome& outcome = outcomes[i];
+    Eigen::Vector3d direction;
+    if (!unit_direction(origin_m, directions[i], direction)) {
+      outcome.blocked = true;
+      outcome.blocking_object = std::string(kInvalidRayObject);
+      continue;
+    }
+    RTCRayHit ray_hit;
+    init_ray(ray_hit, origin_f, direction);
+    if (!with_vegetation && !impl.options.blocking_details) {
+      rtcOccluded1(impl.main.top, &context.base, &ray_hit.ray);
+      outcome.blocked = ray_hit.ray.tfar < 0.0F;  // Embree's mark of an occluded ray
+      continue;
+    }
+    crossings.clear();
+    rtcIntersect1(impl.main.top, &context.base, &ray_hit);
+    if (ray_hit.hit.geomID != kInvalidId) impl.describe_blocking(ray_hit, origin_m, direction, outcome);
+    if (!crossings.empty() || !around.empty()) {
+      impl.add_vegetation(crossings, around, origin_m, direction, outcome.blocked ? outcome.blocking_distance_m : kInfinity,
+                          outcome);
     }
   }
   return outcomes;
