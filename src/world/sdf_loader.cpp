@@ -9,6 +9,7 @@
 #include <png.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
@@ -18,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -242,33 +244,148 @@ class ConsoleCapture {
   Silent silent_;
 };
 
-// Well-formedness and the root element, checked with expat before sdformat sees the file: sdformat
-// reports XML errors only on its console and would try the file as URDF.
-Status check_xml(const fs::path& path) {
+// A world-level <include> as written, for includes skytrace instantiates itself (see
+// load_sdf_world: sdformat builds each unique included model once instead of once per include).
+struct IncludeSpec {
+  std::size_t begin = 0;  // byte range of the element in the file
+  std::size_t end = 0;
+  int line = 0;
+  std::string uri;
+  std::string name;
+  std::optional<std::string> pose;  // six numbers relative to the world
+  std::optional<bool> is_static;
+  bool unusual = false;  // merge, placement_frame, a pose in another frame or format: left to sdformat
+};
+
+// What expat sees of the file before sdformat does: well-formedness (sdformat reports XML errors
+// only on its console and would try the file as URDF), the root element, and the world-level
+// includes with the names other elements refer to.
+struct XmlScan {
+  std::string text;
+  std::string root;
+  std::vector<IncludeSpec> includes;
+  std::set<std::string> referenced_frames;  // relative_to / attached_to values
+  bool world_joints = false;
+  int worlds = 0;
+};
+
+Result<XmlScan> scan_xml(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return make_error(ErrorCode::kIo, path.string() + ": cannot open the SDF file");
   std::ostringstream content;
   content << in.rdbuf();
-  const std::string text = content.str();
   struct State {
-    std::string root;
+    XmlScan scan;
+    XML_Parser parser = nullptr;
+    std::vector<std::string> stack;
+    std::string characters;
   } state;
+  state.scan.text = content.str();
   std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(XML_ParserCreate(nullptr),
                                                                                        &XML_ParserFree);
+  state.parser = parser.get();
   XML_SetUserData(parser.get(), &state);
-  XML_SetStartElementHandler(parser.get(), [](void* data, const XML_Char* name, const XML_Char** /*attributes*/) {
-    auto* s = static_cast<State*>(data);
-    if (s->root.empty()) s->root = name;
+  XML_SetElementHandler(
+      parser.get(),
+      [](void* data, const XML_Char* name, const XML_Char** attributes) {
+        auto* st = static_cast<State*>(data);
+        const std::string element(name);
+        if (st->scan.root.empty()) st->scan.root = element;
+        for (const XML_Char** a = attributes; *a != nullptr; a += 2) {
+          const std::string key(a[0]);
+          if (key == "relative_to" || key == "attached_to") st->scan.referenced_frames.insert(a[1]);
+        }
+        const std::size_t depth = st->stack.size();
+        if (depth == 1 && element == "world") ++st->scan.worlds;
+        if (depth == 2 && st->stack[1] == "world") {
+          if (element == "include") {
+            IncludeSpec include;
+            include.begin = static_cast<std::size_t>(XML_GetCurrentByteIndex(st->parser));
+            include.line = static_cast<int>(XML_GetCurrentLineNumber(st->parser));
+            include.unusual = attributes[0] != nullptr;  // merge="true" and the like
+            st->scan.includes.push_back(include);
+          } else if (element == "joint") {
+            st->scan.world_joints = true;
+          }
+        }
+        if (depth == 3 && st->stack[2] == "include" && st->stack[1] == "world") {
+          IncludeSpec& include = st->scan.includes.back();
+          if (element == "pose") {
+            for (const XML_Char** a = attributes; *a != nullptr; a += 2) {
+              if (std::string(a[0]) != "relative_to" || std::string(a[1]) != "world") include.unusual = true;
+            }
+          } else if (element != "uri" && element != "name" && element != "static" && element != "plugin") {
+            include.unusual = true;  // placement_frame, experimental parameters...
+          }
+        }
+        st->stack.push_back(element);
+        st->characters.clear();
+      },
+      [](void* data, const XML_Char* /*name*/) {
+        auto* st = static_cast<State*>(data);
+        const std::size_t depth = st->stack.size();
+        if (depth == 4 && st->stack[2] == "include" && st->stack[1] == "world") {
+          IncludeSpec& include = st->scan.includes.back();
+          std::string value = st->characters;
+          const auto first = value.find_first_not_of(" \t\r\n");
+          const auto last = value.find_last_not_of(" \t\r\n");
+          value = first == std::string::npos ? std::string() : value.substr(first, last - first + 1);
+          const std::string& element = st->stack[3];
+          if (element == "uri") include.uri = value;
+          if (element == "name") include.name = value;
+          if (element == "pose") include.pose = value;
+          if (element == "static") {
+            if (value == "true" || value == "1") {
+              include.is_static = true;
+            } else if (value == "false" || value == "0") {
+              include.is_static = false;
+            } else {
+              include.unusual = true;
+            }
+          }
+        }
+        if (depth == 3 && st->stack[2] == "include" && st->stack[1] == "world") {
+          st->scan.includes.back().end = static_cast<std::size_t>(XML_GetCurrentByteIndex(st->parser)) +
+                                         static_cast<std::size_t>(XML_GetCurrentByteCount(st->parser));
+        }
+        st->stack.pop_back();
+        st->characters.clear();
+      });
+  XML_SetCharacterDataHandler(parser.get(), [](void* data, const XML_Char* text, int length) {
+    static_cast<State*>(data)->characters.append(text, static_cast<std::size_t>(length));
   });
+  const std::string& text = state.scan.text;
   if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), XML_TRUE) == XML_STATUS_ERROR) {
     return make_error(ErrorCode::kParse, path.string() + ":" + std::to_string(XML_GetCurrentLineNumber(parser.get())) +
                                              ":" + std::to_string(XML_GetCurrentColumnNumber(parser.get())) +
                                              ": malformed XML: " + XML_ErrorString(XML_GetErrorCode(parser.get())));
   }
-  if (state.root != "sdf") {
-    return make_error(ErrorCode::kParse, path.string() + ": not an SDF file (root element <" + state.root + ">, expected <sdf>)");
+  if (state.scan.root != "sdf") {
+    return make_error(ErrorCode::kParse,
+                      path.string() + ": not an SDF file (root element <" + state.scan.root + ">, expected <sdf>)");
   }
-  return Ok{};
+  return std::move(state.scan);
+}
+
+// Messages about the text given to sdformat name the world file instead of sdformat's placeholder.
+std::string replace_string_source(std::string message, const fs::path& path) {
+  const std::string placeholder = sdf::kSdfStringSource;
+  for (std::size_t at = message.find(placeholder); at != std::string::npos;
+       at = message.find(placeholder, at + path.string().size())) {
+    message.replace(at, placeholder.size(), path.string());
+  }
+  return message;
+}
+
+std::optional<ignition::math::Pose3d> parse_pose(const std::string& text) {
+  std::istringstream in(text);
+  std::array<double, 6> v{};
+  for (double& x : v) {
+    if (!(in >> x) || !std::isfinite(x)) return std::nullopt;
+  }
+  std::string rest;
+  if (in >> rest) return std::nullopt;
+  return ignition::math::Pose3d(v[0], v[1], v[2], v[3], v[4], v[5]);
 }
 
 std::vector<fs::path> split_path_list(const char* value) {
@@ -335,17 +452,20 @@ Eigen::Isometry3d to_isometry(const ignition::math::Pose3d& pose) {
 
 std::string where(const sdf::ElementPtr& element) {
   if (!element) return "";
-  std::string out = element->FilePath();
-  if (const auto line = element->LineNumber()) out += ":" + std::to_string(*line);
+  // Elements parsed from text (see load_sdf_world) have no file: the placeholder is replaced by the
+  // world's path in the messages.
+  std::string out = element->FilePath().empty() ? std::string(sdf::kSdfStringSource) : element->FilePath();
+  // Appends rather than "a" + b: GCC 12 warns falsely (-Wrestrict) on the latter here.
+  if (const auto line = element->LineNumber()) out.append(":").append(std::to_string(*line));
   return out;
 }
 
 std::string error_text(const sdf::Error& error) {
   std::string out;
   if (error.FilePath()) out += *error.FilePath();
-  if (error.LineNumber()) out += ":" + std::to_string(*error.LineNumber());
-  if (!out.empty()) out += ": ";
-  return out + error.Message();
+  if (error.LineNumber()) out.append(":").append(std::to_string(*error.LineNumber()));
+  if (!out.empty()) out.append(": ");
+  return out.append(error.Message());
 }
 
 // SDFormat needs unique model names among siblings; worlds saved by Gazebo classic (PX4's test
@@ -528,11 +648,19 @@ class SdfWalker {
   SdfWalker(const SdfLoadOptions& options, const Resolver& resolver, WorldModel& world, fs::path world_file)
       : options_(options), resolver_(resolver), world_(world), world_file_(std::move(world_file)) {}
 
-  void model(const sdf::Model& model, const Eigen::Isometry3d& world_from_model, Chain chain) {
-    chain.names.push_back(model.Name());
-    chain.uris.push_back(model_identity(model.Element()));
+  // What an <include> changes in the model it brings in.
+  struct Overrides {
+    std::string name;
+    std::string uri;
+    std::optional<bool> is_static;
+  };
+
+  void model(const sdf::Model& model, const Eigen::Isometry3d& world_from_model, Chain chain,
+             const Overrides& overrides = {}) {
+    chain.names.push_back(overrides.name.empty() ? model.Name() : overrides.name);
+    chain.uris.push_back(overrides.uri.empty() ? model_identity(model.Element()) : overrides.uri);
     chain.elements.push_back(model.Element());
-    chain.is_static = chain.is_static || model.Static();
+    chain.is_static = chain.is_static || overrides.is_static.value_or(model.Static());
     const std::size_t first_object = world_.objects.size();
 
     for (uint64_t l = 0; l < model.LinkCount(); ++l) {
@@ -605,7 +733,9 @@ class SdfWalker {
       return include->GetElementImpl("uri")->Get<std::string>();
     }
     const fs::path file(element->FilePath());
-    if (!file.empty() && file != world_file_) return "model://" + file.parent_path().filename().string();
+    if (!file.empty() && file != world_file_ && element->FilePath() != sdf::kSdfStringSource) {
+      return "model://" + file.parent_path().filename().string();
+    }
     return "";
   }
 
@@ -699,8 +829,14 @@ class SdfWalker {
     return out;
   }
 
+  // The folder relative URIs start from: the file the element came from.
+  fs::path base_dir(const std::string& file_path) const {
+    return file_path.empty() || file_path == sdf::kSdfStringSource ? world_file_.parent_path()
+                                                                   : fs::path(file_path).parent_path();
+  }
+
   std::optional<BuiltShape> mesh(const sdf::Mesh& mesh, const std::string& object_name) {
-    const fs::path base = fs::path(mesh.FilePath()).parent_path();
+    const fs::path base = base_dir(mesh.FilePath());
     const std::string uri = mesh.Uri();
     const auto resolved = resolver_.resolve(uri, base);
     if (!resolved) {
@@ -770,7 +906,7 @@ class SdfWalker {
   }
 
   std::optional<BuiltShape> heightmap(const sdf::Heightmap& heightmap, const std::string& object_name) {
-    const fs::path base = fs::path(heightmap.FilePath()).parent_path();
+    const fs::path base = base_dir(heightmap.FilePath());
     const auto resolved = resolver_.resolve(heightmap.Uri(), base);
     if (!resolved) {
       warn(where(heightmap.Element()) + ": " + object_name + ": heightmap " + heightmap.Uri() + " not found, skipped" +
@@ -1026,7 +1162,8 @@ class SdfWalker {
 Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& options) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return make_error(ErrorCode::kIo, path.string() + ": SDF file not found");
-  if (auto xml = check_xml(path); !xml.ok()) return xml.error();
+  auto scan = scan_xml(path);
+  if (!scan.ok()) return scan.error();
   if (options.round_segments < 3 || options.round_rings < 2 || !(options.infinite_plane_size_m > 0.0)) {
     return make_error(ErrorCode::kInvalidArgument,
                       path.string() + ": SDF options: at least 3 segments, 2 rings and a positive plane size");
@@ -1044,9 +1181,38 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
     return found ? found->string() : std::string();
   });
 
+  // sdformat builds every element of every included copy (about 20 ms per model): 252 trees of
+  // two kinds cost seconds. World-level includes skytrace can resolve are therefore blanked out of
+  // the text (keeping its lines) and instantiated from one sdformat load per model file, with the
+  // include's name, pose and static. Includes with anything unusual (merge, placement_frame, a
+  // pose in another frame, names referred to by frames or joints) stay with sdformat.
+  std::string text = scan->text;
+  std::vector<const IncludeSpec*> own_includes;
+  if (scan->worlds == 1 && !scan->world_joints) {
+    for (const auto& include : scan->includes) {
+      if (include.unusual || include.uri.empty() || include.end <= include.begin) continue;
+      if (include.uri.rfind("http://", 0) == 0 || include.uri.rfind("https://", 0) == 0) continue;
+      if (include.pose && !parse_pose(*include.pose)) continue;
+      if (include.name.empty() ? !scan->referenced_frames.empty() : scan->referenced_frames.count(include.name) != 0) {
+        continue;
+      }
+      for (std::size_t i = include.begin; i < include.end; ++i) {
+        if (text[i] != '\n') text[i] = ' ';
+      }
+      own_includes.push_back(&include);
+    }
+  }
+
   // Parse to an element tree first: duplicate model names are made unique before the DOM load.
   sdf::Errors errors;
-  const sdf::SDFPtr parsed = sdf::readFile(path.string(), config, errors);
+  sdf::SDFPtr parsed;
+  if (own_includes.empty()) {
+    parsed = sdf::readFile(path.string(), config, errors);
+  } else {
+    parsed = std::make_shared<sdf::SDF>();
+    sdf::init(parsed);
+    if (!sdf::readString(text, config, parsed, errors)) parsed.reset();
+  }
   std::map<std::string, std::pair<std::string, int>> missing_models;  // uri -> (first place, count)
   std::vector<std::string> fatal;
   const auto sort_errors = [&](const sdf::Errors& list) {
@@ -1060,8 +1226,8 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
             open != std::string::npos && close != std::string::npos && close > open ? message.substr(open + 1, close - open - 1) : message;
         auto& entry = missing_models[uri];
         if (entry.second++ == 0) {
-          entry.first = (error.FilePath() ? *error.FilePath() : path.string()) +
-                        (error.LineNumber() ? ":" + std::to_string(*error.LineNumber()) : std::string());
+          entry.first = error.FilePath() ? *error.FilePath() : path.string();
+          if (error.LineNumber()) entry.first.append(":").append(std::to_string(*error.LineNumber()));
         }
       } else {
         fatal.push_back(error_text(error));
@@ -1073,7 +1239,7 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
     std::string message = path.string() + ": " + what;
     for (const auto& line : fatal) message += "\n  " + line;
     for (const auto& line : console.lines()) message += "\n  sdformat: " + line;
-    return make_error(ErrorCode::kParse, message);
+    return make_error(ErrorCode::kParse, replace_string_source(message, path));
   };
   if (!parsed || !fatal.empty()) return fail("malformed SDF");
 
@@ -1096,11 +1262,6 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   sdf::Root root;
   sort_errors(root.Load(parsed, config));
   if (!fatal.empty()) return fail("invalid SDF");
-
-  for (const auto& [uri, info] : missing_models) {
-    world.warnings.push_back(info.first + ": model " + uri + " not found, " + std::to_string(info.second) +
-                             " include" + (info.second == 1 ? "" : "s") + " skipped");
-  }
 
   SdfWalker walker(options, resolver, world, path);
   if (world_element) {
@@ -1148,6 +1309,51 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
       if (const auto saved = saved_poses.find(model->Name()); saved != saved_poses.end()) pose = saved->second;
       walker.model(*model, to_isometry(pose), Chain{});
     }
+
+    // The includes skytrace instantiates, each model file loaded once.
+    std::set<std::string> names_in_use;
+    for (uint64_t m = 0; m < sdf_world->ModelCount(); ++m) names_in_use.insert(sdf_world->ModelByIndex(m)->Name());
+    std::map<std::string, std::unique_ptr<sdf::Root>> model_files;
+    std::map<std::string, int> renamed;
+    for (const IncludeSpec* include : own_includes) {
+      const std::string place = path.string() + ":" + std::to_string(include->line);
+      const auto found = resolver.resolve(include->uri, path.parent_path());
+      std::string file;
+      if (found) file = fs::is_directory(*found, ec) ? sdf::getModelFilePath(found->string()) : found->string();
+      if (file.empty() || !fs::is_regular_file(file, ec)) {
+        auto& entry = missing_models[include->uri];
+        if (entry.second++ == 0) entry.first = place;
+        continue;
+      }
+      auto& loaded = model_files[file];
+      if (!loaded) {
+        loaded = std::make_unique<sdf::Root>();
+        sort_errors(loaded->Load(file, config));
+        if (!fatal.empty()) return fail("invalid model " + file + " included at line " + std::to_string(include->line));
+      }
+      const sdf::Model* model = loaded->Model();
+      if (model == nullptr) {
+        world.warnings.push_back(place + ": " + include->uri + " holds no model, include skipped");
+        continue;
+      }
+      std::string name = include->name.empty() ? model->Name() : include->name;
+      if (!names_in_use.insert(name).second) {
+        int suffix = 2;
+        while (names_in_use.count(name + "_" + std::to_string(suffix)) != 0) ++suffix;
+        ++renamed[name];
+        name += "_" + std::to_string(suffix);
+        names_in_use.insert(name);
+      }
+      // The include's pose replaces the model's own (SDFormat semantics); <state> wins over both.
+      ignition::math::Pose3d pose = include->pose ? *parse_pose(*include->pose) : model->RawPose();
+      if (const auto saved = saved_poses.find(name); saved != saved_poses.end()) pose = saved->second;
+      walker.model(*model, to_isometry(pose), Chain{}, SdfWalker::Overrides{name, include->uri, include->is_static});
+    }
+    for (const auto& [name, copies] : renamed) {
+      world.warnings.push_back(path.string() + ": " + std::to_string(copies + 1) + " models named '" + name +
+                               "' (SDFormat needs unique names, Gazebo classic accepted them): copies renamed '" +
+                               name + "_2'...");
+    }
     std::size_t roads = 0;
     for (auto road = world_element->GetElementImpl("road"); road; road = road->GetNextElement("road")) ++roads;
     if (roads > 0) {
@@ -1166,12 +1372,22 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   } else {
     return make_error(ErrorCode::kNotFound, path.string() + ": the SDF file holds no world and no model");
   }
+  for (const auto& [uri, info] : missing_models) {
+    world.warnings.push_back(info.first + ": model " + uri + " not found, " + std::to_string(info.second) +
+                             " include" + (info.second == 1 ? "" : "s") + " skipped");
+  }
+  if (!missing_models.empty()) {
+    std::string dirs;
+    for (const auto& dir : resolver.dirs()) dirs += (dirs.empty() ? "" : ", ") + dir.string();
+    world.warnings.push_back("model:// URIs were searched in: " + (dirs.empty() ? std::string("no model paths") : dirs));
+  }
   walker.finish();
   if (!world.geo_origin && !options.geo_origin) {
     world.warnings.push_back(path.string() + ": no <spherical_coordinates>: the world is not tied to the Earth");
   }
   if (options.geo_origin) world.geo_origin = options.geo_origin;
   for (const auto& line : console.lines()) world.warnings.push_back("sdformat: " + line);
+  for (auto& warning : world.warnings) warning = replace_string_source(std::move(warning), path);
   return world;
 }
 

@@ -535,13 +535,21 @@ TEST(WorldSdf, IncludesOverridesAndMissingModels) {
              "<link name=\"link\"><collision name=\"collision\"><pose>0 0 10 0 0 0</pose><geometry><box>"
              "<size>10 10 20</size></box></geometry></collision></link></model></sdf>");
   const auto path = write_file(dir / "w.sdf",
-                               world_sdf("<include><uri>model://tower_block</uri><name>a</name>"
+                               world_sdf("<frame name=\"plaza\"><pose>100 0 0 0 0 1.5707963267948966</pose></frame>\n"
+                                         "<include><uri>model://tower_block</uri><name>a</name>"
                                          "<pose>5 0 0 0 0 0</pose><static>true</static></include>\n"
                                          "<include><uri>model://tower_block</uri><name>b</name></include>\n"
                                          "<include><uri>model://nowhere_to_be_found</uri></include>\n"
-                                         "<include><uri>model://nowhere_to_be_found</uri><name>x2</name></include>"));
+                                         "<include><uri>model://nowhere_to_be_found</uri><name>x2</name></include>\n"
+                                         // A pose in another frame: this include is left to sdformat.
+                                         "<include><uri>model://tower_block</uri><name>c</name>"
+                                         "<pose relative_to=\"plaza\">1 0 0 0 0 0</pose></include>\n"
+                                         // Gazebo classic restores poses saved in <state>.
+                                         "<include><uri>model://tower_block</uri><name>d</name></include>\n"
+                                         "<state world_name=\"test_world\"><model name=\"d\"><pose>-7 -7 0 0 0 0</pose>"
+                                         "</model></state>"));
   const auto world = load_sdf_world(path, isolated_options(models)).value();
-  ASSERT_EQ(world.objects.size(), 2U) << all_warnings(world);
+  ASSERT_EQ(world.objects.size(), 4U) << all_warnings(world);
   const WorldObject* a = find_object(world, "a/link/collision");
   ASSERT_NE(a, nullptr);
   // The include's pose replaces the model's own <pose>.
@@ -552,6 +560,9 @@ TEST(WorldSdf, IncludesOverridesAndMissingModels) {
   ASSERT_NE(b, nullptr);
   expect_vector_near(b->pose.translation(), {50.0, 50.0, 10.0}, 1e-9);
   EXPECT_FALSE(b->is_static);
+  // plaza (100, 0) turned 90 degrees, then 1 m along its x: world (100, 1).
+  expect_vector_near(find_object(world, "c/link/collision")->pose.translation(), {100.0, 1.0, 10.0}, 1e-9);
+  expect_vector_near(find_object(world, "d/link/collision")->pose.translation(), {-7.0, -7.0, 10.0}, 1e-9);
   EXPECT_TRUE(has_warning(world, "model://nowhere_to_be_found not found, 2 includes skipped")) << all_warnings(world);
   EXPECT_TRUE(has_warning(world, "w.sdf:"));
 
@@ -728,7 +739,10 @@ TEST(WorldSdf, HeightmapAndMissingHeightmap) {
       dir / "w.sdf",
       world_sdf(static_model("terrain", "0 0 0 0 0 0",
                              "<heightmap><uri>terrain.png</uri><size>20 10 5</size><pos>1 2 3</pos></heightmap>") +
-                static_model("lost", "0 0 0 0 0 0", "<heightmap><uri>nothing.png</uri><size>20 10 5</size></heightmap>")));
+                static_model("lost", "0 0 0 0 0 0", "<heightmap><uri>nothing.png</uri><size>20 10 5</size></heightmap>") +
+                // An include skytrace instantiates itself: the rest of the world is then parsed from
+                // text, and relative URIs must still start from the world's folder.
+                "<include><uri>model://absent_model</uri></include>"));
   const auto world = load_sdf_world(path, isolated_options()).value();
   const auto* terrain = find_object(world, "terrain/link/collision");
   ASSERT_NE(terrain, nullptr) << all_warnings(world);
