@@ -45,7 +45,9 @@ std::vector<std::string> split_words(std::string_view name) {
 bool word_matches(const std::string& word, std::string_view keyword) {
   for (std::string_view suffix : {"", "s", "es"}) {
     const std::string full = std::string(keyword) + std::string(suffix);
-    if (word.size() >= full.size() && word.compare(word.size() - full.size(), full.size(), full) == 0) return true;
+    if (word.size() >= full.size() &&
+        word.compare(word.size() - full.size(), full.size(), full) == 0)
+      return true;
   }
   return false;
 }
@@ -61,55 +63,69 @@ bool contains_any(std::string_view name, const auto& keywords) {
 // Keywords of model names and URIs. Callers test vegetation first, so "tree_house" is vegetation:
 // a wrong guess costs a few dB, not a missing satellite behind a wall.
 constexpr std::array<std::string_view, 11> kVegetationWords = {
-    "tree", "pine", "oak", "bush", "hedge", "forest", "palm", "shrub", "foliage", "birch", "conifer",
+    "tree", "pine",  "oak",     "bush",  "hedge",   "forest",
+    "palm", "shrub", "foliage", "birch", "conifer",
 };
 constexpr std::array<std::string_view, 26> kBuildingWords = {
-    "house",    "building",  "office",   "apartment", "school",   "station",    "store",
-    "shop",     "garage",    "salon",    "food",      "restaurant", "industrial", "hotel",
-    "hospital", "church",    "warehouse", "factory",  "tower",    "skyscraper", "library",
-    "hall",     "stadium",   "barn",     "villa",     "dormitory",
+    "house",    "building", "office",    "apartment", "school",     "station",    "store",
+    "shop",     "garage",   "salon",     "food",      "restaurant", "industrial", "hotel",
+    "hospital", "church",   "warehouse", "factory",   "tower",      "skyscraper", "library",
+    "hall",     "stadium",  "barn",      "villa",     "dormitory",
 };
 
 }  // namespace
 
 std::string_view material_class_name(MaterialClass material_class) {
   switch (material_class) {
-    case MaterialClass::kConcrete: return "concrete";
-    case MaterialClass::kBrick: return "brick";
-    case MaterialClass::kGlass: return "glass";
-    case MaterialClass::kMetal: return "metal";
-    case MaterialClass::kWood: return "wood";
-    case MaterialClass::kGround: return "ground";
-    case MaterialClass::kVegetation: return "vegetation";
-    case MaterialClass::kUnknown: return "unknown";
+    case MaterialClass::kConcrete:
+      return "concrete";
+    case MaterialClass::kBrick:
+      return "brick";
+    case MaterialClass::kGlass:
+      return "glass";
+    case MaterialClass::kMetal:
+      return "metal";
+    case MaterialClass::kWood:
+      return "wood";
+    case MaterialClass::kGround:
+      return "ground";
+    case MaterialClass::kVegetation:
+      return "vegetation";
+    case MaterialClass::kUnknown:
+      return "unknown";
   }
   return "unknown";
 }
 
 Result<MaterialClass> parse_material_class(std::string_view name) {
-  static const std::map<std::string, MaterialClass, std::less<>> kNames = {
-      {"concrete", MaterialClass::kConcrete}, {"stone", MaterialClass::kConcrete},
-      {"brick", MaterialClass::kBrick},       {"glass", MaterialClass::kGlass},
-      {"metal", MaterialClass::kMetal},       {"steel", MaterialClass::kMetal},
-      {"wood", MaterialClass::kWood},         {"timber", MaterialClass::kWood},
-      {"ground", MaterialClass::kGround},     {"vegetation", MaterialClass::kVegetation},
+  static const std::map<std::string, MaterialClass, std::less<>> names_by_text = {
+      {"concrete", MaterialClass::kConcrete},  {"stone", MaterialClass::kConcrete},
+      {"brick", MaterialClass::kBrick},        {"glass", MaterialClass::kGlass},
+      {"metal", MaterialClass::kMetal},        {"steel", MaterialClass::kMetal},
+      {"wood", MaterialClass::kWood},          {"timber", MaterialClass::kWood},
+      {"ground", MaterialClass::kGround},      {"vegetation", MaterialClass::kVegetation},
       {"foliage", MaterialClass::kVegetation}, {"unknown", MaterialClass::kUnknown},
   };
-  const auto found = kNames.find(to_lower(name));
-  if (found == kNames.end()) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      "unknown material class '" + std::string(name) +
-                          "' (expected concrete, brick, glass, metal, wood, ground, vegetation, unknown)");
+  const auto found = names_by_text.find(to_lower(name));
+  if (found == names_by_text.end()) {
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        "unknown material class '" + std::string(name) +
+            "' (expected concrete, brick, glass, metal, wood, ground, vegetation, unknown)");
   }
   return found->second;
 }
 
 std::string_view object_kind_name(ObjectKind kind) {
   switch (kind) {
-    case ObjectKind::kBuilding: return "building";
-    case ObjectKind::kTree: return "tree";
-    case ObjectKind::kGround: return "ground";
-    case ObjectKind::kOther: return "other";
+    case ObjectKind::kBuilding:
+      return "building";
+    case ObjectKind::kTree:
+      return "tree";
+    case ObjectKind::kGround:
+      return "ground";
+    case ObjectKind::kOther:
+      return "other";
   }
   return "other";
 }
@@ -138,7 +154,8 @@ bool glob_match(std::string_view pattern, std::string_view text) {
   return p == pattern.size();
 }
 
-const MaterialRule* match_material_rule(const std::vector<MaterialRule>& rules, const std::vector<std::string>& names) {
+const MaterialRule* match_material_rule(const std::vector<MaterialRule>& rules,
+                                        const std::vector<std::string>& names) {
   for (const auto& rule : rules) {
     for (const auto& name : names) {
       if (!name.empty() && glob_match(rule.pattern, name)) return &rule;
@@ -147,14 +164,17 @@ const MaterialRule* match_material_rule(const std::vector<MaterialRule>& rules, 
   return nullptr;
 }
 
-bool name_suggests_vegetation(std::string_view name) { return contains_any(name, kVegetationWords); }
+bool name_suggests_vegetation(std::string_view name) {
+  return contains_any(name, kVegetationWords);
+}
 
 bool name_suggests_building(std::string_view name) { return contains_any(name, kBuildingWords); }
 
 std::string entity_name(const std::string& object_name) {
   // SDF objects are "model[/nested...]/link/collision": the entity is the model path. Other loaders
   // use two-part names ("way/123", "file/node") that are entities themselves.
-  std::size_t parts = 1 + static_cast<std::size_t>(std::count(object_name.begin(), object_name.end(), '/'));
+  std::size_t parts =
+      1 + static_cast<std::size_t>(std::count(object_name.begin(), object_name.end(), '/'));
   if (parts < 3) return object_name;
   std::size_t cut = object_name.size();
   for (int i = 0; i < 2; ++i) cut = object_name.rfind('/', cut - 1);
@@ -170,14 +190,23 @@ WorldSummary summarize_world(const WorldModel& world) {
     summary.vertices += object.mesh.vertices_m.size();
     // A model's ground parts (a terrain inside a building model) do not decide its kind.
     auto [it, inserted] = entities.emplace(entity_name(object.name), object.kind);
-    if (!inserted && it->second == ObjectKind::kGround && object.kind != ObjectKind::kGround) it->second = object.kind;
+    if (!inserted && it->second == ObjectKind::kGround && object.kind != ObjectKind::kGround)
+      it->second = object.kind;
   }
   for (const auto& [name, kind] : entities) {
     switch (kind) {
-      case ObjectKind::kBuilding: ++summary.buildings; break;
-      case ObjectKind::kTree: ++summary.trees; break;
-      case ObjectKind::kGround: ++summary.ground; break;
-      case ObjectKind::kOther: ++summary.other; break;
+      case ObjectKind::kBuilding:
+        ++summary.buildings;
+        break;
+      case ObjectKind::kTree:
+        ++summary.trees;
+        break;
+      case ObjectKind::kGround:
+        ++summary.ground;
+        break;
+      case ObjectKind::kOther:
+        ++summary.other;
+        break;
     }
   }
   return summary;

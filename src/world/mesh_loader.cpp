@@ -1,10 +1,10 @@
 // Mesh files through assimp, the convex hull that turns open vegetation meshes into volumes, and
 // worlds made of one mesh file.
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
@@ -25,7 +25,8 @@ std::string lower_extension(const std::filesystem::path& path) {
 
 Eigen::Matrix4d to_eigen(const aiMatrix4x4& m) {
   Eigen::Matrix4d out;
-  out << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3, m.d4;
+  out << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3,
+      m.d4;
   return out;
 }
 
@@ -74,8 +75,9 @@ struct HullFace {
 
 HullFace make_face(const std::vector<Eigen::Vector3d>& p, int a, int b, int c) {
   HullFace face{{a, b, c}, Eigen::Vector3d::Zero(), 0.0, true};
-  const Eigen::Vector3d n = (p[static_cast<std::size_t>(b)] - p[static_cast<std::size_t>(a)])
-                                .cross(p[static_cast<std::size_t>(c)] - p[static_cast<std::size_t>(a)]);
+  const Eigen::Vector3d n =
+      (p[static_cast<std::size_t>(b)] - p[static_cast<std::size_t>(a)])
+          .cross(p[static_cast<std::size_t>(c)] - p[static_cast<std::size_t>(a)]);
   const double norm = n.norm();
   face.normal = norm > 0.0 ? Eigen::Vector3d(n / norm) : Eigen::Vector3d::Zero();
   face.offset = face.normal.dot(p[static_cast<std::size_t>(a)]);
@@ -83,7 +85,8 @@ HullFace make_face(const std::vector<Eigen::Vector3d>& p, int a, int b, int c) {
 }
 
 std::uint64_t edge_key(int a, int b) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32U) | static_cast<std::uint32_t>(b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32U) |
+         static_cast<std::uint32_t>(b);
 }
 
 }  // namespace
@@ -98,11 +101,13 @@ Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) {
     });
     sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
     for (const auto& v : sorted) {
-      if (!v.allFinite()) return make_error(ErrorCode::kInvalidArgument, "convex hull: non-finite point");
+      if (!v.allFinite())
+        return make_error(ErrorCode::kInvalidArgument, "convex hull: non-finite point");
       p.push_back(v.cast<double>());
     }
   }
-  if (p.size() < 4) return make_error(ErrorCode::kInvalidArgument, "convex hull: fewer than 4 distinct points");
+  if (p.size() < 4)
+    return make_error(ErrorCode::kInvalidArgument, "convex hull: fewer than 4 distinct points");
 
   Eigen::Vector3d low = p[0];
   Eigen::Vector3d high = p[0];
@@ -144,7 +149,8 @@ Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) {
       i3 = i;
     }
   }
-  if (i3 < 0) return make_error(ErrorCode::kInvalidArgument, "convex hull: all points in one plane");
+  if (i3 < 0)
+    return make_error(ErrorCode::kInvalidArgument, "convex hull: all points in one plane");
 
   std::vector<HullFace> faces;
   const Eigen::Vector3d inside = (at(i0) + at(i1) + at(i2) + at(i3)) / 4.0;
@@ -173,7 +179,9 @@ Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) {
     visible_edges.clear();
     for (int f : visible) {
       const auto& v = faces[static_cast<std::size_t>(f)].v;
-      for (int k = 0; k < 3; ++k) visible_edges.insert(edge_key(v[static_cast<std::size_t>(k)], v[(static_cast<std::size_t>(k) + 1) % 3]));
+      for (int k = 0; k < 3; ++k)
+        visible_edges.insert(
+            edge_key(v[static_cast<std::size_t>(k)], v[(static_cast<std::size_t>(k) + 1) % 3]));
     }
     // Horizon: edges of visible faces whose twin belongs to a face that stays. New faces keep the
     // edge's direction, so they are oriented like the face they replace.
@@ -213,20 +221,24 @@ Result<std::vector<MeshPart>> read_mesh_file(const std::filesystem::path& path, 
   const bool is_collada = extension == ".dae";
   // Where assimp leaves the file's axes: COLLADA and FBX are turned Y-up by assimp itself (from
   // their own up-axis declaration), glTF is Y-up by specification, the rest is raw (Z-up for us).
-  const bool assimp_output_y_up = is_collada || extension == ".gltf" || extension == ".glb" || extension == ".fbx";
+  const bool assimp_output_y_up =
+      is_collada || extension == ".gltf" || extension == ".glb" || extension == ".fbx";
 
   Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   bool rotate_y_up = assimp_output_y_up;
   if (up_axis != UpAxis::kAuto) {
     // An explicit axis overrides the file: make assimp keep the raw coordinates.
     importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
     rotate_y_up = up_axis == UpAxis::kY;
   }
-  const aiScene* scene = importer.ReadFile(
-      path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  const aiScene* scene =
+      importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                           aiProcess_SortByPType);
   if (scene == nullptr || scene->mRootNode == nullptr) {
-    return make_error(ErrorCode::kParse, path.string() + ": assimp cannot read the mesh: " + importer.GetErrorString());
+    return make_error(ErrorCode::kParse, path.string() + ": assimp cannot read the mesh: " +
+                                             importer.GetErrorString());
   }
   Eigen::Matrix4d root = Eigen::Matrix4d::Identity();
   if (rotate_y_up) {
@@ -258,10 +270,12 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
   // Group parts into objects: one per node, or one for the whole file.
   std::vector<std::pair<std::string, std::vector<const MeshPart*>>> groups;
   for (const auto& part : *parts) {
-    const std::string name = options.split_by_node
-                                 ? file_name + "/" + (part.node_name.empty() ? part.mesh_name : part.node_name)
-                                 : file_name;
-    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == name; });
+    const std::string name =
+        options.split_by_node
+            ? file_name + "/" + (part.node_name.empty() ? part.mesh_name : part.node_name)
+            : file_name;
+    auto it =
+        std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == name; });
     if (it == groups.end()) {
       groups.push_back({name, {}});
       it = std::prev(groups.end());
@@ -280,7 +294,8 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
       for (const auto& v : part->mesh.vertices_m) {
         object.mesh.vertices_m.push_back(v * static_cast<float>(options.scale));
       }
-      for (const auto& t : part->mesh.triangles) object.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+      for (const auto& t : part->mesh.triangles)
+        object.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
     }
     const MaterialRule* rule = match_material_rule(options.material_rules, names);
     const bool vegetation_name = std::any_of(names.begin(), names.end(), [](const std::string& n) {
@@ -289,7 +304,8 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
     if (rule != nullptr) {
       object.material = rule->material;
     } else if (vegetation_name) {
-      object.material = Material{MaterialClass::kVegetation, options.vegetation_attenuation_db_per_m};
+      object.material =
+          Material{MaterialClass::kVegetation, options.vegetation_attenuation_db_per_m};
     } else {
       object.material = options.default_material;
     }
@@ -305,7 +321,8 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
     if (object.material.is_vegetation()) {
       auto hull = convex_hull(object.mesh.vertices_m);
       if (!hull.ok()) {
-        world.warnings.push_back(name + ": vegetation skipped, no volume (" + hull.error().message + ")");
+        world.warnings.push_back(name + ": vegetation skipped, no volume (" + hull.error().message +
+                                 ")");
         continue;
       }
       object.mesh = std::move(*hull);

@@ -1,7 +1,8 @@
 // Polygon triangulation and extrusion, and OpenStreetMap worlds through libosmium: building
 // footprints (closed ways and multipolygons, assembled by osmium) extruded to their height, trees
 // and woods as vegetation volumes, projected on the tangent plane of the origin.
-// GCC 12 sees a false string over-read inside libosmium's area builder (inlined from the assembler).
+// GCC 12 sees a false string over-read inside libosmium's area builder (inlined from the
+// assembler).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wstringop-overread"
 #include <osmium/area/assembler.hpp>
@@ -17,7 +18,6 @@
 #pragma GCC diagnostic pop
 
 #include <GeographicLib/LocalCartesian.hpp>
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -49,10 +49,13 @@ struct PreparedPolygon {
 std::vector<int> clean_ring(const std::vector<Eigen::Vector2d>& points, int begin, int end) {
   std::vector<int> ring;
   for (int i = begin; i < end; ++i) {
-    if (!ring.empty() && points[static_cast<std::size_t>(ring.back())] == points[static_cast<std::size_t>(i)]) continue;
+    if (!ring.empty() &&
+        points[static_cast<std::size_t>(ring.back())] == points[static_cast<std::size_t>(i)])
+      continue;
     ring.push_back(i);
   }
-  while (ring.size() > 1 && points[static_cast<std::size_t>(ring.front())] == points[static_cast<std::size_t>(ring.back())]) {
+  while (ring.size() > 1 && points[static_cast<std::size_t>(ring.front())] ==
+                                points[static_cast<std::size_t>(ring.back())]) {
     ring.pop_back();
   }
   return ring;
@@ -81,7 +84,8 @@ Result<PreparedPolygon> prepare_polygon(const PolygonWithHoles& polygon) {
   for (const auto& p : prepared.points) {
     if (!p.allFinite()) return make_error(ErrorCode::kInvalidArgument, "polygon: non-finite point");
   }
-  if (polygon.outer.empty()) return make_error(ErrorCode::kInvalidArgument, "polygon: empty outer ring");
+  if (polygon.outer.empty())
+    return make_error(ErrorCode::kInvalidArgument, "polygon: empty outer ring");
   Eigen::Vector2d low = prepared.points.front();
   Eigen::Vector2d high = low;
   for (const auto& p : prepared.points) {
@@ -99,9 +103,9 @@ Result<PreparedPolygon> prepare_polygon(const PolygonWithHoles& polygon) {
     const double area = ring.size() >= 3 ? ring_area(prepared.points, ring) : 0.0;
     if (std::abs(area) <= prepared.eps_area_m2) {
       if (r == 0) {
-        return make_error(ErrorCode::kInvalidArgument,
-                          "polygon: the outer ring has " + std::to_string(ring.size()) +
-                              " distinct points and no area");
+        return make_error(ErrorCode::kInvalidArgument, "polygon: the outer ring has " +
+                                                           std::to_string(ring.size()) +
+                                                           " distinct points and no area");
       }
       continue;  // a hole without area removes nothing
     }
@@ -133,11 +137,13 @@ class EarClipper {
       } while (p != start);
       holes.push_back(leftmost);
     }
-    std::sort(holes.begin(), holes.end(), [&](int a, int b) { return x(a) != x(b) ? x(a) < x(b) : y(a) < y(b); });
+    std::sort(holes.begin(), holes.end(),
+              [&](int a, int b) { return x(a) != x(b) ? x(a) < x(b) : y(a) < y(b); });
     for (std::size_t h = 0; h < holes.size(); ++h) {
       const int bridge = find_bridge(holes[h], outer);
       if (bridge < 0) {
-        return make_error(ErrorCode::kInvalidArgument, "polygon: a hole is not inside the outer ring");
+        return make_error(ErrorCode::kInvalidArgument,
+                          "polygon: a hole is not inside the outer ring");
       }
       const int reverse = split(bridge, holes[h]);
       filter(reverse, next(reverse));
@@ -173,7 +179,8 @@ class EarClipper {
     const int first = static_cast<int>(nodes_.size());
     for (std::size_t k = 0; k < indices.size(); ++k) {
       const int n = add(indices[k]);
-      nodes_[static_cast<std::size_t>(n)].prev = k == 0 ? first + static_cast<int>(indices.size()) - 1 : n - 1;
+      nodes_[static_cast<std::size_t>(n)].prev =
+          k == 0 ? first + static_cast<int>(indices.size()) - 1 : n - 1;
       nodes_[static_cast<std::size_t>(n)].next = k + 1 == indices.size() ? first : n + 1;
     }
     return first;
@@ -204,8 +211,9 @@ class EarClipper {
     bool again = false;
     do {
       again = false;
-      if (next(p) != p && (same_place(p, next(p)) || std::abs(area(prev(p), p, next(p))) <=
-                                                         prepared_.flat_m * (at(next(p)) - at(prev(p))).norm())) {
+      if (next(p) != p &&
+          (same_place(p, next(p)) || std::abs(area(prev(p), p, next(p))) <=
+                                         prepared_.flat_m * (at(next(p)) - at(prev(p))).norm())) {
         remove(p);
         p = end = prev(p);
         if (p == next(p)) break;
@@ -217,24 +225,28 @@ class EarClipper {
     return end;
   }
 
-  static bool inside_triangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
-                              const Eigen::Vector2d& p) {
+  static bool inside_triangle(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                              const Eigen::Vector2d& c, const Eigen::Vector2d& p) {
     return cross2(a, b, p) >= 0.0 && cross2(b, c, p) >= 0.0 && cross2(c, a, p) >= 0.0;
   }
   // The diagonal a-b leaves a into the polygon's interior.
   bool locally_inside(int a, int b) const {
-    return area(prev(a), a, next(a)) > 0.0 ? area(a, b, next(a)) <= 0.0 && area(a, prev(a), b) <= 0.0
-                                           : area(a, b, prev(a)) > 0.0 || area(a, next(a), b) > 0.0;
+    return area(prev(a), a, next(a)) > 0.0
+               ? area(a, b, next(a)) <= 0.0 && area(a, prev(a), b) <= 0.0
+               : area(a, b, prev(a)) > 0.0 || area(a, next(a), b) > 0.0;
   }
   // At one place, the corner of m contains the corner of p.
-  bool sector_contains(int m, int p) const { return area(prev(m), m, prev(p)) > 0.0 && area(next(p), m, next(m)) > 0.0; }
-  static int sign(double v) { return (v > 0.0) - (v < 0.0); }
-  static bool on_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& r) {
-    return q.x() <= std::max(p.x(), r.x()) && q.x() >= std::min(p.x(), r.x()) && q.y() <= std::max(p.y(), r.y()) &&
-           q.y() >= std::min(p.y(), r.y());
+  bool sector_contains(int m, int p) const {
+    return area(prev(m), m, prev(p)) > 0.0 && area(next(p), m, next(m)) > 0.0;
   }
-  static bool intersects(const Eigen::Vector2d& p1, const Eigen::Vector2d& q1, const Eigen::Vector2d& p2,
-                         const Eigen::Vector2d& q2) {
+  static int sign(double v) { return (v > 0.0) - (v < 0.0); }
+  static bool on_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& q,
+                         const Eigen::Vector2d& r) {
+    return q.x() <= std::max(p.x(), r.x()) && q.x() >= std::min(p.x(), r.x()) &&
+           q.y() <= std::max(p.y(), r.y()) && q.y() >= std::min(p.y(), r.y());
+  }
+  static bool intersects(const Eigen::Vector2d& p1, const Eigen::Vector2d& q1,
+                         const Eigen::Vector2d& p2, const Eigen::Vector2d& q2) {
     const int o1 = sign(cross2(p1, q1, p2));
     const int o2 = sign(cross2(p1, q1, q2));
     const int o3 = sign(cross2(p2, q2, p1));
@@ -246,8 +258,8 @@ class EarClipper {
   bool intersects_ring(int a, int b) const {
     int p = a;
     do {
-      if (index(p) != index(a) && index(next(p)) != index(a) && index(p) != index(b) && index(next(p)) != index(b) &&
-          intersects(at(p), at(next(p)), at(a), at(b))) {
+      if (index(p) != index(a) && index(next(p)) != index(a) && index(p) != index(b) &&
+          index(next(p)) != index(b) && intersects(at(p), at(next(p)), at(a), at(b))) {
         return true;
       }
       p = next(p);
@@ -273,7 +285,8 @@ class EarClipper {
     return index(next(a)) != index(b) && index(prev(a)) != index(b) && !intersects_ring(a, b) &&
            ((locally_inside(a, b) && locally_inside(b, a) && middle_inside(a, b) &&
              (area(prev(a), a, prev(b)) != 0.0 || area(a, prev(b), b) != 0.0)) ||
-            (same_place(a, b) && area(prev(a), a, next(a)) < 0.0 && area(prev(b), b, next(b)) < 0.0));
+            (same_place(a, b) && area(prev(a), a, next(a)) < 0.0 &&
+             area(prev(b), b, next(b)) < 0.0));
   }
 
   // Bridge for the hole vertex h: the nearest outer vertex seen along a ray towards -x.
@@ -308,11 +321,12 @@ class EarClipper {
     do {
       const Eigen::Vector2d first(hy < my ? hx : qx, hy);
       const Eigen::Vector2d third(hy < my ? qx : hx, hy);
-      if (hx >= x(p) && x(p) >= mx && hx != x(p) && inside_triangle(first, Eigen::Vector2d(mx, my), third, at(p))) {
+      if (hx >= x(p) && x(p) >= mx && hx != x(p) &&
+          inside_triangle(first, Eigen::Vector2d(mx, my), third, at(p))) {
         const double tangent = std::abs(hy - y(p)) / (hx - x(p));
-        if (locally_inside(p, h) &&
-            (tangent < best_tangent ||
-             (tangent == best_tangent && (x(p) > x(m) || (x(p) == x(m) && sector_contains(m, p)))))) {
+        if (locally_inside(p, h) && (tangent < best_tangent ||
+                                     (tangent == best_tangent &&
+                                      (x(p) > x(m) || (x(p) == x(m) && sector_contains(m, p)))))) {
           m = p;
           best_tangent = tangent;
         }
@@ -329,7 +343,8 @@ class EarClipper {
     for (int p = next(c); p != a; p = next(p)) {
       // A reflex (or flat) vertex inside the triangle blocks it; copies of its corners do not.
       if (same_place(p, a) || same_place(p, ear) || same_place(p, c)) continue;
-      if (inside_triangle(at(a), at(ear), at(c), at(p)) && area(prev(p), p, next(p)) <= 0.0) return false;
+      if (inside_triangle(at(a), at(ear), at(c), at(p)) && area(prev(p), p, next(p)) <= 0.0)
+        return false;
     }
     return true;
   }
@@ -340,8 +355,8 @@ class EarClipper {
     do {
       const int a = prev(p);
       const int b = next(next(p));
-      if (!same_place(a, b) && intersects(at(a), at(p), at(next(p)), at(b)) && locally_inside(a, b) &&
-          locally_inside(b, a)) {
+      if (!same_place(a, b) && intersects(at(a), at(p), at(next(p)), at(b)) &&
+          locally_inside(a, b) && locally_inside(b, a)) {
         triangles_.push_back({index(a), index(p), index(b)});
         remove(p);
         remove(next(p));
@@ -427,15 +442,18 @@ Result<std::vector<std::array<int, 3>>> triangulate_polygon(const PolygonWithHol
   EarClipper clipper(*prepared);
   auto triangles = clipper.run();
   if (triangles.ok() && clipper.stuck()) {
-    return make_error(ErrorCode::kInvalidArgument, "polygon: cannot triangulate the rings (self-intersecting?)");
+    return make_error(ErrorCode::kInvalidArgument,
+                      "polygon: cannot triangulate the rings (self-intersecting?)");
   }
   return triangles;
 }
 
-Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bottom_m, double top_m) {
+Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bottom_m,
+                                     double top_m) {
   if (!(top_m > bottom_m) || !std::isfinite(bottom_m) || !std::isfinite(top_m)) {
     return make_error(ErrorCode::kInvalidArgument, "extrusion: the top (" + std::to_string(top_m) +
-                                                       " m) must be above the bottom (" + std::to_string(bottom_m) + " m)");
+                                                       " m) must be above the bottom (" +
+                                                       std::to_string(bottom_m) + " m)");
   }
   auto prepared = prepare_polygon(polygon);
   if (!prepared.ok()) return prepared.error();
@@ -448,7 +466,8 @@ Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bot
   mesh.vertices_m.reserve(2 * static_cast<std::size_t>(n));
   for (const double z : {bottom_m, top_m}) {
     for (const auto& p : prepared->points) {
-      mesh.vertices_m.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(z));
+      mesh.vertices_m.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                   static_cast<float>(z));
     }
   }
   // Walls stand on the roof's boundary: the edges of its triangles without a twin (bridges and
@@ -457,7 +476,8 @@ Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bot
   // walls follow the roof exactly even where clipping dropped a spike or a flat vertex.
   std::set<std::pair<int, int>> edges;
   for (const auto& t : *cap) {
-    for (int k = 0; k < 3; ++k) edges.emplace(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]);
+    for (int k = 0; k < 3; ++k)
+      edges.emplace(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]);
   }
   for (const auto& [a, b] : edges) {
     if (edges.count({b, a}) != 0) continue;
@@ -473,7 +493,9 @@ Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bot
 
 Result<double> parse_osm_length_m(std::string_view text) {
   const auto fail = [&]() -> Result<double> {
-    return make_error(ErrorCode::kParse, "length '" + std::string(text) + "' not understood (expected e.g. 12, 12 m, 40 ft, 12'6\")");
+    return make_error(ErrorCode::kParse,
+                      "length '" + std::string(text) +
+                          "' not understood (expected e.g. 12, 12 m, 40 ft, 12'6\")");
   };
   std::string s(text);
   std::replace(s.begin(), s.end(), ',', '.');  // "12,5" is common in some regions
@@ -498,7 +520,8 @@ Result<double> parse_osm_length_m(std::string_view text) {
   trim(unit);
   constexpr double kFootM = 0.3048;
   constexpr double kInchM = 0.0254;
-  if (unit.empty() || unit == "m" || unit == "meter" || unit == "meters" || unit == "metre" || unit == "metres") {
+  if (unit.empty() || unit == "m" || unit == "meter" || unit == "meters" || unit == "metre" ||
+      unit == "metres") {
     return *first;
   }
   if (unit == "ft" || unit == "feet" || unit == "foot" || unit == "'") return *first * kFootM;
@@ -550,25 +573,32 @@ class ProblemCollector final : public osmium::area::ProblemReporter {
   void report_ring_not_closed(const osmium::NodeRef& nr, const osmium::Way* /*way*/) override {
     note("ring not closed at node " + std::to_string(nr.ref()));
   }
-  void report_intersection(osmium::object_id_type way1_id, osmium::Location /*s1*/, osmium::Location /*e1*/,
-                           osmium::object_id_type way2_id, osmium::Location /*s2*/, osmium::Location /*e2*/,
+  void report_intersection(osmium::object_id_type way1_id, osmium::Location /*s1*/,
+                           osmium::Location /*e1*/, osmium::object_id_type way2_id,
+                           osmium::Location /*s2*/, osmium::Location /*e2*/,
                            osmium::Location /*at*/) override {
-    note("segments of ways " + std::to_string(way1_id) + " and " + std::to_string(way2_id) + " intersect");
+    note("segments of ways " + std::to_string(way1_id) + " and " + std::to_string(way2_id) +
+         " intersect");
   }
   void report_duplicate_segment(const osmium::NodeRef& nr1, const osmium::NodeRef& nr2) override {
-    note("duplicate segment between nodes " + std::to_string(nr1.ref()) + " and " + std::to_string(nr2.ref()));
+    note("duplicate segment between nodes " + std::to_string(nr1.ref()) + " and " +
+         std::to_string(nr2.ref()));
   }
-  void report_invalid_location(osmium::object_id_type way_id, osmium::object_id_type node_id) override {
-    note("node " + std::to_string(node_id) + " of way " + std::to_string(way_id) + " is missing from the file");
+  void report_invalid_location(osmium::object_id_type way_id,
+                               osmium::object_id_type node_id) override {
+    note("node " + std::to_string(node_id) + " of way " + std::to_string(way_id) +
+         " is missing from the file");
   }
-  void report_role_should_be_outer(osmium::object_id_type way_id, osmium::Location /*s*/, osmium::Location /*e*/) override {
+  void report_role_should_be_outer(osmium::object_id_type way_id, osmium::Location /*s*/,
+                                   osmium::Location /*e*/) override {
     note("way " + std::to_string(way_id) + " should have role outer");
   }
 
  private:
   void note(const std::string& message) {
     const std::string key =
-        std::string(m_object_type == osmium::item_type::relation ? "relation/" : "way/") + std::to_string(m_object_id);
+        std::string(m_object_type == osmium::item_type::relation ? "relation/" : "way/") +
+        std::to_string(m_object_id);
     problems.emplace(key, message);  // keeps the first
   }
 };
@@ -587,7 +617,8 @@ bool is_building(const std::map<std::string, std::string>& tags) {
 bool is_wood(const std::map<std::string, std::string>& tags) {
   const auto natural = tags.find("natural");
   const auto landuse = tags.find("landuse");
-  return (natural != tags.end() && natural->second == "wood") || (landuse != tags.end() && landuse->second == "forest");
+  return (natural != tags.end() && natural->second == "wood") ||
+         (landuse != tags.end() && landuse->second == "forest");
 }
 
 struct Collector : osmium::handler::Handler {
@@ -606,7 +637,8 @@ struct Collector : osmium::handler::Handler {
     if (!node.location().valid()) return;
     const char* natural = node.tags()["natural"];
     if (load_trees && natural != nullptr && std::string_view(natural) == "tree") {
-      trees.push_back({"node/" + std::to_string(node.id()), node.location().lat(), node.location().lon(), tags_of(node.tags())});
+      trees.push_back({"node/" + std::to_string(node.id()), node.location().lat(),
+                       node.location().lon(), tags_of(node.tags())});
       data_box.extend(node.location());
     }
   }
@@ -615,9 +647,10 @@ struct Collector : osmium::handler::Handler {
     if (is_building(tags) || (load_woods && is_wood(tags))) {
       const std::string name = "way/" + std::to_string(way.id());
       const bool closed = way.nodes().size() >= 4 && way.is_closed();
-      candidates.emplace(name, (is_building(tags) ? "building=" + tags.at("building") : std::string("wood")) + ", " +
-                                   std::to_string(way.nodes().size()) + " node(s), " +
-                                   (closed ? "closed" : "not a closed ring"));
+      candidates.emplace(
+          name, (is_building(tags) ? "building=" + tags.at("building") : std::string("wood")) +
+                    ", " + std::to_string(way.nodes().size()) + " node(s), " +
+                    (closed ? "closed" : "not a closed ring"));
       if (!closed) return;
       OsmArea raw;
       raw.name = name;
@@ -634,11 +667,13 @@ struct Collector : osmium::handler::Handler {
   void relation(const osmium::Relation& relation) {
     const auto tags = tags_of(relation.tags());
     const auto type = tags.find("type");
-    if (type == tags.end() || (type->second != "multipolygon" && type->second != "boundary")) return;
+    if (type == tags.end() || (type->second != "multipolygon" && type->second != "boundary"))
+      return;
     if (is_building(tags) || (load_woods && is_wood(tags))) {
-      candidates.emplace("relation/" + std::to_string(relation.id()),
-                         (is_building(tags) ? "building=" + tags.at("building") : std::string("wood")) +
-                             " multipolygon of " + std::to_string(relation.members().size()) + " member(s)");
+      candidates.emplace(
+          "relation/" + std::to_string(relation.id()),
+          (is_building(tags) ? "building=" + tags.at("building") : std::string("wood")) +
+              " multipolygon of " + std::to_string(relation.members().size()) + " member(s)");
     }
   }
   void area(const osmium::Area& area) {
@@ -654,7 +689,8 @@ struct Collector : osmium::handler::Handler {
       }
       for (const auto& inner : area.inner_rings(outer)) {
         LatLonRing hole;
-        for (const auto& nr : inner) hole.points_deg.emplace_back(nr.location().lat(), nr.location().lon());
+        for (const auto& nr : inner)
+          hole.points_deg.emplace_back(nr.location().lat(), nr.location().lon());
         polygon.holes.push_back(std::move(hole));
       }
       out.polygons.push_back(std::move(polygon));
@@ -663,27 +699,32 @@ struct Collector : osmium::handler::Handler {
   }
 };
 
-std::optional<double> tag_length(const std::map<std::string, std::string>& tags, const std::string& key,
-                                 const std::string& object, std::vector<std::string>& warnings) {
+std::optional<double> tag_length(const std::map<std::string, std::string>& tags,
+                                 const std::string& key, const std::string& object,
+                                 std::vector<std::string>& warnings) {
   const auto it = tags.find(key);
   if (it == tags.end()) return std::nullopt;
   auto value = parse_osm_length_m(it->second);
   if (!value.ok()) {
-    warnings.push_back(object + ": tag " + key + "=" + it->second + " ignored: " + value.error().message);
+    warnings.push_back(object + ": tag " + key + "=" + it->second +
+                       " ignored: " + value.error().message);
     return std::nullopt;
   }
   return *value;
 }
 
-std::optional<double> tag_number(const std::map<std::string, std::string>& tags, const std::string& key,
-                                 const std::string& object, std::vector<std::string>& warnings) {
+std::optional<double> tag_number(const std::map<std::string, std::string>& tags,
+                                 const std::string& key, const std::string& object,
+                                 std::vector<std::string>& warnings) {
   const auto it = tags.find(key);
   if (it == tags.end()) return std::nullopt;
   double value = 0.0;
   const std::string& text = it->second;
   const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(value) || value < 0.0) {
-    warnings.push_back(object + ": tag " + key + "=" + text + " ignored: not a non-negative number");
+  if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(value) ||
+      value < 0.0) {
+    warnings.push_back(object + ": tag " + key + "=" + text +
+                       " ignored: not a non-negative number");
     return std::nullopt;
   }
   return value;
@@ -705,16 +746,20 @@ void centre_mesh(WorldObject& object) {
 
 }  // namespace
 
-Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLoadOptions& options) {
+Result<WorldModel> load_osm_world(const std::filesystem::path& path,
+                                  const OsmLoadOptions& options) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     return make_error(ErrorCode::kIo, path.string() + ": OSM file not found");
   }
-  if (!(options.level_height_m > 0.0) || !(options.default_building_height_m > 0.0) || !(options.tree_height_m > 0.0) ||
-      !(options.tree_crown_diameter_m > 0.0) || !(options.wood_height_m > 0.0) ||
+  if (!(options.level_height_m > 0.0) || !(options.default_building_height_m > 0.0) ||
+      !(options.tree_height_m > 0.0) || !(options.tree_crown_diameter_m > 0.0) ||
+      !(options.wood_height_m > 0.0) ||
       !(options.tree_crown_base_fraction >= 0.0 && options.tree_crown_base_fraction < 1.0)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      path.string() + ": OSM options: heights and diameters must be positive, crown base fraction in [0, 1)");
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        path.string() +
+            ": OSM options: heights and diameters must be positive, crown base fraction in [0, 1)");
   }
 
   Collector collector;
@@ -743,7 +788,9 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
     osmium::io::Reader reader{input};
     header_box = reader.header().box();
     osmium::apply(reader, locations, collector,
-                  manager.handler([&collector](osmium::memory::Buffer&& buffer) { osmium::apply(buffer, collector); }));
+                  manager.handler([&collector](osmium::memory::Buffer&& buffer) {
+                    osmium::apply(buffer, collector);
+                  }));
     reader.close();
   } catch (const std::exception& e) {
     return make_error(ErrorCode::kParse, path.string() + ": cannot read the OSM data: " + e.what());
@@ -754,9 +801,10 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
   for (const auto& area : collector.areas) collector.candidates.erase(area.name);
   for (const auto& [name, description] : collector.candidates) {
     const auto problem = problems.problems.find(name);
-    const std::string reason = problem != problems.problems.end()
-                                   ? problem->second
-                                   : std::string("no area could be built (members missing from the extract?)");
+    const std::string reason =
+        problem != problems.problems.end()
+            ? problem->second
+            : std::string("no area could be built (members missing from the extract?)");
     if (auto raw = collector.raw_ways.find(name); raw != collector.raw_ways.end()) {
       raw->second.rejected = name + " (" + description + "): osmium rejected it (" + reason + ")";
       collector.areas.push_back(std::move(raw->second));
@@ -772,14 +820,16 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
   } else {
     const osmium::Box& box = header_box.valid() ? header_box : collector.data_box;
     if (!box.valid()) {
-      return make_error(ErrorCode::kNotFound, path.string() + ": no buildings, trees or woods in the OSM data");
+      return make_error(ErrorCode::kNotFound,
+                        path.string() + ": no buildings, trees or woods in the OSM data");
     }
     origin.latitude_deg = 0.5 * (box.bottom_left().lat() + box.top_right().lat());
     origin.longitude_deg = 0.5 * (box.bottom_left().lon() + box.top_right().lon());
     origin.height_m = options.ground_height_m;
   }
   world.geo_origin = GeoOrigin{origin, 0.0};
-  const GeographicLib::LocalCartesian projection(origin.latitude_deg, origin.longitude_deg, origin.height_m);
+  const GeographicLib::LocalCartesian projection(origin.latitude_deg, origin.longitude_deg,
+                                                 origin.height_m);
   const double ground_z_m = options.ground_height_m - origin.height_m;
   // East and north on the tangent plane; the curvature drop (8 cm at 1 km) is left out so that
   // walls stay vertical in the world frame.
@@ -812,7 +862,8 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
         double roof_m = 0.0;
         if (const auto roof_height = tag_length(area.tags, "roof:height", area.name, warnings)) {
           roof_m = *roof_height;
-        } else if (const auto roof_levels = tag_number(area.tags, "roof:levels", area.name, warnings)) {
+        } else if (const auto roof_levels =
+                       tag_number(area.tags, "roof:levels", area.name, warnings)) {
           roof_m = *roof_levels * options.level_height_m;
         }
         top_m = *levels * options.level_height_m + roof_m;
@@ -821,7 +872,8 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
       }
       if (const auto min_height = tag_length(area.tags, "min_height", area.name, warnings)) {
         bottom_m = *min_height;
-      } else if (const auto min_level = tag_number(area.tags, "building:min_level", area.name, warnings)) {
+      } else if (const auto min_level =
+                     tag_number(area.tags, "building:min_level", area.name, warnings)) {
         bottom_m = *min_level * options.level_height_m;
       }
       material = options.building_material;
@@ -829,7 +881,8 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
         if (auto parsed = parse_material_class(it->second); parsed.ok()) {
           material.material_class = *parsed;
         } else {
-          warnings.push_back(area.name + ": building:material=" + it->second + " ignored: " + parsed.error().message);
+          warnings.push_back(area.name + ": building:material=" + it->second +
+                             " ignored: " + parsed.error().message);
         }
       }
     } else {
@@ -841,8 +894,8 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
     const MaterialRule* rule = match_material_rule(options.material_rules, names);
     if (rule != nullptr) material = rule->material;
     if (!(top_m > bottom_m)) {
-      warnings.push_back(area.name + " skipped: top " + std::to_string(top_m) + " m is not above its base " +
-                         std::to_string(bottom_m) + " m");
+      warnings.push_back(area.name + " skipped: top " + std::to_string(top_m) +
+                         " m is not above its base " + std::to_string(bottom_m) + " m");
       continue;
     }
 
@@ -850,9 +903,9 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
     object.name = area.name;
     object.material = material;
     object.kind = rule != nullptr && rule->kind ? *rule->kind
-                  : material.is_vegetation()   ? ObjectKind::kTree
-                  : building                   ? ObjectKind::kBuilding
-                                               : ObjectKind::kOther;
+                  : material.is_vegetation()    ? ObjectKind::kTree
+                  : building                    ? ObjectKind::kBuilding
+                                                : ObjectKind::kOther;
     bool failed = false;
     for (const auto& polygon : area.polygons) {
       PolygonWithHoles projected;
@@ -862,17 +915,20 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
       if (!prism.ok()) {
         warnings.push_back(area.rejected.empty()
                                ? area.name + " skipped: " + prism.error().message
-                               : area.rejected + " and its outline as drawn fails too (" + prism.error().message +
-                                     "): skipped");
+                               : area.rejected + " and its outline as drawn fails too (" +
+                                     prism.error().message + "): skipped");
         failed = true;
         break;
       }
       const int base = static_cast<int>(object.mesh.vertices_m.size());
-      object.mesh.vertices_m.insert(object.mesh.vertices_m.end(), prism->vertices_m.begin(), prism->vertices_m.end());
-      for (const auto& t : prism->triangles) object.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+      object.mesh.vertices_m.insert(object.mesh.vertices_m.end(), prism->vertices_m.begin(),
+                                    prism->vertices_m.end());
+      for (const auto& t : prism->triangles)
+        object.mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
     }
     if (failed) continue;
-    if (!area.rejected.empty()) warnings.push_back(area.rejected + "; built from its outline as drawn");
+    if (!area.rejected.empty())
+      warnings.push_back(area.rejected + "; built from its outline as drawn");
     centre_mesh(object);
     if (object.kind == ObjectKind::kBuilding) ++buildings;
     world.objects.push_back(std::move(object));
@@ -880,9 +936,10 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
 
   for (const auto& tree : collector.trees) {
     std::vector<std::string>& warnings = world.warnings;
-    const double height_m = tag_length(tree.tags, "height", tree.name, warnings).value_or(options.tree_height_m);
-    const double diameter_m =
-        tag_length(tree.tags, "diameter_crown", tree.name, warnings).value_or(options.tree_crown_diameter_m);
+    const double height_m =
+        tag_length(tree.tags, "height", tree.name, warnings).value_or(options.tree_height_m);
+    const double diameter_m = tag_length(tree.tags, "diameter_crown", tree.name, warnings)
+                                  .value_or(options.tree_crown_diameter_m);
     if (!(height_m > 0.0) || !(diameter_m > 0.0)) {
       warnings.push_back(tree.name + " skipped: zero height or crown diameter");
       continue;
@@ -893,14 +950,17 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
     object.name = tree.name;
     object.kind = ObjectKind::kTree;
     object.material = Material{MaterialClass::kVegetation, options.vegetation_attenuation_db_per_m};
-    if (const MaterialRule* rule = match_material_rule(options.material_rules, {tree.name}); rule != nullptr) {
+    if (const MaterialRule* rule = match_material_rule(options.material_rules, {tree.name});
+        rule != nullptr) {
       object.material = rule->material;
       if (rule->kind) object.kind = *rule->kind;
     }
     // Trees are many: a coarser tessellation than SDF primitives keeps the scene small.
-    object.mesh = options.tree_crown_shape == TreeCrownShape::kEllipsoid
-                      ? make_ellipsoid(Eigen::Vector3d(0.5 * diameter_m, 0.5 * diameter_m, 0.5 * crown_height_m), 16, 8)
-                      : make_cylinder(0.5 * diameter_m, crown_height_m, 16);
+    object.mesh =
+        options.tree_crown_shape == TreeCrownShape::kEllipsoid
+            ? make_ellipsoid(
+                  Eigen::Vector3d(0.5 * diameter_m, 0.5 * diameter_m, 0.5 * crown_height_m), 16, 8)
+            : make_cylinder(0.5 * diameter_m, crown_height_m, 16);
     double x = 0.0;
     double y = 0.0;
     double z = 0.0;
@@ -911,7 +971,8 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLo
 
   if (buildings == 0 && !options.allow_no_buildings) {
     std::ostringstream message;
-    message << path.string() << ": no buildings in the OSM data (no building=* way or multipolygon could be built";
+    message << path.string()
+            << ": no buildings in the OSM data (no building=* way or multipolygon could be built";
     if (!world.warnings.empty()) message << "; " << world.warnings.front();
     message << ")";
     return make_error(ErrorCode::kNotFound, message.str());

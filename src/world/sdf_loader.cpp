@@ -1,8 +1,6 @@
 // Gazebo SDF worlds through sdformat 12: tessellated primitives, meshes, polylines and heightmaps
 // placed by their resolved poses, materials from custom elements, rules and defaults, and the
 // <spherical_coordinates> origin.
-#include <sdf/sdf.hh>
-
 #include <console_bridge/console.h>
 #include <expat.h>
 #include <jpeglib.h>
@@ -20,6 +18,7 @@
 #include <mutex>
 #include <numbers>
 #include <optional>
+#include <sdf/sdf.hh>
 #include <set>
 #include <sstream>
 
@@ -36,7 +35,8 @@ namespace {
 
 // Surface of revolution around z from a profile of (radius, z) points going from top to bottom;
 // entries of zero radius are poles (one vertex). x and y are scaled to make ellipsoids.
-TriangleMesh lathe(const std::vector<std::pair<double, double>>& profile, int segments, double scale_x, double scale_y) {
+TriangleMesh lathe(const std::vector<std::pair<double, double>>& profile, int segments,
+                   double scale_x, double scale_y) {
   TriangleMesh mesh;
   std::vector<std::vector<int>> rings;  // vertex indices per profile entry (one for a pole)
   for (const auto& [radius, z] : profile) {
@@ -49,7 +49,8 @@ TriangleMesh lathe(const std::vector<std::pair<double, double>>& profile, int se
         const double phi = 2.0 * std::numbers::pi * j / segments;
         ring.push_back(static_cast<int>(mesh.vertices_m.size()));
         mesh.vertices_m.emplace_back(static_cast<float>(scale_x * radius * std::cos(phi)),
-                                     static_cast<float>(scale_y * radius * std::sin(phi)), static_cast<float>(z));
+                                     static_cast<float>(scale_y * radius * std::sin(phi)),
+                                     static_cast<float>(z));
       }
     }
     rings.push_back(std::move(ring));
@@ -85,7 +86,8 @@ TriangleMesh make_box(const Eigen::Vector3d& size_m) {
                                  static_cast<float>((i & 4) != 0 ? half.z() : -half.z()));
   }
   // Each face counter-clockwise seen from outside.
-  constexpr int kQuads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  constexpr int kQuads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3},
+                                {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
   for (const auto& q : kQuads) {
     mesh.triangles.emplace_back(q[0], q[1], q[2]);
     mesh.triangles.emplace_back(q[0], q[2], q[3]);
@@ -96,7 +98,8 @@ TriangleMesh make_box(const Eigen::Vector3d& size_m) {
 TriangleMesh make_cylinder(double radius_m, double length_m, int segments) {
   segments = std::max(segments, 3);
   const double half = 0.5 * length_m;
-  return lathe({{0.0, half}, {radius_m, half}, {radius_m, -half}, {0.0, -half}}, segments, 1.0, 1.0);
+  return lathe({{0.0, half}, {radius_m, half}, {radius_m, -half}, {0.0, -half}}, segments, 1.0,
+               1.0);
 }
 
 TriangleMesh make_ellipsoid(const Eigen::Vector3d& radii_m, int segments, int rings) {
@@ -105,7 +108,8 @@ TriangleMesh make_ellipsoid(const Eigen::Vector3d& radii_m, int segments, int ri
   std::vector<std::pair<double, double>> profile;
   for (int k = 0; k <= rings; ++k) {
     const double theta = std::numbers::pi * k / rings;
-    profile.emplace_back(k == 0 || k == rings ? 0.0 : std::sin(theta), radii_m.z() * std::cos(theta));
+    profile.emplace_back(k == 0 || k == rings ? 0.0 : std::sin(theta),
+                         radii_m.z() * std::cos(theta));
   }
   return lathe(profile, segments, radii_m.x(), radii_m.y());
 }
@@ -117,34 +121,40 @@ TriangleMesh make_capsule(double radius_m, double length_m, int segments, int ri
   std::vector<std::pair<double, double>> profile;
   for (int k = 0; k <= half_rings; ++k) {  // top hemisphere, pole to equator
     const double theta = 0.5 * std::numbers::pi * k / half_rings;
-    profile.emplace_back(k == 0 ? 0.0 : radius_m * std::sin(theta), half + radius_m * std::cos(theta));
+    profile.emplace_back(k == 0 ? 0.0 : radius_m * std::sin(theta),
+                         half + radius_m * std::cos(theta));
   }
   for (int k = 0; k <= half_rings; ++k) {  // bottom hemisphere, equator to pole
     const double theta = 0.5 * std::numbers::pi + 0.5 * std::numbers::pi * k / half_rings;
-    profile.emplace_back(k == half_rings ? 0.0 : radius_m * std::sin(theta), -half + radius_m * std::cos(theta));
+    profile.emplace_back(k == half_rings ? 0.0 : radius_m * std::sin(theta),
+                         -half + radius_m * std::cos(theta));
   }
   return lathe(profile, segments, 1.0, 1.0);
 }
 
 TriangleMesh make_plane(const Eigen::Vector3d& normal, const Eigen::Vector2d& size_m) {
-  const Eigen::Vector3d n = normal.norm() > 0.0 ? Eigen::Vector3d(normal.normalized()) : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d n =
+      normal.norm() > 0.0 ? Eigen::Vector3d(normal.normalized()) : Eigen::Vector3d::UnitZ();
   Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX() - n * n.x();
   if (x_axis.norm() < 1e-6) x_axis = Eigen::Vector3d::UnitY() - n * n.y();
   x_axis.normalize();
   const Eigen::Vector3d y_axis = n.cross(x_axis);
   TriangleMesh mesh;
   for (const auto& [sx, sy] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
-    mesh.vertices_m.push_back((0.5 * sx * size_m.x() * x_axis + 0.5 * sy * size_m.y() * y_axis).cast<float>());
+    mesh.vertices_m.push_back(
+        (0.5 * sx * size_m.x() * x_axis + 0.5 * sy * size_m.y() * y_axis).cast<float>());
   }
   mesh.triangles.emplace_back(0, 1, 2);
   mesh.triangles.emplace_back(0, 2, 3);
   return mesh;
 }
 
-Result<TriangleMesh> make_height_grid(const std::vector<double>& heights_m, int rows, int columns, double size_x_m,
-                                      double size_y_m) {
-  if (rows < 2 || columns < 2 || heights_m.size() != static_cast<std::size_t>(rows) * static_cast<std::size_t>(columns)) {
-    return make_error(ErrorCode::kInvalidArgument, "height grid: need at least 2 x 2 heights, rows * columns of them");
+Result<TriangleMesh> make_height_grid(const std::vector<double>& heights_m, int rows, int columns,
+                                      double size_x_m, double size_y_m) {
+  if (rows < 2 || columns < 2 ||
+      heights_m.size() != static_cast<std::size_t>(rows) * static_cast<std::size_t>(columns)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "height grid: need at least 2 x 2 heights, rows * columns of them");
   }
   TriangleMesh mesh;
   mesh.vertices_m.reserve(heights_m.size());
@@ -152,8 +162,11 @@ Result<TriangleMesh> make_height_grid(const std::vector<double>& heights_m, int 
     for (int c = 0; c < columns; ++c) {
       const double x = -0.5 * size_x_m + size_x_m * c / (columns - 1);
       const double y = 0.5 * size_y_m - size_y_m * r / (rows - 1);
-      mesh.vertices_m.emplace_back(static_cast<float>(x), static_cast<float>(y),
-                                   static_cast<float>(heights_m[static_cast<std::size_t>(r * columns + c)]));
+      mesh.vertices_m.emplace_back(
+          static_cast<float>(x), static_cast<float>(y),
+          static_cast<float>(
+              heights_m[static_cast<std::size_t>(r) * static_cast<std::size_t>(columns) +
+                        static_cast<std::size_t>(c)]));
     }
   }
   for (int r = 0; r + 1 < rows; ++r) {
@@ -182,7 +195,8 @@ Geodetic world_point_to_geodetic(const GeoOrigin& origin, const Eigen::Vector3d&
 Eigen::Vector3d geodetic_to_world_point(const GeoOrigin& origin, const Geodetic& point) {
   const double h = origin.heading_deg * std::numbers::pi / 180.0;
   const Eigen::Vector3d enu = ecef_to_enu(geodetic_to_ecef(point), origin.origin);
-  return {enu.x() * std::cos(h) + enu.y() * std::sin(h), -enu.x() * std::sin(h) + enu.y() * std::cos(h), enu.z()};
+  return {enu.x() * std::cos(h) + enu.y() * std::sin(h),
+          -enu.x() * std::sin(h) + enu.y() * std::cos(h), enu.z()};
 }
 
 // -------------------------------------------------------------------------------------------------
@@ -235,8 +249,8 @@ class ConsoleCapture {
   }
   class Silent final : public console_bridge::OutputHandler {
    public:
-    void log(const std::string& /*text*/, console_bridge::LogLevel /*level*/, const char* /*filename*/,
-             int /*line*/) override {}
+    void log(const std::string& /*text*/, console_bridge::LogLevel /*level*/,
+             const char* /*filename*/, int /*line*/) override {}
   };
   std::lock_guard<std::mutex> lock_;
   std::ostringstream buffer_;
@@ -254,7 +268,8 @@ struct IncludeSpec {
   std::string name;
   std::optional<std::string> pose;  // six numbers relative to the world
   std::optional<bool> is_static;
-  bool unusual = false;  // merge, placement_frame, a pose in another frame or format: left to sdformat
+  bool unusual =
+      false;  // merge, placement_frame, a pose in another frame or format: left to sdformat
 };
 
 // What expat sees of the file before sdformat does: well-formedness (sdformat reports XML errors
@@ -281,8 +296,8 @@ Result<XmlScan> scan_xml(const fs::path& path) {
     std::string characters;
   } state;
   state.scan.text = content.str();
-  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(XML_ParserCreate(nullptr),
-                                                                                       &XML_ParserFree);
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(
+      XML_ParserCreate(nullptr), &XML_ParserFree);
   state.parser = parser.get();
   XML_SetUserData(parser.get(), &state);
   XML_SetElementHandler(
@@ -312,9 +327,11 @@ Result<XmlScan> scan_xml(const fs::path& path) {
           IncludeSpec& include = st->scan.includes.back();
           if (element == "pose") {
             for (const XML_Char** a = attributes; *a != nullptr; a += 2) {
-              if (std::string(a[0]) != "relative_to" || std::string(a[1]) != "world") include.unusual = true;
+              if (std::string(a[0]) != "relative_to" || std::string(a[1]) != "world")
+                include.unusual = true;
             }
-          } else if (element != "uri" && element != "name" && element != "static" && element != "plugin") {
+          } else if (element != "uri" && element != "name" && element != "static" &&
+                     element != "plugin") {
             include.unusual = true;  // placement_frame, experimental parameters...
           }
         }
@@ -329,7 +346,8 @@ Result<XmlScan> scan_xml(const fs::path& path) {
           std::string value = st->characters;
           const auto first = value.find_first_not_of(" \t\r\n");
           const auto last = value.find_last_not_of(" \t\r\n");
-          value = first == std::string::npos ? std::string() : value.substr(first, last - first + 1);
+          value =
+              first == std::string::npos ? std::string() : value.substr(first, last - first + 1);
           const std::string& element = st->stack[3];
           if (element == "uri") include.uri = value;
           if (element == "name") include.name = value;
@@ -345,8 +363,9 @@ Result<XmlScan> scan_xml(const fs::path& path) {
           }
         }
         if (depth == 3 && st->stack[2] == "include" && st->stack[1] == "world") {
-          st->scan.includes.back().end = static_cast<std::size_t>(XML_GetCurrentByteIndex(st->parser)) +
-                                         static_cast<std::size_t>(XML_GetCurrentByteCount(st->parser));
+          st->scan.includes.back().end =
+              static_cast<std::size_t>(XML_GetCurrentByteIndex(st->parser)) +
+              static_cast<std::size_t>(XML_GetCurrentByteCount(st->parser));
         }
         st->stack.pop_back();
         st->characters.clear();
@@ -355,14 +374,16 @@ Result<XmlScan> scan_xml(const fs::path& path) {
     static_cast<State*>(data)->characters.append(text, static_cast<std::size_t>(length));
   });
   const std::string& text = state.scan.text;
-  if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), XML_TRUE) == XML_STATUS_ERROR) {
-    return make_error(ErrorCode::kParse, path.string() + ":" + std::to_string(XML_GetCurrentLineNumber(parser.get())) +
-                                             ":" + std::to_string(XML_GetCurrentColumnNumber(parser.get())) +
-                                             ": malformed XML: " + XML_ErrorString(XML_GetErrorCode(parser.get())));
+  if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), XML_TRUE) ==
+      XML_STATUS_ERROR) {
+    return make_error(ErrorCode::kParse,
+                      path.string() + ":" + std::to_string(XML_GetCurrentLineNumber(parser.get())) +
+                          ":" + std::to_string(XML_GetCurrentColumnNumber(parser.get())) +
+                          ": malformed XML: " + XML_ErrorString(XML_GetErrorCode(parser.get())));
   }
   if (state.scan.root != "sdf") {
-    return make_error(ErrorCode::kParse,
-                      path.string() + ": not an SDF file (root element <" + state.scan.root + ">, expected <sdf>)");
+    return make_error(ErrorCode::kParse, path.string() + ": not an SDF file (root element <" +
+                                             state.scan.root + ">, expected <sdf>)");
   }
   return std::move(state.scan);
 }
@@ -407,7 +428,8 @@ class Resolver {
   explicit Resolver(const SdfLoadOptions& options) {
     dirs_ = options.model_paths;
     if (options.use_environment_paths) {
-      for (const char* variable : {"GAZEBO_MODEL_PATH", "GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "SDF_PATH"}) {
+      for (const char* variable :
+           {"GAZEBO_MODEL_PATH", "GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "SDF_PATH"}) {
         for (auto& dir : split_path_list(std::getenv(variable))) dirs_.push_back(std::move(dir));
       }
     }
@@ -417,7 +439,8 @@ class Resolver {
 
   // The file or folder a URI names; nullopt when nothing exists. `base_dir` is the folder of the
   // SDF file that holds the URI (relative URIs are relative to it, as in SDF 1.7+).
-  [[nodiscard]] std::optional<fs::path> resolve(const std::string& uri, const fs::path& base_dir) const {
+  [[nodiscard]] std::optional<fs::path> resolve(const std::string& uri,
+                                                const fs::path& base_dir) const {
     std::error_code ec;
     const auto exists = [&](const fs::path& p) { return fs::exists(p, ec); };
     if (uri.rfind("model://", 0) == 0) {
@@ -454,7 +477,8 @@ std::string where(const sdf::ElementPtr& element) {
   if (!element) return "";
   // Elements parsed from text (see load_sdf_world) have no file: the placeholder is replaced by the
   // world's path in the messages.
-  std::string out = element->FilePath().empty() ? std::string(sdf::kSdfStringSource) : element->FilePath();
+  std::string out =
+      element->FilePath().empty() ? std::string(sdf::kSdfStringSource) : element->FilePath();
   // Appends rather than "a" + b: GCC 12 warns falsely (-Wrestrict) on the latter here.
   if (const auto line = element->LineNumber()) out.append(":").append(std::to_string(*line));
   return out;
@@ -492,9 +516,10 @@ void rename_duplicate_models(const sdf::ElementPtr& parent, std::vector<std::str
     }
   }
   for (const auto& [name, copies] : renamed) {
-    warnings.push_back(where(parent) + ": " + std::to_string(copies + 1) + " models named '" + name +
-                       "' (SDFormat needs unique names, Gazebo classic accepted them): copies renamed '" + name +
-                       "_2'...");
+    warnings.push_back(
+        where(parent) + ": " + std::to_string(copies + 1) + " models named '" + name +
+        "' (SDFormat needs unique names, Gazebo classic accepted them): copies renamed '" + name +
+        "_2'...");
   }
 }
 
@@ -503,16 +528,19 @@ void rename_duplicate_models(const sdf::ElementPtr& parent, std::vector<std::str
 std::map<std::string, ignition::math::Pose3d> state_poses(const sdf::ElementPtr& world) {
   std::map<std::string, ignition::math::Pose3d> poses;
   for (auto state = world->GetElementImpl("state"); state; state = state->GetNextElement("state")) {
-    for (auto model = state->GetElementImpl("model"); model; model = model->GetNextElement("model")) {
+    for (auto model = state->GetElementImpl("model"); model;
+         model = model->GetNextElement("model")) {
       if (model->HasElement("pose") && model->HasAttribute("name")) {
-        poses[model->GetAttribute("name")->GetAsString()] = model->GetElementImpl("pose")->Get<ignition::math::Pose3d>();
+        poses[model->GetAttribute("name")->GetAsString()] =
+            model->GetElementImpl("pose")->Get<ignition::math::Pose3d>();
       }
     }
   }
   return poses;
 }
 
-// --- heightmap images -----------------------------------------------------------------------------
+// --- heightmap images
+// -----------------------------------------------------------------------------
 
 struct GrayImage {
   int width = 0;
@@ -527,8 +555,8 @@ struct JpegErrorManager {
 };
 
 // libjpeg reports fatal errors through longjmp; the buffers live outside the jump's reach.
-bool decode_jpeg(std::FILE* file, jpeg_decompress_struct& info, JpegErrorManager& errors, std::vector<unsigned char>& pixels,
-                 int& width, int& height) {
+bool decode_jpeg(std::FILE* file, jpeg_decompress_struct& info, JpegErrorManager& errors,
+                 std::vector<unsigned char>& pixels, int& width, int& height) {
   info.err = jpeg_std_error(&errors.manager);
   errors.manager.error_exit = [](j_common_ptr common) {
     auto* manager = reinterpret_cast<JpegErrorManager*>(common->err);
@@ -548,7 +576,8 @@ bool decode_jpeg(std::FILE* file, jpeg_decompress_struct& info, JpegErrorManager
   height = static_cast<int>(info.output_height);
   pixels.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   while (info.output_scanline < info.output_height) {
-    JSAMPROW row = pixels.data() + static_cast<std::size_t>(info.output_scanline) * static_cast<std::size_t>(width);
+    JSAMPROW row = pixels.data() +
+                   static_cast<std::size_t>(info.output_scanline) * static_cast<std::size_t>(width);
     jpeg_read_scanlines(&info, &row, 1);
   }
   jpeg_finish_decompress(&info);
@@ -565,7 +594,8 @@ Result<GrayImage> read_gray_image(const fs::path& path) {
     png_image png{};
     png.version = PNG_IMAGE_VERSION;
     if (png_image_begin_read_from_file(&png, path.string().c_str()) == 0) {
-      return make_error(ErrorCode::kParse, path.string() + ": cannot read the PNG image: " + png.message);
+      return make_error(ErrorCode::kParse,
+                        path.string() + ": cannot read the PNG image: " + png.message);
     }
     // 16-bit images (DEM-like heightmaps) keep their 16 bits; 8-bit ones are read as 8-bit gray.
     const bool sixteen = (png.format & PNG_FORMAT_FLAG_LINEAR) != 0;
@@ -576,35 +606,42 @@ Result<GrayImage> read_gray_image(const fs::path& path) {
     if (sixteen) {
       std::vector<png_uint_16> pixels(count);
       if (png_image_finish_read(&png, nullptr, pixels.data(), 0, nullptr) == 0) {
-        return make_error(ErrorCode::kParse, path.string() + ": cannot decode the PNG image: " + png.message);
+        return make_error(ErrorCode::kParse,
+                          path.string() + ": cannot decode the PNG image: " + png.message);
       }
       for (const auto v : pixels) image.values.push_back(v / 65535.0);
     } else {
       std::vector<png_byte> pixels(count);
       if (png_image_finish_read(&png, nullptr, pixels.data(), 0, nullptr) == 0) {
-        return make_error(ErrorCode::kParse, path.string() + ": cannot decode the PNG image: " + png.message);
+        return make_error(ErrorCode::kParse,
+                          path.string() + ": cannot decode the PNG image: " + png.message);
       }
       for (const auto v : pixels) image.values.push_back(v / 255.0);
     }
     return image;
   }
   if (extension == ".jpg" || extension == ".jpeg") {
-    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(path.string().c_str(), "rb"), &std::fclose);
+    std::unique_ptr<std::FILE, decltype(&std::fclose)> file(std::fopen(path.string().c_str(), "rb"),
+                                                            &std::fclose);
     if (!file) return make_error(ErrorCode::kIo, path.string() + ": cannot open the JPEG image");
     jpeg_decompress_struct info{};
     JpegErrorManager errors{};
     std::vector<unsigned char> pixels;
     if (!decode_jpeg(file.get(), info, errors, pixels, image.width, image.height)) {
-      return make_error(ErrorCode::kParse, path.string() + ": cannot decode the JPEG image: " + errors.message);
+      return make_error(ErrorCode::kParse,
+                        path.string() + ": cannot decode the JPEG image: " + errors.message);
     }
     for (const auto v : pixels) image.values.push_back(v / 255.0);
     return image;
   }
-  return make_error(ErrorCode::kUnsupported,
-                    path.string() + ": heightmap format not supported (PNG and JPEG images only; DEM files are not)");
+  return make_error(
+      ErrorCode::kUnsupported,
+      path.string() +
+          ": heightmap format not supported (PNG and JPEG images only; DEM files are not)");
 }
 
-// --- the walk ---------------------------------------------------------------------------------------
+// --- the walk
+// ---------------------------------------------------------------------------------------
 
 struct MeshEntry {
   Result<TriangleMesh> mesh = TriangleMesh{};
@@ -614,7 +651,8 @@ struct MeshEntry {
 // What an object inherits from its enclosing models.
 struct Chain {
   std::vector<std::string> names;  // outer to inner
-  std::vector<std::string> uris;   // model:// identity of each model (include URI or model folder), may be empty
+  std::vector<std::string>
+      uris;  // model:// identity of each model (include URI or model folder), may be empty
   std::vector<sdf::ElementPtr> elements;
   bool is_static = false;
 };
@@ -629,7 +667,8 @@ struct Geometry {
 struct BuiltShape {
   TriangleMesh mesh;
   bool is_ground = false;  // plane or heightmap
-  bool is_closed = true;   // primitives and prisms are volumes; meshes, planes and heightmaps may not be
+  bool is_closed =
+      true;  // primitives and prisms are volumes; meshes, planes and heightmaps may not be
   std::string mesh_uri;
   std::string submesh;
   // Meshes: the cached file and the instance's scale, to build the vegetation hull once per file.
@@ -645,7 +684,8 @@ BuiltShape solid(TriangleMesh mesh) {
 
 class SdfWalker {
  public:
-  SdfWalker(const SdfLoadOptions& options, const Resolver& resolver, WorldModel& world, fs::path world_file)
+  SdfWalker(const SdfLoadOptions& options, const Resolver& resolver, WorldModel& world,
+            fs::path world_file)
       : options_(options), resolver_(resolver), world_(world), world_file_(std::move(world_file)) {}
 
   // What an <include> changes in the model it brings in.
@@ -674,7 +714,8 @@ class SdfWalker {
       }
       const Eigen::Isometry3d world_from_link = world_from_model * to_isometry(link_pose);
       for (const Geometry& geometry : geometries(*link)) {
-        const std::string object_name = join(chain.names) + "/" + link->Name() + "/" + geometry.name;
+        const std::string object_name =
+            join(chain.names) + "/" + link->Name() + "/" + geometry.name;
         auto shapes = build(geometry, object_name);
         for (auto& shape : shapes) {
           WorldObject object;
@@ -712,7 +753,8 @@ class SdfWalker {
   [[nodiscard]] std::string search_note() const {
     std::string note = " (searched: ";
     if (resolver_.dirs().empty()) return note + "no model paths)";
-    for (std::size_t i = 0; i < resolver_.dirs().size(); ++i) note += (i > 0 ? ", " : "") + resolver_.dirs()[i].string();
+    for (std::size_t i = 0; i < resolver_.dirs().size(); ++i)
+      note += (i > 0 ? ", " : "") + resolver_.dirs()[i].string();
     return note + ")";
   }
 
@@ -745,14 +787,16 @@ class SdfWalker {
     if (collisions) {
       for (uint64_t c = 0; c < link.CollisionCount(); ++c) {
         const sdf::Collision* collision = link.CollisionByIndex(c);
-        out.push_back({collision->Name(), collision->Element(), collision->Geom(), pose_of(collision->SemanticPose())});
+        out.push_back({collision->Name(), collision->Element(), collision->Geom(),
+                       pose_of(collision->SemanticPose())});
       }
     }
     if (options_.geometry == GeometrySource::kVisual ||
         (options_.geometry == GeometrySource::kCollisionElseVisual && link.CollisionCount() == 0)) {
       for (uint64_t v = 0; v < link.VisualCount(); ++v) {
         const sdf::Visual* visual = link.VisualByIndex(v);
-        out.push_back({visual->Name(), visual->Element(), visual->Geom(), pose_of(visual->SemanticPose())});
+        out.push_back(
+            {visual->Name(), visual->Element(), visual->Geom(), pose_of(visual->SemanticPose())});
       }
     }
     return out;
@@ -778,7 +822,8 @@ class SdfWalker {
         break;
       }
       case sdf::GeometryType::CYLINDER:
-        out.push_back(solid(make_cylinder(g.CylinderShape()->Radius(), g.CylinderShape()->Length(), segments)));
+        out.push_back(solid(
+            make_cylinder(g.CylinderShape()->Radius(), g.CylinderShape()->Length(), segments)));
         break;
       case sdf::GeometryType::SPHERE: {
         const double r = g.SphereShape()->Radius();
@@ -786,7 +831,8 @@ class SdfWalker {
         break;
       }
       case sdf::GeometryType::CAPSULE:
-        out.push_back(solid(make_capsule(g.CapsuleShape()->Radius(), g.CapsuleShape()->Length(), segments, rings)));
+        out.push_back(solid(
+            make_capsule(g.CapsuleShape()->Radius(), g.CapsuleShape()->Length(), segments, rings)));
         break;
       case sdf::GeometryType::ELLIPSOID: {
         const auto r = g.EllipsoidShape()->Radii();
@@ -797,9 +843,11 @@ class SdfWalker {
         const sdf::Plane* plane = g.PlaneShape();
         const auto n = plane->Normal();
         Eigen::Vector2d size(plane->Size().X(), plane->Size().Y());
-        const auto size_element = plane->Element() ? plane->Element()->GetElementImpl("size") : nullptr;
+        const auto size_element =
+            plane->Element() ? plane->Element()->GetElementImpl("size") : nullptr;
         if (!size_element || !size_element->GetValue() || !size_element->GetValue()->GetSet()) {
-          size = Eigen::Vector2d::Constant(options_.infinite_plane_size_m);  // Gazebo's plane is infinite
+          size = Eigen::Vector2d::Constant(
+              options_.infinite_plane_size_m);  // Gazebo's plane is infinite
         }
         BuiltShape shape = solid(make_plane({n.X(), n.Y(), n.Z()}, size));
         shape.is_ground = true;
@@ -812,7 +860,8 @@ class SdfWalker {
         break;
       }
       case sdf::GeometryType::HEIGHTMAP: {
-        if (auto shape = heightmap(*g.HeightmapShape(), object_name)) out.push_back(std::move(*shape));
+        if (auto shape = heightmap(*g.HeightmapShape(), object_name))
+          out.push_back(std::move(*shape));
         break;
       }
       case sdf::GeometryType::EMPTY:
@@ -821,7 +870,8 @@ class SdfWalker {
         if (element && element->HasElement("polyline")) {
           polylines(element, object_name, out);
         } else if (element && element->HasElement("image")) {
-          warn(where(geometry.element) + ": " + object_name + ": <image> geometry skipped (not supported)");
+          warn(where(geometry.element) + ": " + object_name +
+               ": <image> geometry skipped (not supported)");
         }
         break;
       }
@@ -831,8 +881,9 @@ class SdfWalker {
 
   // The folder relative URIs start from: the file the element came from.
   fs::path base_dir(const std::string& file_path) const {
-    return file_path.empty() || file_path == sdf::kSdfStringSource ? world_file_.parent_path()
-                                                                   : fs::path(file_path).parent_path();
+    return file_path.empty() || file_path == sdf::kSdfStringSource
+               ? world_file_.parent_path()
+               : fs::path(file_path).parent_path();
   }
 
   std::optional<BuiltShape> mesh(const sdf::Mesh& mesh, const std::string& object_name) {
@@ -844,7 +895,8 @@ class SdfWalker {
       if (entry.second++ == 0) entry.first = where(mesh.Element()) + ": " + object_name;
       return std::nullopt;
     }
-    const std::string key = resolved->string() + "|" + mesh.Submesh() + "|" + (mesh.CenterSubmesh() ? "c" : "");
+    const std::string key =
+        resolved->string() + "|" + mesh.Submesh() + "|" + (mesh.CenterSubmesh() ? "c" : "");
     auto& entry = mesh_cache_[key];
     if (!entry) {
       entry = std::make_shared<MeshEntry>();
@@ -855,9 +907,11 @@ class SdfWalker {
       return std::nullopt;
     }
     const auto s = mesh.Scale();
-    const Eigen::Vector3f scale(static_cast<float>(s.X()), static_cast<float>(s.Y()), static_cast<float>(s.Z()));
+    const Eigen::Vector3f scale(static_cast<float>(s.X()), static_cast<float>(s.Y()),
+                                static_cast<float>(s.Z()));
     if (!(scale.array().abs() > 0.0F).all() || !scale.allFinite()) {
-      warn(where(mesh.Element()) + ": " + object_name + " skipped: mesh scale has a zero component");
+      warn(where(mesh.Element()) + ": " + object_name +
+           " skipped: mesh scale has a zero component");
       return std::nullopt;
     }
     BuiltShape shape;
@@ -878,18 +932,22 @@ class SdfWalker {
     }
   }
 
-  static Result<TriangleMesh> read_selected(const fs::path& path, const std::string& submesh, bool center) {
+  static Result<TriangleMesh> read_selected(const fs::path& path, const std::string& submesh,
+                                            bool center) {
     auto parts = read_mesh_file(path);
     if (!parts.ok()) return parts.error();
     TriangleMesh merged;
     for (const auto& part : *parts) {
       if (!submesh.empty() && part.node_name != submesh && part.mesh_name != submesh) continue;
       const int base = static_cast<int>(merged.vertices_m.size());
-      merged.vertices_m.insert(merged.vertices_m.end(), part.mesh.vertices_m.begin(), part.mesh.vertices_m.end());
-      for (const auto& t : part.mesh.triangles) merged.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+      merged.vertices_m.insert(merged.vertices_m.end(), part.mesh.vertices_m.begin(),
+                               part.mesh.vertices_m.end());
+      for (const auto& t : part.mesh.triangles)
+        merged.triangles.push_back(t + Eigen::Vector3i::Constant(base));
     }
     if (merged.triangles.empty()) {
-      return make_error(ErrorCode::kNotFound, path.string() + ": no submesh named '" + submesh + "'");
+      return make_error(ErrorCode::kNotFound,
+                        path.string() + ": no submesh named '" + submesh + "'");
     }
     if (center && !submesh.empty()) {
       // Gazebo's <center>: the submesh's bounding box centre moves to the origin.
@@ -905,17 +963,19 @@ class SdfWalker {
     return merged;
   }
 
-  std::optional<BuiltShape> heightmap(const sdf::Heightmap& heightmap, const std::string& object_name) {
+  std::optional<BuiltShape> heightmap(const sdf::Heightmap& heightmap,
+                                      const std::string& object_name) {
     const fs::path base = base_dir(heightmap.FilePath());
     const auto resolved = resolver_.resolve(heightmap.Uri(), base);
     if (!resolved) {
-      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap " + heightmap.Uri() + " not found, skipped" +
-           search_note());
+      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap " + heightmap.Uri() +
+           " not found, skipped" + search_note());
       return std::nullopt;
     }
     auto image = read_gray_image(*resolved);
     if (!image.ok()) {
-      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap skipped: " + image.error().message);
+      warn(where(heightmap.Element()) + ": " + object_name +
+           ": heightmap skipped: " + image.error().message);
       return std::nullopt;
     }
     const auto size = heightmap.Size();
@@ -926,7 +986,8 @@ class SdfWalker {
     for (const double v : image->values) heights_m.push_back(position.Z() + v * size.Z());
     auto grid = make_height_grid(heights_m, image->height, image->width, size.X(), size.Y());
     if (!grid.ok()) {
-      warn(where(heightmap.Element()) + ": " + object_name + ": heightmap skipped: " + grid.error().message);
+      warn(where(heightmap.Element()) + ": " + object_name +
+           ": heightmap skipped: " + grid.error().message);
       return std::nullopt;
     }
     for (auto& v : grid->vertices_m) {
@@ -942,16 +1003,20 @@ class SdfWalker {
 
   // <polyline>: the first is the outline, later ones inside it are holes, others separate prisms;
   // all extruded from z = 0 up to their height, as Gazebo does.
-  void polylines(const sdf::ElementPtr& geometry, const std::string& object_name, std::vector<BuiltShape>& out) {
+  void polylines(const sdf::ElementPtr& geometry, const std::string& object_name,
+                 std::vector<BuiltShape>& out) {
     struct Line {
       Ring2 points;
       double height_m = 0.0;
     };
     std::vector<Line> lines;
-    for (auto polyline = geometry->GetElementImpl("polyline"); polyline; polyline = polyline->GetNextElement("polyline")) {
+    for (auto polyline = geometry->GetElementImpl("polyline"); polyline;
+         polyline = polyline->GetNextElement("polyline")) {
       Line line;
-      line.height_m = polyline->HasElement("height") ? polyline->GetElementImpl("height")->Get<double>() : 1.0;
-      for (auto point = polyline->GetElementImpl("point"); point; point = point->GetNextElement("point")) {
+      line.height_m =
+          polyline->HasElement("height") ? polyline->GetElementImpl("height")->Get<double>() : 1.0;
+      for (auto point = polyline->GetElementImpl("point"); point;
+           point = point->GetNextElement("point")) {
         const auto p = point->Get<ignition::math::Vector2d>();
         line.points.emplace_back(p.X(), p.Y());
       }
@@ -962,7 +1027,9 @@ class SdfWalker {
       bool in = false;
       for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
         if ((ring[i].y() > p.y()) != (ring[j].y() > p.y()) &&
-            p.x() < (ring[j].x() - ring[i].x()) * (p.y() - ring[i].y()) / (ring[j].y() - ring[i].y()) + ring[i].x()) {
+            p.x() <
+                (ring[j].x() - ring[i].x()) * (p.y() - ring[i].y()) / (ring[j].y() - ring[i].y()) +
+                    ring[i].x()) {
           in = !in;
         }
       }
@@ -995,9 +1062,11 @@ class SdfWalker {
     Material material;
     std::optional<ObjectKind> kind;
   };
-  std::optional<CustomMaterial> custom_material(const sdf::ElementPtr& element, const std::string& object_name) {
+  std::optional<CustomMaterial> custom_material(const sdf::ElementPtr& element,
+                                                const std::string& object_name) {
     if (!element) return std::nullopt;
-    const auto attribute = [](const sdf::ElementPtr& e, const std::string& key) -> std::optional<std::string> {
+    const auto attribute = [](const sdf::ElementPtr& e,
+                              const std::string& key) -> std::optional<std::string> {
       if (!e->HasAttribute(key)) return std::nullopt;
       return e->GetAttribute(key)->GetAsString();
     };
@@ -1015,7 +1084,8 @@ class SdfWalker {
     };
     if (const auto vegetation = element->FindElement("skytrace:vegetation")) {
       return CustomMaterial{
-          Material{MaterialClass::kVegetation, attenuation(vegetation, options_.vegetation_attenuation_db_per_m)},
+          Material{MaterialClass::kVegetation,
+                   attenuation(vegetation, options_.vegetation_attenuation_db_per_m)},
           ObjectKind::kTree};
     }
     const auto custom = element->FindElement("skytrace:material");
@@ -1024,30 +1094,36 @@ class SdfWalker {
     if (const auto name = attribute(custom, "class")) {
       auto parsed = parse_material_class(*name);
       if (!parsed.ok()) {
-        warn(where(element) + ": " + object_name + ": <skytrace:material> ignored: " + parsed.error().message);
+        warn(where(element) + ": " + object_name +
+             ": <skytrace:material> ignored: " + parsed.error().message);
         return std::nullopt;
       }
       out.material.material_class = *parsed;
     } else {
-      warn(where(element) + ": " + object_name + ": <skytrace:material> without a class attribute ignored");
+      warn(where(element) + ": " + object_name +
+           ": <skytrace:material> without a class attribute ignored");
       return std::nullopt;
     }
     if (out.material.is_vegetation()) {
-      out.material.attenuation_db_per_m = attenuation(custom, options_.vegetation_attenuation_db_per_m);
+      out.material.attenuation_db_per_m =
+          attenuation(custom, options_.vegetation_attenuation_db_per_m);
     }
     if (const auto kind = attribute(custom, "kind")) {
-      for (const ObjectKind k : {ObjectKind::kBuilding, ObjectKind::kTree, ObjectKind::kGround, ObjectKind::kOther}) {
+      for (const ObjectKind k :
+           {ObjectKind::kBuilding, ObjectKind::kTree, ObjectKind::kGround, ObjectKind::kOther}) {
         if (object_kind_name(k) == *kind) out.kind = k;
       }
-      if (!out.kind) warn(where(element) + ": " + object_name + ": kind='" + *kind + "' ignored (building, tree, ground, other)");
+      if (!out.kind)
+        warn(where(element) + ": " + object_name + ": kind='" + *kind +
+             "' ignored (building, tree, ground, other)");
     }
     return out;
   }
 
   // Scenario rules, then custom elements (collision, link, models inner to outer), then defaults.
   // Returns false when the object must be dropped (vegetation without a volume).
-  bool assign_material(WorldObject& object, const Chain& chain, const sdf::Link& link, const Geometry& geometry,
-                       BuiltShape& shape) {
+  bool assign_material(WorldObject& object, const Chain& chain, const sdf::Link& link,
+                       const Geometry& geometry, BuiltShape& shape) {
     std::vector<std::string> names = {object.name};
     names.insert(names.end(), chain.names.begin(), chain.names.end());
     names.insert(names.end(), chain.uris.begin(), chain.uris.end());
@@ -1074,19 +1150,22 @@ class SdfWalker {
       }
     }
     if (!decided) {
-      const bool vegetation = std::any_of(chain.names.begin(), chain.names.end(), name_suggests_vegetation) ||
-                              std::any_of(chain.uris.begin(), chain.uris.end(), name_suggests_vegetation) ||
-                              name_suggests_vegetation(shape.mesh_uri) || name_suggests_vegetation(shape.submesh);
+      const bool vegetation =
+          std::any_of(chain.names.begin(), chain.names.end(), name_suggests_vegetation) ||
+          std::any_of(chain.uris.begin(), chain.uris.end(), name_suggests_vegetation) ||
+          name_suggests_vegetation(shape.mesh_uri) || name_suggests_vegetation(shape.submesh);
       if (shape.is_ground) {
         object.material = Material{MaterialClass::kGround, 0.0};
       } else if (vegetation) {
-        object.material = Material{MaterialClass::kVegetation, options_.vegetation_attenuation_db_per_m};
+        object.material =
+            Material{MaterialClass::kVegetation, options_.vegetation_attenuation_db_per_m};
       } else {
         object.material = Material{MaterialClass::kConcrete, 0.0};
       }
     }
     if (object.material.is_vegetation() && shape.is_ground) {
-      warn(object.name + ": a plane or heightmap cannot be vegetation (no volume), kept as opaque ground");
+      warn(object.name +
+           ": a plane or heightmap cannot be vegetation (no volume), kept as opaque ground");
       object.material = Material{MaterialClass::kGround, 0.0};
     }
     if (object.material.is_vegetation() && !shape.is_closed && options_.vegetation_convex_hull) {
@@ -1112,7 +1191,8 @@ class SdfWalker {
     auto& entry = *shape.mesh_entry;
     if (!entry.hull) entry.hull = convex_hull(entry.mesh->vertices_m);
     if (!entry.hull->ok()) {
-      warn(object.name + ": vegetation skipped, its mesh has no volume: " + entry.hull->error().message);
+      warn(object.name +
+           ": vegetation skipped, its mesh has no volume: " + entry.hull->error().message);
       return false;
     }
     object.mesh = **entry.hull;
@@ -1153,7 +1233,8 @@ class SdfWalker {
   WorldModel& world_;
   fs::path world_file_;
   std::map<std::string, std::shared_ptr<MeshEntry>> mesh_cache_;
-  std::map<std::string, std::pair<std::string, int>> missing_meshes_;  // uri -> (first place, count)
+  std::map<std::string, std::pair<std::string, int>>
+      missing_meshes_;  // uri -> (first place, count)
   std::set<std::size_t> unclassified_;
 };
 
@@ -1161,12 +1242,15 @@ class SdfWalker {
 
 Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& options) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return make_error(ErrorCode::kIo, path.string() + ": SDF file not found");
+  if (!fs::is_regular_file(path, ec))
+    return make_error(ErrorCode::kIo, path.string() + ": SDF file not found");
   auto scan = scan_xml(path);
   if (!scan.ok()) return scan.error();
-  if (options.round_segments < 3 || options.round_rings < 2 || !(options.infinite_plane_size_m > 0.0)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      path.string() + ": SDF options: at least 3 segments, 2 rings and a positive plane size");
+  if (options.round_segments < 3 || options.round_rings < 2 ||
+      !(options.infinite_plane_size_m > 0.0)) {
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        path.string() + ": SDF options: at least 3 segments, 2 rings and a positive plane size");
   }
 
   const Resolver resolver(options);
@@ -1193,7 +1277,8 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
       if (include.unusual || include.uri.empty() || include.end <= include.begin) continue;
       if (include.uri.rfind("http://", 0) == 0 || include.uri.rfind("https://", 0) == 0) continue;
       if (include.pose && !parse_pose(*include.pose)) continue;
-      if (include.name.empty() ? !scan->referenced_frames.empty() : scan->referenced_frames.count(include.name) != 0) {
+      if (include.name.empty() ? !scan->referenced_frames.empty()
+                               : scan->referenced_frames.count(include.name) != 0) {
         continue;
       }
       for (std::size_t i = include.begin; i < include.end; ++i) {
@@ -1223,11 +1308,14 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
         const auto open = message.find('[');
         const auto close = message.rfind(']');
         const std::string uri =
-            open != std::string::npos && close != std::string::npos && close > open ? message.substr(open + 1, close - open - 1) : message;
+            open != std::string::npos && close != std::string::npos && close > open
+                ? message.substr(open + 1, close - open - 1)
+                : message;
         auto& entry = missing_models[uri];
         if (entry.second++ == 0) {
           entry.first = error.FilePath() ? *error.FilePath() : path.string();
-          if (error.LineNumber()) entry.first.append(":").append(std::to_string(*error.LineNumber()));
+          if (error.LineNumber())
+            entry.first.append(":").append(std::to_string(*error.LineNumber()));
         }
       } else {
         fatal.push_back(error_text(error));
@@ -1244,14 +1332,17 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   if (!parsed || !fatal.empty()) return fail("malformed SDF");
 
   sdf::ElementPtr world_element;
-  for (auto element = parsed->Root()->GetElementImpl("world"); element; element = element->GetNextElement("world")) {
-    if (options.world_name.empty() || element->GetAttribute("name")->GetAsString() == options.world_name) {
+  for (auto element = parsed->Root()->GetElementImpl("world"); element;
+       element = element->GetNextElement("world")) {
+    if (options.world_name.empty() ||
+        element->GetAttribute("name")->GetAsString() == options.world_name) {
       world_element = element;
       break;
     }
   }
   if (!options.world_name.empty() && !world_element) {
-    return make_error(ErrorCode::kNotFound, path.string() + ": no world named '" + options.world_name + "'");
+    return make_error(ErrorCode::kNotFound,
+                      path.string() + ": no world named '" + options.world_name + "'");
   }
   std::map<std::string, ignition::math::Pose3d> saved_poses;
   if (world_element) {
@@ -1267,8 +1358,8 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   if (world_element) {
     const sdf::World* sdf_world = nullptr;
     for (uint64_t w = 0; w < root.WorldCount(); ++w) {
-      if (root.WorldByIndex(w)->Element() == world_element || root.WorldByIndex(w)->Name() ==
-                                                                    world_element->GetAttribute("name")->GetAsString()) {
+      if (root.WorldByIndex(w)->Element() == world_element ||
+          root.WorldByIndex(w)->Name() == world_element->GetAttribute("name")->GetAsString()) {
         sdf_world = root.WorldByIndex(w);
         break;
       }
@@ -1278,7 +1369,8 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
 
     if (const auto* sc = sdf_world->SphericalCoordinates()) {
       if (sc->Surface() != ignition::math::SphericalCoordinates::EARTH_WGS84) {
-        world.warnings.push_back(where(world_element) + ": <spherical_coordinates> not on EARTH_WGS84, ignored");
+        world.warnings.push_back(where(world_element) +
+                                 ": <spherical_coordinates> not on EARTH_WGS84, ignored");
       } else {
         GeoOrigin origin;
         origin.origin.latitude_deg = sc->LatitudeReference().Degree();
@@ -1288,7 +1380,8 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
         world.geo_origin = origin;
         const auto element = world_element->GetElementImpl("spherical_coordinates");
         if (element && element->HasElement("world_frame_orientation")) {
-          const auto orientation = element->GetElementImpl("world_frame_orientation")->Get<std::string>();
+          const auto orientation =
+              element->GetElementImpl("world_frame_orientation")->Get<std::string>();
           if (orientation != "ENU") {
             world.warnings.push_back(where(element) + ": world_frame_orientation " + orientation +
                                      " read as ENU (the only orientation Gazebo implements)");
@@ -1302,24 +1395,29 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
       ignition::math::Pose3d pose;
       const auto pose_errors = model->SemanticPose().Resolve(pose);
       if (!pose_errors.empty()) {
-        world.warnings.push_back(where(model->Element()) + ": model " + model->Name() +
-                                 " skipped, its pose cannot be resolved: " + error_text(pose_errors.front()));
+        world.warnings.push_back(
+            where(model->Element()) + ": model " + model->Name() +
+            " skipped, its pose cannot be resolved: " + error_text(pose_errors.front()));
         continue;
       }
-      if (const auto saved = saved_poses.find(model->Name()); saved != saved_poses.end()) pose = saved->second;
+      if (const auto saved = saved_poses.find(model->Name()); saved != saved_poses.end())
+        pose = saved->second;
       walker.model(*model, to_isometry(pose), Chain{});
     }
 
     // The includes skytrace instantiates, each model file loaded once.
     std::set<std::string> names_in_use;
-    for (uint64_t m = 0; m < sdf_world->ModelCount(); ++m) names_in_use.insert(sdf_world->ModelByIndex(m)->Name());
+    for (uint64_t m = 0; m < sdf_world->ModelCount(); ++m)
+      names_in_use.insert(sdf_world->ModelByIndex(m)->Name());
     std::map<std::string, std::unique_ptr<sdf::Root>> model_files;
     std::map<std::string, int> renamed;
     for (const IncludeSpec* include : own_includes) {
       const std::string place = path.string() + ":" + std::to_string(include->line);
       const auto found = resolver.resolve(include->uri, path.parent_path());
       std::string file;
-      if (found) file = fs::is_directory(*found, ec) ? sdf::getModelFilePath(found->string()) : found->string();
+      if (found)
+        file =
+            fs::is_directory(*found, ec) ? sdf::getModelFilePath(found->string()) : found->string();
       if (file.empty() || !fs::is_regular_file(file, ec)) {
         auto& entry = missing_models[include->uri];
         if (entry.second++ == 0) entry.first = place;
@@ -1329,7 +1427,9 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
       if (!loaded) {
         loaded = std::make_unique<sdf::Root>();
         sort_errors(loaded->Load(file, config));
-        if (!fatal.empty()) return fail("invalid model " + file + " included at line " + std::to_string(include->line));
+        if (!fatal.empty())
+          return fail("invalid model " + file + " included at line " +
+                      std::to_string(include->line));
       }
       const sdf::Model* model = loaded->Model();
       if (model == nullptr) {
@@ -1346,23 +1446,30 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
       }
       // The include's pose replaces the model's own (SDFormat semantics); <state> wins over both.
       ignition::math::Pose3d pose = include->pose ? *parse_pose(*include->pose) : model->RawPose();
-      if (const auto saved = saved_poses.find(name); saved != saved_poses.end()) pose = saved->second;
-      walker.model(*model, to_isometry(pose), Chain{}, SdfWalker::Overrides{name, include->uri, include->is_static});
+      if (const auto saved = saved_poses.find(name); saved != saved_poses.end())
+        pose = saved->second;
+      walker.model(*model, to_isometry(pose), Chain{},
+                   SdfWalker::Overrides{name, include->uri, include->is_static});
     }
     for (const auto& [name, copies] : renamed) {
-      world.warnings.push_back(path.string() + ": " + std::to_string(copies + 1) + " models named '" + name +
-                               "' (SDFormat needs unique names, Gazebo classic accepted them): copies renamed '" +
-                               name + "_2'...");
+      world.warnings.push_back(
+          path.string() + ": " + std::to_string(copies + 1) + " models named '" + name +
+          "' (SDFormat needs unique names, Gazebo classic accepted them): copies renamed '" + name +
+          "_2'...");
     }
     std::size_t roads = 0;
-    for (auto road = world_element->GetElementImpl("road"); road; road = road->GetNextElement("road")) ++roads;
+    for (auto road = world_element->GetElementImpl("road"); road;
+         road = road->GetNextElement("road"))
+      ++roads;
     if (roads > 0) {
-      world.warnings.push_back(where(world_element) + ": " + std::to_string(roads) +
-                               " <road> element(s) skipped (flat ribbons on the ground do not block signals)");
+      world.warnings.push_back(
+          where(world_element) + ": " + std::to_string(roads) +
+          " <road> element(s) skipped (flat ribbons on the ground do not block signals)");
     }
     if (sdf_world->ActorCount() > 0) {
-      world.warnings.push_back(where(world_element) + ": " + std::to_string(sdf_world->ActorCount()) +
-                               " <actor> element(s) skipped (animated people are not obstacles here)");
+      world.warnings.push_back(
+          where(world_element) + ": " + std::to_string(sdf_world->ActorCount()) +
+          " <actor> element(s) skipped (animated people are not obstacles here)");
     }
   } else if (const sdf::Model* model = root.Model()) {
     world.name = model->Name();
@@ -1370,20 +1477,24 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
     (void)model->SemanticPose().Resolve(pose);
     walker.model(*model, to_isometry(pose), Chain{});
   } else {
-    return make_error(ErrorCode::kNotFound, path.string() + ": the SDF file holds no world and no model");
+    return make_error(ErrorCode::kNotFound,
+                      path.string() + ": the SDF file holds no world and no model");
   }
   for (const auto& [uri, info] : missing_models) {
-    world.warnings.push_back(info.first + ": model " + uri + " not found, " + std::to_string(info.second) +
-                             " include" + (info.second == 1 ? "" : "s") + " skipped");
+    world.warnings.push_back(info.first + ": model " + uri + " not found, " +
+                             std::to_string(info.second) + " include" +
+                             (info.second == 1 ? "" : "s") + " skipped");
   }
   if (!missing_models.empty()) {
     std::string dirs;
     for (const auto& dir : resolver.dirs()) dirs += (dirs.empty() ? "" : ", ") + dir.string();
-    world.warnings.push_back("model:// URIs were searched in: " + (dirs.empty() ? std::string("no model paths") : dirs));
+    world.warnings.push_back("model:// URIs were searched in: " +
+                             (dirs.empty() ? std::string("no model paths") : dirs));
   }
   walker.finish();
   if (!world.geo_origin && !options.geo_origin) {
-    world.warnings.push_back(path.string() + ": no <spherical_coordinates>: the world is not tied to the Earth");
+    world.warnings.push_back(path.string() +
+                             ": no <spherical_coordinates>: the world is not tied to the Earth");
   }
   if (options.geo_origin) world.geo_origin = options.geo_origin;
   for (const auto& line : console.lines()) world.warnings.push_back("sdformat: " + line);

@@ -28,7 +28,8 @@ std::string read_text(const std::filesystem::path& path) {
 }
 
 std::size_t count_matches(const std::string& text, const std::regex& pattern) {
-  return static_cast<std::size_t>(std::distance(std::sregex_iterator(text.begin(), text.end(), pattern), std::sregex_iterator()));
+  return static_cast<std::size_t>(std::distance(
+      std::sregex_iterator(text.begin(), text.end(), pattern), std::sregex_iterator()));
 }
 
 SdfLoadOptions options_with_models(const std::filesystem::path& models) {
@@ -41,9 +42,10 @@ SdfLoadOptions options_with_models(const std::filesystem::path& models) {
 void report(const std::string& what, const WorldModel& world, double seconds) {
   const auto summary = summarize_world(world);
   const auto [low, high] = world_bounds(world);
-  std::cout << what << ": " << seconds << " s, " << summary.objects << " objects, " << summary.triangles
-            << " triangles, buildings " << summary.buildings << ", trees " << summary.trees << ", ground " << summary.ground
-            << ", other " << summary.other << ", bounds (" << low.transpose() << ") - (" << high.transpose() << "), "
+  std::cout << what << ": " << seconds << " s, " << summary.objects << " objects, "
+            << summary.triangles << " triangles, buildings " << summary.buildings << ", trees "
+            << summary.trees << ", ground " << summary.ground << ", other " << summary.other
+            << ", bounds (" << low.transpose() << ") - (" << high.transpose() << "), "
             << world.warnings.size() << " warnings\n";
   ::testing::Test::RecordProperty(what + "_load_s", std::to_string(seconds));
   ::testing::Test::RecordProperty(what + "_triangles", std::to_string(summary.triangles));
@@ -60,19 +62,22 @@ TEST(WorldLoadersReal, CitysimSimpleCity) {
   const auto path = SKYTRACE_SHARED_FILE("worlds/citysim/simple_city.world");
   const auto models = test::shared_data_dir() / "worlds/models";
   Result<WorldModel> loaded = WorldModel{};
-  const double seconds = seconds_of([&] { loaded = load_sdf_world(path, options_with_models(models)); });
+  const double seconds =
+      seconds_of([&] { loaded = load_sdf_world(path, options_with_models(models)); });
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   const WorldModel& world = *loaded;
   report("citysim", world, seconds);
 
   // Independent expectation from the world's text: includes of models present in worlds/models.
   const std::string text = read_text(path);
-  const std::regex include(R"(<include>[\s\S]*?<uri>model://([A-Za-z0-9_]+)</uri>[\s\S]*?</include>)");
+  const std::regex include(
+      R"(<include>[\s\S]*?<uri>model://([A-Za-z0-9_]+)</uri>[\s\S]*?</include>)");
   std::size_t expected_trees = 0;
   std::size_t expected_buildings = 0;
   std::size_t expected_terrain = 0;
   std::set<std::string> missing;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), include); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), include);
+       it != std::sregex_iterator(); ++it) {
     const std::string name = (*it)[1];
     if (!std::filesystem::exists(models / name)) {
       missing.insert(name);
@@ -97,8 +102,9 @@ TEST(WorldLoadersReal, CitysimSimpleCity) {
   // Every missing model is named once in the warnings.
   for (const auto& name : missing) {
     const std::string needle = "model model://" + name + " not found";
-    EXPECT_TRUE(std::any_of(world.warnings.begin(), world.warnings.end(),
-                            [&](const std::string& w) { return w.find(needle) != std::string::npos; }))
+    EXPECT_TRUE(
+        std::any_of(world.warnings.begin(), world.warnings.end(),
+                    [&](const std::string& w) { return w.find(needle) != std::string::npos; }))
         << needle;
   }
   // Trees are closed vegetation volumes with the default attenuation.
@@ -151,15 +157,17 @@ TEST(WorldLoadersReal, CitysimVisualHeightmap) {
 TEST(WorldLoadersReal, Px4TestCity4) {
   const auto path = SKYTRACE_SHARED_FILE("worlds/px4_avoidance/test_city_4.world");
   Result<WorldModel> loaded = WorldModel{};
-  const double seconds =
-      seconds_of([&] { loaded = load_sdf_world(path, options_with_models(test::shared_data_dir() / "worlds/models")); });
+  const double seconds = seconds_of([&] {
+    loaded = load_sdf_world(path, options_with_models(test::shared_data_dir() / "worlds/models"));
+  });
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   const WorldModel& world = *loaded;
   report("test_city_4", world, seconds);
 
   // From the text: models named House N / Office Building N are buildings, asphalt tiles are flat.
   const std::string text = read_text(path);
-  const std::size_t houses = count_matches(text, std::regex(R"(<model name='(House|Office Building) \d'>)"));
+  const std::size_t houses =
+      count_matches(text, std::regex(R"(<model name='(House|Office Building) \d'>)"));
   const std::size_t tiles = count_matches(text, std::regex(R"(<model name='asphalt_plane'>)"));
   EXPECT_EQ(houses, 69U);
   EXPECT_EQ(tiles, 144U);
@@ -182,7 +190,8 @@ TEST(WorldLoadersReal, Px4TestCity4) {
   std::size_t poses = 0;
   const std::regex block(R"(<model name='[^']+'>([\s\S]*?)\n    </model>)");
   const std::regex pose(R"(\n      <pose>\s*(\S+)\s+(\S+)\s+(\S+)\s)");
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), block); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), block);
+       it != std::sregex_iterator(); ++it) {
     const std::string body = (*it)[1];
     std::smatch m;
     ASSERT_TRUE(std::regex_search(body, m, pose));
@@ -202,7 +211,8 @@ TEST(WorldLoadersReal, Px4TestCity4) {
   EXPECT_LE(high.x(), max_x + 10.0);
   EXPECT_GE(high.y(), max_y);
   EXPECT_LE(high.y(), max_y + 10.0);
-  std::cout << "test_city_4 model origins x " << min_x << ".." << max_x << ", y " << min_y << ".." << max_y << "\n";
+  std::cout << "test_city_4 model origins x " << min_x << ".." << max_x << ", y " << min_y << ".."
+            << max_y << "\n";
   EXPECT_NEAR(low.z(), -0.05, 1e-4);  // tile bottoms (0.1 m thick at z = 0)
   // The office buildings are the tallest: about 18.7 m (inches in the COLLADA file).
   EXPECT_GT(high.z(), 15.0);

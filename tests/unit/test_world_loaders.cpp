@@ -45,7 +45,8 @@ bool is_closed_consistent(const TriangleMesh& mesh) {
   std::map<std::array<float, 3>, int> ids;
   const auto id = [&](int v) {
     const auto& p = mesh.vertices_m[static_cast<std::size_t>(v)];
-    return ids.emplace(std::array<float, 3>{p.x(), p.y(), p.z()}, static_cast<int>(ids.size())).first->second;
+    return ids.emplace(std::array<float, 3>{p.x(), p.y(), p.z()}, static_cast<int>(ids.size()))
+        .first->second;
   };
   std::map<std::pair<int, int>, int> edges;
   for (const auto& t : mesh.triangles) {
@@ -84,7 +85,8 @@ std::string all_warnings(const WorldModel& world) {
   return out;
 }
 
-void expect_vector_near(const Eigen::Vector3d& actual, const Eigen::Vector3d& expected, double tolerance_m) {
+void expect_vector_near(const Eigen::Vector3d& actual, const Eigen::Vector3d& expected,
+                        double tolerance_m) {
   EXPECT_NEAR(actual.x(), expected.x(), tolerance_m);
   EXPECT_NEAR(actual.y(), expected.y(), tolerance_m);
   EXPECT_NEAR(actual.z(), expected.z(), tolerance_m);
@@ -129,7 +131,8 @@ TEST(WorldPrimitives, EllipsoidAndCapsuleAreClosedAndCloseToTheirVolume) {
   const double capsule_exact = kPi * 0.25 * 2.0 + 4.0 / 3.0 * kPi * 0.125;
   EXPECT_LT(signed_volume_m3(capsule), capsule_exact);
   EXPECT_GT(signed_volume_m3(capsule), 0.97 * capsule_exact);
-  const auto [capsule_low, capsule_high] = object_bounds(WorldObject{"k", ObjectKind::kOther, {}, capsule});
+  const auto [capsule_low, capsule_high] =
+      object_bounds(WorldObject{"k", ObjectKind::kOther, {}, capsule});
   EXPECT_NEAR(capsule_high.z(), 1.5, 1e-6);
   EXPECT_NEAR(capsule_low.z(), -1.5, 1e-6);
 }
@@ -155,12 +158,15 @@ TEST(WorldPrimitives, PlaneFacesItsNormal) {
 TEST(WorldPrimitives, HeightGridRowZeroIsNorthAndFacesUp) {
   const auto grid = make_height_grid({0.0, 1.0, 2.0, 3.0, 4.0, 5.0}, 2, 3, 10.0, 4.0).value();
   ASSERT_EQ(grid.vertices_m.size(), 6U);
-  expect_vector_near(grid.vertices_m[0].cast<double>(), {-5.0, 2.0, 0.0}, 1e-6);  // row 0, column 0: north-west
+  expect_vector_near(grid.vertices_m[0].cast<double>(), {-5.0, 2.0, 0.0},
+                     1e-6);  // row 0, column 0: north-west
   expect_vector_near(grid.vertices_m[5].cast<double>(), {5.0, -2.0, 5.0}, 1e-6);
   ASSERT_EQ(grid.triangles.size(), 4U);
   for (const auto& t : grid.triangles) {
-    const Eigen::Vector3f n = (grid.vertices_m[static_cast<std::size_t>(t[1])] - grid.vertices_m[static_cast<std::size_t>(t[0])])
-                                  .cross(grid.vertices_m[static_cast<std::size_t>(t[2])] - grid.vertices_m[static_cast<std::size_t>(t[0])]);
+    const Eigen::Vector3f n = (grid.vertices_m[static_cast<std::size_t>(t[1])] -
+                               grid.vertices_m[static_cast<std::size_t>(t[0])])
+                                  .cross(grid.vertices_m[static_cast<std::size_t>(t[2])] -
+                                         grid.vertices_m[static_cast<std::size_t>(t[0])]);
     EXPECT_GT(n.z(), 0.0F);
   }
   EXPECT_FALSE(make_height_grid({1.0, 2.0}, 1, 2, 1.0, 1.0).ok());
@@ -169,13 +175,15 @@ TEST(WorldPrimitives, HeightGridRowZeroIsNorthAndFacesUp) {
 // ---------------------------------------------------------------------------------------------
 // Polygons
 
-double triangles_area(const PolygonWithHoles& polygon, const std::vector<std::array<int, 3>>& triangles, bool& all_ccw) {
+double triangles_area(const PolygonWithHoles& polygon,
+                      const std::vector<std::array<int, 3>>& triangles, bool& all_ccw) {
   std::vector<Eigen::Vector2d> points = polygon.outer;
   for (const auto& hole : polygon.holes) points.insert(points.end(), hole.begin(), hole.end());
   double area = 0.0;
   all_ccw = true;
   for (const auto& t : triangles) {
-    const double a = signed_area_m2({points[static_cast<std::size_t>(t[0])], points[static_cast<std::size_t>(t[1])],
+    const double a = signed_area_m2({points[static_cast<std::size_t>(t[0])],
+                                     points[static_cast<std::size_t>(t[1])],
                                      points[static_cast<std::size_t>(t[2])]});
     if (a <= 0.0) all_ccw = false;
     area += a;
@@ -187,7 +195,8 @@ bool inside_ring(const Ring2& ring, const Eigen::Vector2d& p) {
   bool in = false;
   for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
     if ((ring[i].y() > p.y()) != (ring[j].y() > p.y()) &&
-        p.x() < (ring[j].x() - ring[i].x()) * (p.y() - ring[i].y()) / (ring[j].y() - ring[i].y()) + ring[i].x()) {
+        p.x() < (ring[j].x() - ring[i].x()) * (p.y() - ring[i].y()) / (ring[j].y() - ring[i].y()) +
+                    ring[i].x()) {
       in = !in;
     }
   }
@@ -202,13 +211,16 @@ void expect_valid_triangulation(const PolygonWithHoles& polygon) {
   double expected = std::abs(signed_area_m2(polygon.outer));
   for (const auto& hole : polygon.holes) expected -= std::abs(signed_area_m2(hole));
   bool all_ccw = false;
-  EXPECT_NEAR(triangles_area(polygon, *triangles, all_ccw), expected, 1e-9 * std::max(1.0, expected));
+  EXPECT_NEAR(triangles_area(polygon, *triangles, all_ccw), expected,
+              1e-9 * std::max(1.0, expected));
   EXPECT_TRUE(all_ccw);
   std::vector<Eigen::Vector2d> points = polygon.outer;
   for (const auto& hole : polygon.holes) points.insert(points.end(), hole.begin(), hole.end());
   for (const auto& t : *triangles) {
-    const Eigen::Vector2d centroid = (points[static_cast<std::size_t>(t[0])] + points[static_cast<std::size_t>(t[1])] +
-                                      points[static_cast<std::size_t>(t[2])]) / 3.0;
+    const Eigen::Vector2d centroid =
+        (points[static_cast<std::size_t>(t[0])] + points[static_cast<std::size_t>(t[1])] +
+         points[static_cast<std::size_t>(t[2])]) /
+        3.0;
     EXPECT_TRUE(inside_ring(polygon.outer, centroid));
     for (const auto& hole : polygon.holes) EXPECT_FALSE(inside_ring(hole, centroid));
   }
@@ -217,7 +229,8 @@ void expect_valid_triangulation(const PolygonWithHoles& polygon) {
 TEST(WorldPolygons, SquareWithHoleAreaIsOuterMinusHole) {
   PolygonWithHoles polygon;
   polygon.outer = {{0, 0}, {10, 0}, {10, 10}, {0, 10}};
-  polygon.holes = {{{2, 2}, {6, 2}, {6, 6}, {2, 6}}};  // counter-clockwise too: orientation is fixed inside
+  polygon.holes = {
+      {{2, 2}, {6, 2}, {6, 6}, {2, 6}}};  // counter-clockwise too: orientation is fixed inside
   const auto triangles = triangulate_polygon(polygon).value();
   bool all_ccw = false;
   EXPECT_NEAR(triangles_area(polygon, triangles, all_ccw), 100.0 - 16.0, 1e-9);
@@ -231,9 +244,9 @@ TEST(WorldPolygons, ConcaveClockwiseRingsWithTwoHolesAndClosingPoints) {
   PolygonWithHoles polygon;
   // An L shape, clockwise, with its closing point repeated.
   polygon.outer = {{0, 0}, {0, 20}, {8, 20}, {8, 8}, {20, 8}, {20, 0}, {0, 0}};
-  polygon.holes = {{{2, 2}, {2, 5}, {5, 5}, {5, 2}, {2, 2}},       // square, clockwise
-                   {{12, 2}, {17, 2}, {17, 6}, {12, 6}},           // rectangle, counter-clockwise
-                   {{3, 10}, {6, 10}, {4.5, 17}}};                 // triangle in the vertical arm
+  polygon.holes = {{{2, 2}, {2, 5}, {5, 5}, {5, 2}, {2, 2}},  // square, clockwise
+                   {{12, 2}, {17, 2}, {17, 6}, {12, 6}},      // rectangle, counter-clockwise
+                   {{3, 10}, {6, 10}, {4.5, 17}}};            // triangle in the vertical arm
   expect_valid_triangulation(polygon);
 }
 
@@ -258,7 +271,8 @@ TEST(WorldPolygons, RandomStarPolygonsWithHoles) {
     }
     // Holes well inside the inner radius 4: a small square and a small triangle.
     const double offset = 0.5 * (trial % 3);
-    polygon.holes.push_back({{-2.0 + offset, -1.0}, {-1.0 + offset, -1.0}, {-1.0 + offset, 0.0}, {-2.0 + offset, 0.0}});
+    polygon.holes.push_back(
+        {{-2.0 + offset, -1.0}, {-1.0 + offset, -1.0}, {-1.0 + offset, 0.0}, {-2.0 + offset, 0.0}});
     if (trial % 2 == 0) polygon.holes.push_back({{1.0, 1.0}, {2.5, 1.2}, {1.5, 2.5}});
     SCOPED_TRACE("trial " + std::to_string(trial));
     expect_valid_triangulation(polygon);
@@ -278,7 +292,8 @@ TEST(WorldPolygons, GridAlignedHolesWithTies) {
     for (int i = 0; i < n; ++i) {
       const double angle = 2.0 * kPi * i / n;
       const double r = radius(random);
-      polygon.outer.emplace_back(std::round(2.0 * r * std::cos(angle)) / 2.0, std::round(2.0 * r * std::sin(angle)) / 2.0);
+      polygon.outer.emplace_back(std::round(2.0 * r * std::cos(angle)) / 2.0,
+                                 std::round(2.0 * r * std::sin(angle)) / 2.0);
     }
     for (int gx = -3; gx <= 2; ++gx) {
       for (int gy = -3; gy <= 2; ++gy) {
@@ -292,14 +307,16 @@ TEST(WorldPolygons, GridAlignedHolesWithTies) {
         }
       }
     }
-    SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(polygon.holes.size()) + " holes");
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(polygon.holes.size()) +
+                 " holes");
     expect_valid_triangulation(polygon);
   }
 }
 
 TEST(WorldPolygons, InvalidPolygonsAreErrors) {
   EXPECT_FALSE(triangulate_polygon(PolygonWithHoles{{{0, 0}, {1, 1}}, {}}).ok());
-  EXPECT_FALSE(triangulate_polygon(PolygonWithHoles{{{0, 0}, {1, 1}, {2, 2}}, {}}).ok());  // no area
+  EXPECT_FALSE(
+      triangulate_polygon(PolygonWithHoles{{{0, 0}, {1, 1}, {2, 2}}, {}}).ok());  // no area
   PolygonWithHoles outside;
   outside.outer = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   outside.holes = {{{5, 5}, {6, 5}, {6, 6}}};
@@ -323,7 +340,9 @@ TEST(WorldPolygons, ExtrusionIsAClosedPrism) {
 
 TEST(WorldHull, CubeWithInteriorPointsGivesTheCube) {
   std::vector<Eigen::Vector3f> points;
-  for (int i = 0; i < 8; ++i) points.emplace_back((i & 1) != 0 ? 2.0F : 0.0F, (i & 2) != 0 ? 3.0F : 0.0F, (i & 4) != 0 ? 4.0F : 0.0F);
+  for (int i = 0; i < 8; ++i)
+    points.emplace_back((i & 1) != 0 ? 2.0F : 0.0F, (i & 2) != 0 ? 3.0F : 0.0F,
+                        (i & 4) != 0 ? 4.0F : 0.0F);
   std::mt19937 random(7);
   std::uniform_real_distribution<float> u(0.1F, 1.9F);
   for (int i = 0; i < 200; ++i) points.emplace_back(u(random), 1.5F * u(random), 2.0F * u(random));
@@ -345,9 +364,10 @@ TEST(WorldHull, EveryPointIsInsideTheHullOfASphereCloud) {
   EXPECT_TRUE(is_closed_consistent(hull));
   for (const auto& t : hull.triangles) {
     const Eigen::Vector3d a = hull.vertices_m[static_cast<std::size_t>(t[0])].cast<double>();
-    const Eigen::Vector3d n = (hull.vertices_m[static_cast<std::size_t>(t[1])].cast<double>() - a)
-                                  .cross(hull.vertices_m[static_cast<std::size_t>(t[2])].cast<double>() - a)
-                                  .normalized();
+    const Eigen::Vector3d n =
+        (hull.vertices_m[static_cast<std::size_t>(t[1])].cast<double>() - a)
+            .cross(hull.vertices_m[static_cast<std::size_t>(t[2])].cast<double>() - a)
+            .normalized();
     for (const auto& p : points) EXPECT_LE(n.dot(p.cast<double>() - a), 1e-5);
   }
   // Close to the 2 m sphere's volume, below it.
@@ -387,12 +407,14 @@ TEST(WorldMaterials, GlobAndDefaults) {
   EXPECT_EQ(parse_material_class("Glass").value(), MaterialClass::kGlass);
   EXPECT_EQ(parse_material_class("stone").value(), MaterialClass::kConcrete);
   EXPECT_FALSE(parse_material_class("cheese").ok());
-  for (const auto c : {MaterialClass::kConcrete, MaterialClass::kBrick, MaterialClass::kGlass, MaterialClass::kMetal,
-                       MaterialClass::kWood, MaterialClass::kGround, MaterialClass::kVegetation}) {
+  for (const auto c : {MaterialClass::kConcrete, MaterialClass::kBrick, MaterialClass::kGlass,
+                       MaterialClass::kMetal, MaterialClass::kWood, MaterialClass::kGround,
+                       MaterialClass::kVegetation}) {
     EXPECT_EQ(parse_material_class(material_class_name(c)).value(), c);
   }
-  const std::vector<MaterialRule> rules = {{"*glass*", {MaterialClass::kGlass, 0.0}, std::nullopt},
-                                           {"*tree*", {MaterialClass::kVegetation, 1.0}, ObjectKind::kTree}};
+  const std::vector<MaterialRule> rules = {
+      {"*glass*", {MaterialClass::kGlass, 0.0}, std::nullopt},
+      {"*tree*", {MaterialClass::kVegetation, 1.0}, ObjectKind::kTree}};
   EXPECT_EQ(match_material_rule(rules, {"a/b/c", "model://pine_tree"}), &rules[1]);
   EXPECT_EQ(match_material_rule(rules, {"a/b/c"}), nullptr);
 
@@ -425,11 +447,12 @@ SdfLoadOptions isolated_options(const std::filesystem::path& models = {}) {
 
 std::string world_sdf(const std::string& body, const std::string& version = "1.9") {
   return "<?xml version=\"1.0\"?>\n<sdf version=\"" + version +
-         "\" xmlns:skytrace=\"https://skytrace.dev/sdf\">\n<world name=\"test_world\">\n" + body + "\n</world>\n</sdf>\n";
+         "\" xmlns:skytrace=\"https://skytrace.dev/sdf\">\n<world name=\"test_world\">\n" + body +
+         "\n</world>\n</sdf>\n";
 }
 
-std::string static_model(const std::string& name, const std::string& pose, const std::string& geometry,
-                         const std::string& extra = "") {
+std::string static_model(const std::string& name, const std::string& pose,
+                         const std::string& geometry, const std::string& extra = "") {
   return "<model name=\"" + name + "\"><static>true</static><pose>" + pose + "</pose>" + extra +
          "<link name=\"link\"><collision name=\"collision\"><geometry>" + geometry +
          "</geometry></collision></link></model>\n";
@@ -440,17 +463,21 @@ TEST(WorldSdf, PrimitivesArePlacedByTheirPoses) {
   const std::string half_pi = std::to_string(kPi / 2.0);
   const auto path = write_file(
       dir / "w.sdf",
-      world_sdf(static_model("box", "1 2 3 0 0 " + half_pi, "<box><size>2 4 6</size></box>") +
-                static_model("cyl", "0 0 0 " + half_pi + " 0 0", "<cylinder><radius>1</radius><length>4</length></cylinder>") +
-                static_model("ball", "5 5 5 0 0 0", "<sphere><radius>0.5</radius></sphere>") +
-                static_model("ground", "0 0 -1 0 0 0", "<plane><normal>0 0 1</normal><size>10 20</size></plane>") +
-                static_model("endless", "0 0 -2 0 0 0", "<plane><normal>0 0 1</normal></plane>") +
-                // A collision pose inside the link, with a capsule and an ellipsoid.
-                "<model name=\"posed\"><static>true</static><pose>10 0 0 0 0 0</pose><link name=\"l\">"
-                "<pose>0 10 0 0 0 0</pose><collision name=\"c\"><pose>0 0 10 0 0 0</pose><geometry>"
-                "<capsule><radius>1</radius><length>2</length></capsule></geometry></collision>"
-                "<collision name=\"e\"><geometry><ellipsoid><radii>1 2 3</radii></ellipsoid></geometry></collision>"
-                "</link></model>"));
+      world_sdf(
+          static_model("box", "1 2 3 0 0 " + half_pi, "<box><size>2 4 6</size></box>") +
+          static_model("cyl", "0 0 0 " + half_pi + " 0 0",
+                       "<cylinder><radius>1</radius><length>4</length></cylinder>") +
+          static_model("ball", "5 5 5 0 0 0", "<sphere><radius>0.5</radius></sphere>") +
+          static_model("ground", "0 0 -1 0 0 0",
+                       "<plane><normal>0 0 1</normal><size>10 20</size></plane>") +
+          static_model("endless", "0 0 -2 0 0 0", "<plane><normal>0 0 1</normal></plane>") +
+          // A collision pose inside the link, with a capsule and an ellipsoid.
+          "<model name=\"posed\"><static>true</static><pose>10 0 0 0 0 0</pose><link name=\"l\">"
+          "<pose>0 10 0 0 0 0</pose><collision name=\"c\"><pose>0 0 10 0 0 0</pose><geometry>"
+          "<capsule><radius>1</radius><length>2</length></capsule></geometry></collision>"
+          "<collision name=\"e\"><geometry><ellipsoid><radii>1 2 "
+          "3</radii></ellipsoid></geometry></collision>"
+          "</link></model>"));
   const auto world = load_sdf_world(path, isolated_options()).value();
   EXPECT_EQ(world.name, "test_world");
   ASSERT_EQ(world.objects.size(), 7U) << all_warnings(world);
@@ -500,17 +527,25 @@ TEST(WorldSdf, NestedModelsAndFramesResolve) {
   const std::string half_pi = "1.5707963267948966";
   const auto path = write_file(
       dir / "w.sdf",
-      world_sdf("<frame name=\"plaza\"><pose>100 0 0 0 0 " + half_pi + "</pose></frame>\n"
-                "<model name=\"outer\"><static>true</static><pose>10 0 0 0 0 " + half_pi + "</pose>"
-                "<frame name=\"corner\"><pose>0 5 0 0 0 0</pose></frame>"
-                "<link name=\"l\"><pose>1 0 0 0 0 0</pose><collision name=\"c\"><geometry><box><size>1 1 1</size></box>"
-                "</geometry></collision></link>"
-                "<model name=\"inner\"><pose relative_to=\"corner\">2 0 0 0 0 0</pose><link name=\"li\">"
-                "<collision name=\"ci\"><geometry><box><size>1 1 1</size></box></geometry></collision></link></model>"
-                "</model>\n"
-                "<model name=\"at_plaza\"><static>true</static><pose relative_to=\"plaza\">3 0 0 0 0 0</pose>"
-                "<link name=\"l\"><collision name=\"c\"><geometry><box><size>1 1 1</size></box></geometry></collision>"
-                "</link></model>"));
+      world_sdf(
+          "<frame name=\"plaza\"><pose>100 0 0 0 0 " + half_pi +
+          "</pose></frame>\n"
+          "<model name=\"outer\"><static>true</static><pose>10 0 0 0 0 " +
+          half_pi +
+          "</pose>"
+          "<frame name=\"corner\"><pose>0 5 0 0 0 0</pose></frame>"
+          "<link name=\"l\"><pose>1 0 0 0 0 0</pose><collision name=\"c\"><geometry><box><size>1 1 "
+          "1</size></box>"
+          "</geometry></collision></link>"
+          "<model name=\"inner\"><pose relative_to=\"corner\">2 0 0 0 0 0</pose><link name=\"li\">"
+          "<collision name=\"ci\"><geometry><box><size>1 1 "
+          "1</size></box></geometry></collision></link></model>"
+          "</model>\n"
+          "<model name=\"at_plaza\"><static>true</static><pose relative_to=\"plaza\">3 0 0 0 0 "
+          "0</pose>"
+          "<link name=\"l\"><collision name=\"c\"><geometry><box><size>1 1 "
+          "1</size></box></geometry></collision>"
+          "</link></model>"));
   const auto world = load_sdf_world(path, isolated_options()).value();
   // outer at (10, 0) turned 90 degrees: its x is the world y.
   expect_vector_near(find_object(world, "outer/l/c")->pose.translation(), {10.0, 1.0, 0.0}, 1e-9);
@@ -519,7 +554,8 @@ TEST(WorldSdf, NestedModelsAndFramesResolve) {
   ASSERT_NE(inner, nullptr) << all_warnings(world);
   expect_vector_near(inner->pose.translation(), {5.0, 2.0, 0.0}, 1e-9);
   EXPECT_TRUE(inner->is_static);  // inherits the static parent
-  expect_vector_near(find_object(world, "at_plaza/l/c")->pose.translation(), {100.0, 3.0, 0.0}, 1e-9);
+  expect_vector_near(find_object(world, "at_plaza/l/c")->pose.translation(), {100.0, 3.0, 0.0},
+                     1e-9);
   const auto summary = summarize_world(world);
   EXPECT_EQ(summary.objects, 3U);
   EXPECT_EQ(summary.other, 3U);  // outer, outer/inner, at_plaza: small boxes
@@ -529,25 +565,29 @@ TEST(WorldSdf, IncludesOverridesAndMissingModels) {
   const auto dir = test::make_temp_dir("world_sdf_includes");
   const auto models = dir / "models";
   write_file(models / "tower_block" / "model.config",
-             "<?xml version=\"1.0\"?><model><name>tower_block</name><sdf version=\"1.6\">model.sdf</sdf></model>");
-  write_file(models / "tower_block" / "model.sdf",
-             "<?xml version=\"1.0\"?><sdf version=\"1.6\"><model name=\"tower_block\"><pose>50 50 0 0 0 0</pose>"
-             "<link name=\"link\"><collision name=\"collision\"><pose>0 0 10 0 0 0</pose><geometry><box>"
-             "<size>10 10 20</size></box></geometry></collision></link></model></sdf>");
-  const auto path = write_file(dir / "w.sdf",
-                               world_sdf("<frame name=\"plaza\"><pose>100 0 0 0 0 1.5707963267948966</pose></frame>\n"
-                                         "<include><uri>model://tower_block</uri><name>a</name>"
-                                         "<pose>5 0 0 0 0 0</pose><static>true</static></include>\n"
-                                         "<include><uri>model://tower_block</uri><name>b</name></include>\n"
-                                         "<include><uri>model://nowhere_to_be_found</uri></include>\n"
-                                         "<include><uri>model://nowhere_to_be_found</uri><name>x2</name></include>\n"
-                                         // A pose in another frame: this include is left to sdformat.
-                                         "<include><uri>model://tower_block</uri><name>c</name>"
-                                         "<pose relative_to=\"plaza\">1 0 0 0 0 0</pose></include>\n"
-                                         // Gazebo classic restores poses saved in <state>.
-                                         "<include><uri>model://tower_block</uri><name>d</name></include>\n"
-                                         "<state world_name=\"test_world\"><model name=\"d\"><pose>-7 -7 0 0 0 0</pose>"
-                                         "</model></state>"));
+             "<?xml version=\"1.0\"?><model><name>tower_block</name><sdf "
+             "version=\"1.6\">model.sdf</sdf></model>");
+  write_file(
+      models / "tower_block" / "model.sdf",
+      "<?xml version=\"1.0\"?><sdf version=\"1.6\"><model name=\"tower_block\"><pose>50 50 0 0 0 "
+      "0</pose>"
+      "<link name=\"link\"><collision name=\"collision\"><pose>0 0 10 0 0 0</pose><geometry><box>"
+      "<size>10 10 20</size></box></geometry></collision></link></model></sdf>");
+  const auto path = write_file(
+      dir / "w.sdf",
+      world_sdf("<frame name=\"plaza\"><pose>100 0 0 0 0 1.5707963267948966</pose></frame>\n"
+                "<include><uri>model://tower_block</uri><name>a</name>"
+                "<pose>5 0 0 0 0 0</pose><static>true</static></include>\n"
+                "<include><uri>model://tower_block</uri><name>b</name></include>\n"
+                "<include><uri>model://nowhere_to_be_found</uri></include>\n"
+                "<include><uri>model://nowhere_to_be_found</uri><name>x2</name></include>\n"
+                // A pose in another frame: this include is left to sdformat.
+                "<include><uri>model://tower_block</uri><name>c</name>"
+                "<pose relative_to=\"plaza\">1 0 0 0 0 0</pose></include>\n"
+                // Gazebo classic restores poses saved in <state>.
+                "<include><uri>model://tower_block</uri><name>d</name></include>\n"
+                "<state world_name=\"test_world\"><model name=\"d\"><pose>-7 -7 0 0 0 0</pose>"
+                "</model></state>"));
   const auto world = load_sdf_world(path, isolated_options(models)).value();
   ASSERT_EQ(world.objects.size(), 4U) << all_warnings(world);
   const WorldObject* a = find_object(world, "a/link/collision");
@@ -561,9 +601,12 @@ TEST(WorldSdf, IncludesOverridesAndMissingModels) {
   expect_vector_near(b->pose.translation(), {50.0, 50.0, 10.0}, 1e-9);
   EXPECT_FALSE(b->is_static);
   // plaza (100, 0) turned 90 degrees, then 1 m along its x: world (100, 1).
-  expect_vector_near(find_object(world, "c/link/collision")->pose.translation(), {100.0, 1.0, 10.0}, 1e-9);
-  expect_vector_near(find_object(world, "d/link/collision")->pose.translation(), {-7.0, -7.0, 10.0}, 1e-9);
-  EXPECT_TRUE(has_warning(world, "model://nowhere_to_be_found not found, 2 includes skipped")) << all_warnings(world);
+  expect_vector_near(find_object(world, "c/link/collision")->pose.translation(), {100.0, 1.0, 10.0},
+                     1e-9);
+  expect_vector_near(find_object(world, "d/link/collision")->pose.translation(), {-7.0, -7.0, 10.0},
+                     1e-9);
+  EXPECT_TRUE(has_warning(world, "model://nowhere_to_be_found not found, 2 includes skipped"))
+      << all_warnings(world);
   EXPECT_TRUE(has_warning(world, "w.sdf:"));
 
   // Without the model path the included models are missing too, and the load still succeeds.
@@ -576,19 +619,23 @@ TEST(WorldSdf, MaterialsFromElementsRulesAndDefaults) {
   const auto dir = test::make_temp_dir("world_sdf_materials");
   const auto path = write_file(
       dir / "w.sdf",
-      world_sdf(
-          static_model("facade", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>", "<skytrace:material class=\"glass\"/>") +
-          "<model name=\"hedge_row\"><static>true</static><link name=\"link\"><collision name=\"collision\">"
-          "<skytrace:vegetation attenuation_db_per_m=\"1.2\"/><geometry><box><size>10 1 2</size></box></geometry>"
-          "</collision></link></model>\n" +
-          static_model("pine_tree_7", "20 0 0 0 0 0", "<cylinder><radius>2</radius><length>8</length></cylinder>") +
-          static_model("house_9", "30 0 0 0 0 0", "<box><size>2 2 2</size></box>") +
-          static_model("block", "40 0 0 0 0 0", "<box><size>10 10 12</size></box>") +
-          static_model("crate", "50 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
-          static_model("radio_mast", "60 0 0 0 0 0", "<box><size>1 1 30</size></box>") +
-          static_model("odd", "70 0 0 0 0 0", "<box><size>1 1 1</size></box>",
-                       "<skytrace:material class=\"metal\" kind=\"building\"/>") +
-          static_model("typo", "80 0 0 0 0 0", "<box><size>1 1 1</size></box>", "<skytrace:material class=\"glas\"/>")));
+      world_sdf(static_model("facade", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>",
+                             "<skytrace:material class=\"glass\"/>") +
+                "<model name=\"hedge_row\"><static>true</static><link name=\"link\"><collision "
+                "name=\"collision\">"
+                "<skytrace:vegetation attenuation_db_per_m=\"1.2\"/><geometry><box><size>10 1 "
+                "2</size></box></geometry>"
+                "</collision></link></model>\n" +
+                static_model("pine_tree_7", "20 0 0 0 0 0",
+                             "<cylinder><radius>2</radius><length>8</length></cylinder>") +
+                static_model("house_9", "30 0 0 0 0 0", "<box><size>2 2 2</size></box>") +
+                static_model("block", "40 0 0 0 0 0", "<box><size>10 10 12</size></box>") +
+                static_model("crate", "50 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
+                static_model("radio_mast", "60 0 0 0 0 0", "<box><size>1 1 30</size></box>") +
+                static_model("odd", "70 0 0 0 0 0", "<box><size>1 1 1</size></box>",
+                             "<skytrace:material class=\"metal\" kind=\"building\"/>") +
+                static_model("typo", "80 0 0 0 0 0", "<box><size>1 1 1</size></box>",
+                             "<skytrace:material class=\"glas\"/>")));
   auto options = isolated_options();
   options.material_rules.push_back({"*mast*", {MaterialClass::kMetal, 0.0}, std::nullopt});
   const auto world = load_sdf_world(path, options).value();
@@ -604,41 +651,49 @@ TEST(WorldSdf, MaterialsFromElementsRulesAndDefaults) {
   EXPECT_DOUBLE_EQ(pine->material.attenuation_db_per_m, kDefaultVegetationAttenuationDbPerM);
   EXPECT_EQ(pine->kind, ObjectKind::kTree);
   EXPECT_EQ(find_object(world, "house_9/link/collision")->kind, ObjectKind::kBuilding);  // by name
-  EXPECT_EQ(find_object(world, "block/link/collision")->kind, ObjectKind::kBuilding);    // tall, static, wide
-  EXPECT_EQ(find_object(world, "block/link/collision")->material.material_class, MaterialClass::kConcrete);
+  EXPECT_EQ(find_object(world, "block/link/collision")->kind,
+            ObjectKind::kBuilding);  // tall, static, wide
+  EXPECT_EQ(find_object(world, "block/link/collision")->material.material_class,
+            MaterialClass::kConcrete);
   EXPECT_EQ(find_object(world, "crate/link/collision")->kind, ObjectKind::kOther);
   const auto* mast = find_object(world, "radio_mast/link/collision");
   EXPECT_EQ(mast->material.material_class, MaterialClass::kMetal);  // scenario rule
-  EXPECT_EQ(mast->kind, ObjectKind::kOther);                       // tall but thin
+  EXPECT_EQ(mast->kind, ObjectKind::kOther);                        // tall but thin
   const auto* odd = find_object(world, "odd/link/collision");
   EXPECT_EQ(odd->material.material_class, MaterialClass::kMetal);
   EXPECT_EQ(odd->kind, ObjectKind::kBuilding);
-  EXPECT_EQ(find_object(world, "typo/link/collision")->material.material_class, MaterialClass::kConcrete);
+  EXPECT_EQ(find_object(world, "typo/link/collision")->material.material_class,
+            MaterialClass::kConcrete);
   EXPECT_TRUE(has_warning(world, "unknown material class 'glas'")) << all_warnings(world);
 
   // A scenario rule wins over the SDF's own element.
-  options.material_rules.insert(options.material_rules.begin(), {"facade*", {MaterialClass::kBrick, 0.0}, std::nullopt});
+  options.material_rules.insert(options.material_rules.begin(),
+                                {"facade*", {MaterialClass::kBrick, 0.0}, std::nullopt});
   const auto overridden = load_sdf_world(path, options).value();
-  EXPECT_EQ(find_object(overridden, "facade/link/collision")->material.material_class, MaterialClass::kBrick);
+  EXPECT_EQ(find_object(overridden, "facade/link/collision")->material.material_class,
+            MaterialClass::kBrick);
 }
 
 TEST(WorldSdf, DuplicateNamesPolylinesAndVisuals) {
   const auto dir = test::make_temp_dir("world_sdf_duplicates");
-  const std::string square = "<polyline><height>3</height><point>0 0</point><point>10 0</point><point>10 10</point>"
-                             "<point>0 10</point></polyline><polyline><height>3</height><point>2 2</point>"
-                             "<point>4 2</point><point>4 4</point><point>2 4</point></polyline>";
-  const auto path = write_file(
-      dir / "w.sdf",
-      world_sdf(static_model("dup", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
-                    static_model("dup", "5 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
-                    static_model("dup", "9 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
-                    static_model("walls", "0 0 1 0 0 0", square) +
-                    "<model name=\"deco\"><static>true</static><link name=\"l\"><visual name=\"v\"><geometry><box>"
-                    "<size>1 1 1</size></box></geometry></visual></link></model>",
-                "1.6"));
+  const std::string square =
+      "<polyline><height>3</height><point>0 0</point><point>10 0</point><point>10 10</point>"
+      "<point>0 10</point></polyline><polyline><height>3</height><point>2 2</point>"
+      "<point>4 2</point><point>4 4</point><point>2 4</point></polyline>";
+  const auto path =
+      write_file(dir / "w.sdf",
+                 world_sdf(static_model("dup", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
+                               static_model("dup", "5 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
+                               static_model("dup", "9 0 0 0 0 0", "<box><size>1 1 1</size></box>") +
+                               static_model("walls", "0 0 1 0 0 0", square) +
+                               "<model name=\"deco\"><static>true</static><link name=\"l\"><visual "
+                               "name=\"v\"><geometry><box>"
+                               "<size>1 1 1</size></box></geometry></visual></link></model>",
+                           "1.6"));
   const auto world = load_sdf_world(path, isolated_options()).value();
   ASSERT_NE(find_object(world, "dup_3/link/collision"), nullptr) << all_warnings(world);
-  expect_vector_near(find_object(world, "dup_2/link/collision")->pose.translation(), {5.0, 0.0, 0.0}, 1e-9);
+  expect_vector_near(find_object(world, "dup_2/link/collision")->pose.translation(),
+                     {5.0, 0.0, 0.0}, 1e-9);
   EXPECT_TRUE(has_warning(world, "3 models named 'dup'"));
   const auto* walls = find_object(world, "walls/link/collision");
   ASSERT_NE(walls, nullptr);
@@ -655,19 +710,23 @@ TEST(WorldSdf, DuplicateNamesPolylinesAndVisuals) {
 
 TEST(WorldSdf, MalformedFilesAreErrorsNamingTheFile) {
   const auto dir = test::make_temp_dir("world_sdf_malformed");
-  const auto broken = write_file(dir / "broken.sdf",
-                                 "<?xml version=\"1.0\"?>\n<sdf version=\"1.6\">\n<world name=\"w\">\n"
-                                 "<model name=\"a\"><link name=\"l\"></model>\n</world></sdf>\n");
+  const auto broken =
+      write_file(dir / "broken.sdf",
+                 "<?xml version=\"1.0\"?>\n<sdf version=\"1.6\">\n<world name=\"w\">\n"
+                 "<model name=\"a\"><link name=\"l\"></model>\n</world></sdf>\n");
   auto result = load_sdf_world(broken, isolated_options());
   ASSERT_FALSE(result.ok());
   EXPECT_EQ(result.error().code, ErrorCode::kParse);
-  EXPECT_NE(result.error().message.find("broken.sdf:4"), std::string::npos) << result.error().message;
+  EXPECT_NE(result.error().message.find("broken.sdf:4"), std::string::npos)
+      << result.error().message;
 
-  const auto bad_value = write_file(dir / "bad_value.sdf",
-                                    world_sdf(static_model("a", "0 0 0 0 0 0", "<box><size>a b c</size></box>"), "1.6"));
+  const auto bad_value = write_file(
+      dir / "bad_value.sdf",
+      world_sdf(static_model("a", "0 0 0 0 0 0", "<box><size>a b c</size></box>"), "1.6"));
   result = load_sdf_world(bad_value, isolated_options());
   ASSERT_FALSE(result.ok());
-  EXPECT_NE(result.error().message.find("bad_value.sdf"), std::string::npos) << result.error().message;
+  EXPECT_NE(result.error().message.find("bad_value.sdf"), std::string::npos)
+      << result.error().message;
   EXPECT_NE(result.error().message.find("size"), std::string::npos) << result.error().message;
 
   const auto urdf = write_file(dir / "robot.urdf", "<?xml version=\"1.0\"?><robot name=\"r\"/>");
@@ -684,11 +743,13 @@ TEST(WorldSdf, SphericalCoordinatesFollowGazebo) {
   const auto dir = test::make_temp_dir("world_sdf_geo");
   const auto path = write_file(
       dir / "w.sdf",
-      world_sdf("<spherical_coordinates><surface_model>EARTH_WGS84</surface_model>"
-                "<world_frame_orientation>ENU</world_frame_orientation><latitude_deg>48.1</latitude_deg>"
-                "<longitude_deg>11.5</longitude_deg><elevation>500</elevation><heading_deg>90</heading_deg>"
-                "</spherical_coordinates>" +
-                static_model("a", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>")));
+      world_sdf(
+          "<spherical_coordinates><surface_model>EARTH_WGS84</surface_model>"
+          "<world_frame_orientation>ENU</world_frame_orientation><latitude_deg>48.1</latitude_deg>"
+          "<longitude_deg>11.5</longitude_deg><elevation>500</elevation><heading_deg>90</"
+          "heading_deg>"
+          "</spherical_coordinates>" +
+          static_model("a", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>")));
   auto world = load_sdf_world(path, isolated_options()).value();
   ASSERT_TRUE(world.geo_origin.has_value());
   EXPECT_DOUBLE_EQ(world.geo_origin->origin.latitude_deg, 48.1);
@@ -703,9 +764,11 @@ TEST(WorldSdf, SphericalCoordinatesFollowGazebo) {
   const double e2 = 6.69437999014e-3;
   const double sin_lat = std::sin(48.1 * kPi / 180.0);
   const double meridian_m = 6378137.0 * (1.0 - e2) / std::pow(1.0 - e2 * sin_lat * sin_lat, 1.5);
-  EXPECT_NEAR(north.latitude_deg - 48.1, std::atan(1000.0 / (meridian_m + 500.0)) * 180.0 / kPi, 1e-8);
+  EXPECT_NEAR(north.latitude_deg - 48.1, std::atan(1000.0 / (meridian_m + 500.0)) * 180.0 / kPi,
+              1e-8);
   EXPECT_NEAR(north.longitude_deg, 11.5, 1e-9);
-  EXPECT_NEAR(north.height_m, 500.0 + 1000.0 * 1000.0 / (2.0 * 6.37e6), 0.01);  // the tangent plane rises
+  EXPECT_NEAR(north.height_m, 500.0 + 1000.0 * 1000.0 / (2.0 * 6.37e6),
+              0.01);  // the tangent plane rises
   const Geodetic west = world_point_to_geodetic(*world.geo_origin, {0.0, 1000.0, 0.0});
   EXPECT_LT(west.longitude_deg, 11.5);
   const Eigen::Vector3d back = geodetic_to_world_point(*world.geo_origin, north);
@@ -724,10 +787,11 @@ TEST(WorldSdf, SphericalCoordinatesFollowGazebo) {
 
 // 3 x 2 grayscale PNG: rows (0, 128, 255) and (255, 0, 64).
 const unsigned char kTinyPng[] = {
-    0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44, 0x52, 0x00, 0x00, 0x00,
-    0x03, 0x00, 0x00, 0x00, 0x02, 0x08, 0x00, 0x00, 0x00, 0x00, 0xb8, 0x1f, 0x39, 0xc6, 0x00, 0x00, 0x00, 0x10, 0x49,
-    0x44, 0x41, 0x54, 0x78, 0x9c, 0x63, 0x60, 0x68, 0xf8, 0xcf, 0xf0, 0x9f, 0xc1, 0x01, 0x00, 0x0b, 0x40, 0x02, 0xbf,
-    0x8c, 0xe2, 0x9d, 0x78, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+    0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44,
+    0x52, 0x00, 0x00, 0x00, 0x03, 0x00, 0x00, 0x00, 0x02, 0x08, 0x00, 0x00, 0x00, 0x00, 0xb8,
+    0x1f, 0x39, 0xc6, 0x00, 0x00, 0x00, 0x10, 0x49, 0x44, 0x41, 0x54, 0x78, 0x9c, 0x63, 0x60,
+    0x68, 0xf8, 0xcf, 0xf0, 0x9f, 0xc1, 0x01, 0x00, 0x0b, 0x40, 0x02, 0xbf, 0x8c, 0xe2, 0x9d,
+    0x78, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
 
 TEST(WorldSdf, HeightmapAndMissingHeightmap) {
   const auto dir = test::make_temp_dir("world_sdf_heightmap");
@@ -737,21 +801,26 @@ TEST(WorldSdf, HeightmapAndMissingHeightmap) {
   }
   const auto path = write_file(
       dir / "w.sdf",
-      world_sdf(static_model("terrain", "0 0 0 0 0 0",
-                             "<heightmap><uri>terrain.png</uri><size>20 10 5</size><pos>1 2 3</pos></heightmap>") +
-                static_model("lost", "0 0 0 0 0 0", "<heightmap><uri>nothing.png</uri><size>20 10 5</size></heightmap>") +
-                // An include skytrace instantiates itself: the rest of the world is then parsed from
-                // text, and relative URIs must still start from the world's folder.
-                "<include><uri>model://absent_model</uri></include>"));
+      world_sdf(
+          static_model(
+              "terrain", "0 0 0 0 0 0",
+              "<heightmap><uri>terrain.png</uri><size>20 10 5</size><pos>1 2 3</pos></heightmap>") +
+          static_model("lost", "0 0 0 0 0 0",
+                       "<heightmap><uri>nothing.png</uri><size>20 10 5</size></heightmap>") +
+          // An include skytrace instantiates itself: the rest of the world is then parsed from
+          // text, and relative URIs must still start from the world's folder.
+          "<include><uri>model://absent_model</uri></include>"));
   const auto world = load_sdf_world(path, isolated_options()).value();
   const auto* terrain = find_object(world, "terrain/link/collision");
   ASSERT_NE(terrain, nullptr) << all_warnings(world);
   EXPECT_EQ(terrain->kind, ObjectKind::kGround);
   ASSERT_EQ(terrain->mesh.vertices_m.size(), 6U);
   // Row 0 (north, +y), column 2 (east): brightness 255 -> pos.z + size.z.
-  expect_vector_near(terrain->mesh.vertices_m[2].cast<double>(), {1.0 + 10.0, 2.0 + 5.0, 3.0 + 5.0}, 1e-5);
+  expect_vector_near(terrain->mesh.vertices_m[2].cast<double>(), {1.0 + 10.0, 2.0 + 5.0, 3.0 + 5.0},
+                     1e-5);
   // Row 1, column 2: 64 / 255 of 5 m.
-  expect_vector_near(terrain->mesh.vertices_m[5].cast<double>(), {11.0, -3.0, 3.0 + 5.0 * 64.0 / 255.0}, 1e-5);
+  expect_vector_near(terrain->mesh.vertices_m[5].cast<double>(),
+                     {11.0, -3.0, 3.0 + 5.0 * 64.0 / 255.0}, 1e-5);
   EXPECT_EQ(find_object(world, "lost/link/collision"), nullptr);
   EXPECT_TRUE(has_warning(world, "heightmap nothing.png not found")) << all_warnings(world);
 }
@@ -868,13 +937,18 @@ TEST(WorldMesh, SdfMeshesWithScaleSubmeshAndFailures) {
   write_file(dir / "models" / "garden" / "meshes" / "broken.dae", "<COLLADA>nope");
   const auto path = write_file(
       dir / "w.sdf",
-      world_sdf(static_model("scaled", "0 0 0 0 0 0",
-                             "<mesh><uri>model://garden/meshes/scene.obj</uri><scale>2 1 0.5</scale></mesh>") +
-                static_model("crown_only", "0 0 0 0 0 0",
-                             "<mesh><uri>model://garden/meshes/scene.obj</uri><submesh><name>tree_crown</name>"
-                             "<center>true</center></submesh></mesh>") +
-                static_model("ghost", "0 0 0 0 0 0", "<mesh><uri>model://garden/meshes/ghost.dae</uri></mesh>") +
-                static_model("broken", "0 0 0 0 0 0", "<mesh><uri>model://garden/meshes/broken.dae</uri></mesh>")));
+      world_sdf(
+          static_model(
+              "scaled", "0 0 0 0 0 0",
+              "<mesh><uri>model://garden/meshes/scene.obj</uri><scale>2 1 0.5</scale></mesh>") +
+          static_model(
+              "crown_only", "0 0 0 0 0 0",
+              "<mesh><uri>model://garden/meshes/scene.obj</uri><submesh><name>tree_crown</name>"
+              "<center>true</center></submesh></mesh>") +
+          static_model("ghost", "0 0 0 0 0 0",
+                       "<mesh><uri>model://garden/meshes/ghost.dae</uri></mesh>") +
+          static_model("broken", "0 0 0 0 0 0",
+                       "<mesh><uri>model://garden/meshes/broken.dae</uri></mesh>")));
   const auto world = load_sdf_world(path, isolated_options(dir / "models")).value();
   const auto* scaled = find_object(world, "scaled/link/collision");
   ASSERT_NE(scaled, nullptr) << all_warnings(world);
@@ -888,7 +962,8 @@ TEST(WorldMesh, SdfMeshesWithScaleSubmeshAndFailures) {
   expect_vector_near(low, {-1.0, -1.0, -1.0}, 1e-6);  // centred
   EXPECT_EQ(find_object(world, "ghost/link/collision"), nullptr);
   EXPECT_EQ(find_object(world, "broken/link/collision"), nullptr);
-  EXPECT_TRUE(has_warning(world, "mesh model://garden/meshes/ghost.dae not found, 1 geometry skipped"))
+  EXPECT_TRUE(
+      has_warning(world, "mesh model://garden/meshes/ghost.dae not found, 1 geometry skipped"))
       << all_warnings(world);
   EXPECT_TRUE(has_warning(world, "broken.dae")) << all_warnings(world);
 }
@@ -898,7 +973,8 @@ TEST(WorldMesh, SdfMeshesWithScaleSubmeshAndFailures) {
 
 std::string osm_node(int id, double lat, double lon, const std::string& tags = "") {
   char buffer[200];
-  std::snprintf(buffer, sizeof(buffer), "<node id=\"%d\" version=\"1\" lat=\"%.7f\" lon=\"%.7f\"", id, lat, lon);
+  std::snprintf(buffer, sizeof(buffer), "<node id=\"%d\" version=\"1\" lat=\"%.7f\" lon=\"%.7f\"",
+                id, lat, lon);
   return std::string(buffer) + (tags.empty() ? "/>\n" : ">" + tags + "</node>\n");
 }
 
@@ -908,17 +984,20 @@ std::string osm_way(int id, const std::vector<int>& nodes, const std::string& ta
   return out + tags + "</way>\n";
 }
 
-std::string tag(const std::string& k, const std::string& v) { return "<tag k=\"" + k + "\" v=\"" + v + "\"/>"; }
+std::string tag(const std::string& k, const std::string& v) {
+  return "<tag k=\"" + k + "\" v=\"" + v + "\"/>";
+}
 
 // Square of nodes first_id..first_id+3 between two latitudes and longitudes.
 std::string osm_square(int first_id, double lat0, double lon0, double lat1, double lon1) {
-  return osm_node(first_id, lat0, lon0) + osm_node(first_id + 1, lat0, lon1) + osm_node(first_id + 2, lat1, lon1) +
-         osm_node(first_id + 3, lat1, lon0);
+  return osm_node(first_id, lat0, lon0) + osm_node(first_id + 1, lat0, lon1) +
+         osm_node(first_id + 2, lat1, lon1) + osm_node(first_id + 3, lat1, lon0);
 }
 
 std::string tiny_osm(bool with_buildings) {
-  std::string xml = "<?xml version='1.0' encoding='UTF-8'?>\n<osm version=\"0.6\">\n"
-                    "<bounds minlat=\"47.998\" minlon=\"10.999\" maxlat=\"48.003\" maxlon=\"11.002\"/>\n";
+  std::string xml =
+      "<?xml version='1.0' encoding='UTF-8'?>\n<osm version=\"0.6\">\n"
+      "<bounds minlat=\"47.998\" minlon=\"10.999\" maxlat=\"48.003\" maxlon=\"11.002\"/>\n";
   xml += osm_square(1, 48.0000, 11.0000, 48.0002, 11.0002);
   xml += osm_square(5, 48.0004, 11.0000, 48.0006, 11.0002);
   xml += osm_square(9, 48.0008, 11.0000, 48.0010, 11.0002);
@@ -928,12 +1007,16 @@ std::string tiny_osm(bool with_buildings) {
   xml += osm_square(25, 47.9990, 11.0000, 47.9992, 11.0002);
   xml += osm_square(29, 48.0024, 11.0000, 48.0028, 11.0004);
   xml += osm_node(33, 48.0026, 11.0000) + osm_node(34, 48.0027, 11.0000);
-  xml += osm_node(40, 47.9985, 11.0000, tag("natural", "tree") + tag("height", "10") + tag("diameter_crown", "4"));
+  xml += osm_node(40, 47.9985, 11.0000,
+                  tag("natural", "tree") + tag("height", "10") + tag("diameter_crown", "4"));
   xml += osm_node(41, 47.9985, 11.0005, tag("natural", "tree"));
   if (with_buildings) {
     xml += osm_way(1, {1, 2, 3, 4, 1}, tag("building", "yes") + tag("height", "12 m"));
-    xml += osm_way(2, {5, 6, 7, 8, 5}, tag("building", "house") + tag("building:levels", "4") + tag("roof:levels", "1"));
-    xml += osm_way(3, {9, 10, 11, 12, 9}, tag("building", "yes") + tag("building:material", "glass"));
+    xml +=
+        osm_way(2, {5, 6, 7, 8, 5},
+                tag("building", "house") + tag("building:levels", "4") + tag("roof:levels", "1"));
+    xml +=
+        osm_way(3, {9, 10, 11, 12, 9}, tag("building", "yes") + tag("building:material", "glass"));
     xml += osm_way(4, {1}, tag("building", "yes"));
     xml += osm_way(5, {25, 26, 27, 28, 25}, tag("building", "no"));
     // The west side runs down, back up and down again: osmium rejects the overlapping segments,
@@ -941,9 +1024,11 @@ std::string tiny_osm(bool with_buildings) {
     xml += osm_way(6, {29, 30, 31, 32, 33, 34, 29}, tag("building", "yes") + tag("height", "5"));
     xml += osm_way(20, {13, 14, 15, 16, 13}, "");
     xml += osm_way(21, {17, 18, 19, 20, 17}, "");
-    xml += "<relation id=\"10\" version=\"1\"><member type=\"way\" ref=\"20\" role=\"outer\"/>"
-           "<member type=\"way\" ref=\"21\" role=\"inner\"/>" +
-           tag("type", "multipolygon") + tag("building", "yes") + tag("height", "20") + "</relation>\n";
+    xml +=
+        "<relation id=\"10\" version=\"1\"><member type=\"way\" ref=\"20\" role=\"outer\"/>"
+        "<member type=\"way\" ref=\"21\" role=\"inner\"/>" +
+        tag("type", "multipolygon") + tag("building", "yes") + tag("height", "20") +
+        "</relation>\n";
     xml += "<relation id=\"11\" version=\"1\"><member type=\"way\" ref=\"999\" role=\"outer\"/>" +
            tag("type", "multipolygon") + tag("building", "yes") + "</relation>\n";
   }
@@ -954,13 +1039,14 @@ std::string tiny_osm(bool with_buildings) {
 // ENU of a point at the origin's height, through core's frames (independent of GeographicLib's
 // LocalCartesian used by the loader).
 Eigen::Vector2d enu_of(double lat, double lon, const Geodetic& origin) {
-  const Eigen::Vector3d enu = ecef_to_enu(geodetic_to_ecef(Geodetic{lat, lon, origin.height_m}), origin);
+  const Eigen::Vector3d enu =
+      ecef_to_enu(geodetic_to_ecef(Geodetic{lat, lon, origin.height_m}), origin);
   return enu.head<2>();
 }
 
 double square_area_m2(double lat0, double lon0, double lat1, double lon1, const Geodetic& origin) {
-  return std::abs(signed_area_m2({enu_of(lat0, lon0, origin), enu_of(lat0, lon1, origin), enu_of(lat1, lon1, origin),
-                                  enu_of(lat1, lon0, origin)}));
+  return std::abs(signed_area_m2({enu_of(lat0, lon0, origin), enu_of(lat0, lon1, origin),
+                                  enu_of(lat1, lon1, origin), enu_of(lat1, lon0, origin)}));
 }
 
 TEST(WorldOsm, BuildingsMultipolygonTreesAndWoods) {
@@ -976,7 +1062,7 @@ TEST(WorldOsm, BuildingsMultipolygonTreesAndWoods) {
 
   const auto summary = summarize_world(world);
   EXPECT_EQ(summary.buildings, 5U) << all_warnings(world);  // ways 1, 2, 3, 6 and relation 10
-  EXPECT_EQ(summary.trees, 3U);                              // two tree nodes and the wood
+  EXPECT_EQ(summary.trees, 3U);                             // two tree nodes and the wood
 
   const auto height_of = [&](const std::string& name) {
     const auto* object = find_object(world, name);
@@ -995,12 +1081,15 @@ TEST(WorldOsm, BuildingsMultipolygonTreesAndWoods) {
   // Footprint of way 1 from the prism's volume, against the shoelace area of its corners in ENU.
   const auto* first = find_object(world, "way/1");
   EXPECT_TRUE(is_closed_consistent(first->mesh));
-  EXPECT_NEAR(signed_volume_m3(first->mesh) / 12.0, square_area_m2(48.0, 11.0, 48.0002, 11.0002, origin), 0.01);
+  EXPECT_NEAR(signed_volume_m3(first->mesh) / 12.0,
+              square_area_m2(48.0, 11.0, 48.0002, 11.0002, origin), 0.01);
   // The footprint's east-west extent: 0.0002 deg of longitude at 48 deg, N cos(lat) with the prime
   // vertical radius N = a / sqrt(1 - e2 sin2(lat)) = 6390702 m: 14.927 m.
   const auto [low1, high1] = object_bounds(*first);
-  EXPECT_NEAR(high1.x() - low1.x(), enu_of(48.0, 11.0002, origin).x() - enu_of(48.0, 11.0, origin).x(), 0.01);
-  EXPECT_NEAR(high1.x() - low1.x(), 0.0002 * kPi / 180.0 * 6390702.0 * std::cos(48.0 * kPi / 180.0), 0.01);
+  EXPECT_NEAR(high1.x() - low1.x(),
+              enu_of(48.0, 11.0002, origin).x() - enu_of(48.0, 11.0, origin).x(), 0.01);
+  EXPECT_NEAR(high1.x() - low1.x(), 0.0002 * kPi / 180.0 * 6390702.0 * std::cos(48.0 * kPi / 180.0),
+              0.01);
 
   // The multipolygon keeps its hole: volume = (outer - inner) * 20 m.
   const auto* courtyard = find_object(world, "relation/10");
@@ -1030,9 +1119,12 @@ TEST(WorldOsm, BuildingsMultipolygonTreesAndWoods) {
   const auto* redrawn = find_object(world, "way/6");
   ASSERT_NE(redrawn, nullptr);
   EXPECT_TRUE(is_closed_consistent(redrawn->mesh));
-  EXPECT_NEAR(signed_volume_m3(redrawn->mesh) / 5.0, square_area_m2(48.0024, 11.0, 48.0028, 11.0004, origin), 0.05);
-  EXPECT_TRUE(has_warning(world, "way/6 (building=yes, 7 node(s), closed): osmium rejected it")) << all_warnings(world);
-  EXPECT_TRUE(has_warning(world, "way/4 (building=yes, 1 node(s), not a closed ring) skipped")) << all_warnings(world);
+  EXPECT_NEAR(signed_volume_m3(redrawn->mesh) / 5.0,
+              square_area_m2(48.0024, 11.0, 48.0028, 11.0004, origin), 0.05);
+  EXPECT_TRUE(has_warning(world, "way/6 (building=yes, 7 node(s), closed): osmium rejected it"))
+      << all_warnings(world);
+  EXPECT_TRUE(has_warning(world, "way/4 (building=yes, 1 node(s), not a closed ring) skipped"))
+      << all_warnings(world);
   EXPECT_TRUE(has_warning(world, "relation/11")) << all_warnings(world);
 }
 
@@ -1049,7 +1141,8 @@ TEST(WorldOsm, NoBuildingsIsAnErrorUnlessAllowed) {
   const auto world = load_osm_world(path, options).value();
   EXPECT_EQ(summarize_world(world).trees, 3U);
 
-  const auto broken = write_file(dir / "broken.osm", "<?xml version='1.0'?>\n<osm version=\"0.6\">\n<node id=\"1\"");
+  const auto broken = write_file(dir / "broken.osm",
+                                 "<?xml version='1.0'?>\n<osm version=\"0.6\">\n<node id=\"1\"");
   const auto bad = load_osm_world(broken);
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().message.find("broken.osm"), std::string::npos);

@@ -9,7 +9,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -30,7 +29,8 @@ namespace skytrace::world {
 // Materials and kinds (materials.cpp)
 
 // Specific attenuation given to vegetation when nothing more specific is known (SDF tree models,
-// OSM trees and woods). An order of magnitude for foliage at L band; scenarios should set their own.
+// OSM trees and woods). An order of magnitude for foliage at L band; scenarios should set their
+// own.
 inline constexpr double kDefaultVegetationAttenuationDbPerM = 1.0;
 
 // "concrete", "brick", "glass", "metal", "wood", "ground", "vegetation", "unknown".
@@ -58,7 +58,8 @@ struct MaterialRule {
                                                       const std::vector<std::string>& names);
 
 // Default classification by name or URI (case-insensitive substrings).
-// Vegetation: tree, pine, oak, bush, hedge, forest (also palm, shrub, wood_land... see materials.cpp).
+// Vegetation: tree, pine, oak, bush, hedge, forest (also palm, shrub, wood_land... see
+// materials.cpp).
 [[nodiscard]] bool name_suggests_vegetation(std::string_view name);
 // Buildings: house, building, office, apartment, school, station, store, shop, garage, ...
 [[nodiscard]] bool name_suggests_building(std::string_view name);
@@ -89,16 +90,18 @@ struct WorldSummary {
 [[nodiscard]] TriangleMesh make_cylinder(double radius_m, double length_m, int segments = 32);
 // Ellipsoid centred on the origin (a sphere when all radii are equal): `segments` around z,
 // `rings` from pole to pole (vertices lie on the surface, so the polytope is slightly inside it).
-[[nodiscard]] TriangleMesh make_ellipsoid(const Eigen::Vector3d& radii_m, int segments = 32, int rings = 16);
+[[nodiscard]] TriangleMesh make_ellipsoid(const Eigen::Vector3d& radii_m, int segments = 32,
+                                          int rings = 16);
 // Capsule along z: a cylinder of `length_m` between two hemispheres of `radius_m`.
-[[nodiscard]] TriangleMesh make_capsule(double radius_m, double length_m, int segments = 32, int rings = 16);
+[[nodiscard]] TriangleMesh make_capsule(double radius_m, double length_m, int segments = 32,
+                                        int rings = 16);
 // A finite square plane through the origin with the given normal: size x along the plane's own x
 // axis (the world x projected on the plane, as Gazebo orients it). Two triangles facing the normal.
 [[nodiscard]] TriangleMesh make_plane(const Eigen::Vector3d& normal, const Eigen::Vector2d& size_m);
-// Regular grid of heights (row 0 at +y, the top of a heightmap image; column 0 at -x), centred on the
-// origin, spanning size_x by size_y; heights_m is rows * columns, row-major. Surface only.
-[[nodiscard]] Result<TriangleMesh> make_height_grid(const std::vector<double>& heights_m, int rows, int columns,
-                                                    double size_x_m, double size_y_m);
+// Regular grid of heights (row 0 at +y, the top of a heightmap image; column 0 at -x), centred on
+// the origin, spanning size_x by size_y; heights_m is rows * columns, row-major. Surface only.
+[[nodiscard]] Result<TriangleMesh> make_height_grid(const std::vector<double>& heights_m, int rows,
+                                                    int columns, double size_x_m, double size_y_m);
 
 // Convex hull of points (incremental, double precision); errors for fewer than 4 points or points
 // that are all in one plane. Used to turn open vegetation meshes (leaf cards) into closed volumes.
@@ -116,9 +119,11 @@ struct PolygonWithHoles {
 // index the concatenation outer, holes[0], holes[1], ... and are counter-clockwise; their total
 // area is |area(outer)| - sum |area(hole)| for a valid polygon. Errors name what is invalid (fewer
 // than 3 distinct points, zero area, a ring that cannot be clipped).
-[[nodiscard]] Result<std::vector<std::array<int, 3>>> triangulate_polygon(const PolygonWithHoles& polygon);
+[[nodiscard]] Result<std::vector<std::array<int, 3>>> triangulate_polygon(
+    const PolygonWithHoles& polygon);
 // Prism of a polygon with holes between two heights: walls, roof and floor (closed volume).
-[[nodiscard]] Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bottom_m, double top_m);
+[[nodiscard]] Result<TriangleMesh> extrude_polygon(const PolygonWithHoles& polygon, double bottom_m,
+                                                   double top_m);
 
 // ---------------------------------------------------------------------------------------------
 // Mesh files through assimp (mesh_loader.cpp)
@@ -136,8 +141,9 @@ struct MeshPart {
   TriangleMesh mesh;
 };
 
-// Reads every triangle of a mesh file (COLLADA, OBJ, STL, PLY, glTF/GLB, and whatever assimp reads).
-// Points and lines are dropped; polygons are triangulated. Errors name the file and assimp's message.
+// Reads every triangle of a mesh file (COLLADA, OBJ, STL, PLY, glTF/GLB, and whatever assimp
+// reads). Points and lines are dropped; polygons are triangulated. Errors name the file and
+// assimp's message.
 [[nodiscard]] Result<std::vector<MeshPart>> read_mesh_file(const std::filesystem::path& path,
                                                            UpAxis up_axis = UpAxis::kAuto);
 
@@ -157,7 +163,8 @@ struct MeshLoadOptions {
 };
 
 // A world made of one mesh file placed at a geographic origin.
-[[nodiscard]] Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoOrigin& origin,
+[[nodiscard]] Result<WorldModel> load_mesh_world(const std::filesystem::path& path,
+                                                 const GeoOrigin& origin,
                                                  const MeshLoadOptions& options = {});
 
 // ---------------------------------------------------------------------------------------------
@@ -204,14 +211,17 @@ struct SdfLoadOptions {
 // (nested models "outer/inner/link/collision"); their pose is the collision frame in the world.
 // Missing models and meshes are skipped with a warning; a malformed file is an error with
 // sdformat's messages.
-[[nodiscard]] Result<WorldModel> load_sdf_world(const std::filesystem::path& path, const SdfLoadOptions& options = {});
+[[nodiscard]] Result<WorldModel> load_sdf_world(const std::filesystem::path& path,
+                                                const SdfLoadOptions& options = {});
 
 // The origin as Gazebo defines it from <spherical_coordinates> (ENU world frame, heading of the
 // world x axis counter-clockwise from east, elevation above the WGS84 ellipsoid): where a point of
 // the world frame is on the Earth.
-[[nodiscard]] Geodetic world_point_to_geodetic(const GeoOrigin& origin, const Eigen::Vector3d& world_m);
+[[nodiscard]] Geodetic world_point_to_geodetic(const GeoOrigin& origin,
+                                               const Eigen::Vector3d& world_m);
 // The inverse: the world frame position of a geodetic point.
-[[nodiscard]] Eigen::Vector3d geodetic_to_world_point(const GeoOrigin& origin, const Geodetic& point);
+[[nodiscard]] Eigen::Vector3d geodetic_to_world_point(const GeoOrigin& origin,
+                                                      const Geodetic& point);
 
 // ---------------------------------------------------------------------------------------------
 // OpenStreetMap extracts through libosmium (osm_loader.cpp)
@@ -249,7 +259,8 @@ struct OsmLoadOptions {
 // extruded to their height, trees and woods, projected on the local tangent plane of the origin
 // (GeographicLib LocalCartesian). Objects are named "way/123", "relation/45", "node/67".
 // .osm, .osm.pbf, .osm.bz2, .osm.gz. Objects that cannot be built are named in the warnings.
-[[nodiscard]] Result<WorldModel> load_osm_world(const std::filesystem::path& path, const OsmLoadOptions& options = {});
+[[nodiscard]] Result<WorldModel> load_osm_world(const std::filesystem::path& path,
+                                                const OsmLoadOptions& options = {});
 
 // An OSM length ("12", "12 m", "12.5m", "40 ft", "40'", "12'6\"") in metres.
 [[nodiscard]] Result<double> parse_osm_length_m(std::string_view text);
