@@ -557,6 +557,7 @@ std::vector<RayOutcome> EmbreeScene::trace(const Eigen::Vector3d& origin_m,
   }
   const Eigen::Vector3f origin_f = origin_m.cast<float>();
   std::vector<VegetationCrossing> crossings;
+  if (!impl.vegetation.empty) crossings.reserve(32);
   VegetationContext context{};
   rtcInitIntersectContext(&context.base);
   context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // every ray of a batch leaves the same point
