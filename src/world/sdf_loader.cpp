@@ -282,6 +282,9 @@ struct XmlScan {
   std::set<std::string> referenced_frames;  // relative_to / attached_to values
   bool world_joints = false;
   int worlds = 0;
+  // expat's complaint ("file:line:column: malformed XML: ..."), empty when well-formed. sdformat's
+  // parser (tinyxml2) is more lenient, so it decides; this message explains its failure.
+  std::string xml_error;
 };
 
 Result<XmlScan> scan_xml(const fs::path& path) {
@@ -373,13 +376,27 @@ Result<XmlScan> scan_xml(const fs::path& path) {
   XML_SetCharacterDataHandler(parser.get(), [](void* data, const XML_Char* text, int length) {
     static_cast<State*>(data)->characters.append(text, static_cast<std::size_t>(length));
   });
-  const std::string& text = state.scan.text;
+  // "--" inside comments is not XML but tinyxml2 (sdformat) accepts it, and gz-sim's examples
+  // use it: expat reads a copy with those blanked, same length so that offsets still match.
+  std::string text = state.scan.text;
+  for (std::size_t open = text.find("<!--"); open != std::string::npos;
+       open = text.find("<!--", open + 4)) {
+    const std::size_t close = text.find("-->", open + 4);
+    const std::size_t stop = close == std::string::npos ? text.size() : close;
+    for (std::size_t i = open + 4; i + 1 < stop; ++i) {
+      if (text[i] == '-' && text[i + 1] == '-') text[i] = ' ';
+    }
+    if (close == std::string::npos) break;
+    open = close;
+  }
   if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), XML_TRUE) ==
       XML_STATUS_ERROR) {
-    return make_error(ErrorCode::kParse,
-                      path.string() + ":" + std::to_string(XML_GetCurrentLineNumber(parser.get())) +
-                          ":" + std::to_string(XML_GetCurrentColumnNumber(parser.get())) +
-                          ": malformed XML: " + XML_ErrorString(XML_GetErrorCode(parser.get())));
+    state.scan.xml_error = path.string() + ":" +
+                           std::to_string(XML_GetCurrentLineNumber(parser.get())) + ":" +
+                           std::to_string(XML_GetCurrentColumnNumber(parser.get())) +
+                           ": malformed XML: " + XML_ErrorString(XML_GetErrorCode(parser.get()));
+    state.scan.includes.clear();
+    return std::move(state.scan);
   }
   if (state.scan.root != "sdf") {
     return make_error(ErrorCode::kParse, path.string() + ": not an SDF file (root element <" +
@@ -1272,7 +1289,7 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   // pose in another frame, names referred to by frames or joints) stay with sdformat.
   std::string text = scan->text;
   std::vector<const IncludeSpec*> own_includes;
-  if (scan->worlds == 1 && !scan->world_joints) {
+  if (scan->xml_error.empty() && scan->worlds == 1 && !scan->world_joints) {
     for (const auto& include : scan->includes) {
       if (include.unusual || include.uri.empty() || include.end <= include.begin) continue;
       if (include.uri.rfind("http://", 0) == 0 || include.uri.rfind("https://", 0) == 0) continue;
@@ -1324,7 +1341,7 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   };
   sort_errors(errors);
   const auto fail = [&](const std::string& what) -> Result<WorldModel> {
-    std::string message = path.string() + ": " + what;
+    std::string message = scan->xml_error.empty() ? path.string() + ": " + what : scan->xml_error;
     for (const auto& line : fatal) message += "\n  " + line;
     for (const auto& line : console.lines()) message += "\n  sdformat: " + line;
     return make_error(ErrorCode::kParse, replace_string_source(message, path));

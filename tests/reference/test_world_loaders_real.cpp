@@ -219,6 +219,22 @@ TEST(WorldLoadersReal, Px4TestCity4) {
   EXPECT_LT(high.z(), 25.0);
 }
 
+// gz-sim's geo-referencing example: its header comment holds "--" (not XML, accepted by
+// sdformat's parser) and its origin is Rio de Janeiro.
+TEST(WorldLoadersReal, GzSimSphericalCoordinatesExample) {
+  const auto path = SKYTRACE_SHARED_FILE("worlds/gz_sim/spherical_coordinates.sdf");
+  const auto world = load_sdf_world(path, options_with_models({})).value();
+  ASSERT_TRUE(world.geo_origin.has_value());
+  const std::string text = read_text(path);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(text, m, std::regex(R"(<latitude_deg>([^<]+)</latitude_deg>)")));
+  EXPECT_DOUBLE_EQ(world.geo_origin->origin.latitude_deg, std::stod(m[1]));
+  ASSERT_TRUE(std::regex_search(text, m, std::regex(R"(<longitude_deg>([^<]+)</longitude_deg>)")));
+  EXPECT_DOUBLE_EQ(world.geo_origin->origin.longitude_deg, std::stod(m[1]));
+  EXPECT_DOUBLE_EQ(world.geo_origin->origin.latitude_deg, -22.986687);
+  EXPECT_DOUBLE_EQ(world.geo_origin->heading_deg, 0.0);
+}
+
 struct OsmExpectation {
   std::string file;
   std::size_t readme_buildings;

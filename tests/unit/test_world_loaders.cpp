@@ -729,6 +729,14 @@ TEST(WorldSdf, MalformedFilesAreErrorsNamingTheFile) {
       << result.error().message;
   EXPECT_NE(result.error().message.find("size"), std::string::npos) << result.error().message;
 
+  // "--" in a comment is not XML, but sdformat accepts it (gz-sim's examples have it): no error.
+  std::string dashes_text =
+      world_sdf(static_model("a", "0 0 0 0 0 0", "<box><size>1 1 1</size></box>"));
+  dashes_text.insert(dashes_text.find('\n') + 1, "<!-- run: gz service --timeout 2000 -->\n");
+  const auto dashes = write_file(dir / "dashes.sdf", dashes_text);
+  const auto dashes_world = load_sdf_world(dashes, isolated_options());
+  EXPECT_TRUE(dashes_world.ok()) << dashes_world.error().message;
+
   const auto urdf = write_file(dir / "robot.urdf", "<?xml version=\"1.0\"?><robot name=\"r\"/>");
   result = load_sdf_world(urdf, isolated_options());
   ASSERT_FALSE(result.ok());
