@@ -57,9 +57,10 @@ struct MaterialRule {
 [[nodiscard]] const MaterialRule* match_material_rule(const std::vector<MaterialRule>& rules,
                                                       const std::vector<std::string>& names);
 
-// Default classification by name or URI (case-insensitive substrings).
-// Vegetation: tree, pine, oak, bush, hedge, forest (also palm, shrub, wood_land... see
-// materials.cpp).
+// Default classification by name or URI. Names are split into words (at non-letters and at
+// lower-to-upper case changes); a keyword matches a word equal to it or ending with it, plural
+// s/es allowed: "PineTree_2" and "warehouse" match, "street" and "small" do not.
+// Vegetation: tree, pine, oak, bush, hedge, forest, palm, shrub, foliage, birch, conifer.
 [[nodiscard]] bool name_suggests_vegetation(std::string_view name);
 // Buildings: house, building, office, apartment, school, station, store, shop, garage, ...
 [[nodiscard]] bool name_suggests_building(std::string_view name);
@@ -95,8 +96,9 @@ struct WorldSummary {
 // Capsule along z: a cylinder of `length_m` between two hemispheres of `radius_m`.
 [[nodiscard]] TriangleMesh make_capsule(double radius_m, double length_m, int segments = 32,
                                         int rings = 16);
-// A finite square plane through the origin with the given normal: size x along the plane's own x
-// axis (the world x projected on the plane, as Gazebo orients it). Two triangles facing the normal.
+// A finite rectangle through the origin with the given normal: size x along the frame's x axis
+// projected on the plane (y's when x is the normal), size y across. Two triangles facing the
+// normal.
 [[nodiscard]] TriangleMesh make_plane(const Eigen::Vector3d& normal, const Eigen::Vector2d& size_m);
 // Regular grid of heights (row 0 at +y, the top of a heightmap image; column 0 at -x), centred on
 // the origin, spanning size_x by size_y; heights_m is rows * columns, row-major. Surface only.
