@@ -660,28 +660,10 @@ class NavReader {
     KeplerEphemeris e;
     e.satellite = sat;
     e.toc = GnssTime::from_calendar(*epoch, system_time_scale(sat.system));
-    e.af0_s = f.required(0, 1, "SV clock bias");
-    e.af1_s_per_s = f.required(0, 2, "SV clock drift");
-    e.af2_s_per_s2 = f.required(0, 3, "SV clock drift rate");
     const char* iod_name = sat.system == S::kGalileo ? "IODnav" : sat.system == S::kBeiDou ? "AODE"
                            : sat.system == S::kNavic ? "IODEC" : "IODE";
     const double iode = f.required(1, 0, iod_name);
-    e.crs_m = f.required(1, 1, "Crs");
-    e.delta_n_rad_per_s = f.required(1, 2, "Delta n");
-    e.m0_rad = f.required(1, 3, "M0");
-    e.cuc_rad = f.required(2, 0, "Cuc");
-    e.eccentricity = f.required(2, 1, "e Eccentricity");
-    e.cus_rad = f.required(2, 2, "Cus");
-    e.sqrt_a_sqrtm = f.required(2, 3, "sqrt(A)");
-    e.toe_sow = f.required(3, 0, "Toe");
-    e.cic_rad = f.required(3, 1, "Cic");
-    e.omega0_rad = f.required(3, 2, "OMEGA0");
-    e.cis_rad = f.required(3, 3, "Cis");
-    e.i0_rad = f.required(4, 0, "i0");
-    e.crc_m = f.required(4, 1, "Crc");
-    e.omega_rad = f.required(4, 2, "omega");
-    e.omega_dot_rad_per_s = f.required(4, 3, "OMEGA DOT");
-    e.idot_rad_per_s = f.required(5, 0, "IDOT");
+    decode_kepler_elements(f, e, "Delta n");
     e.iode = static_cast<int>(std::lround(iode));
     e.iodc = e.iode;
     double week = 0.0;
@@ -766,12 +748,19 @@ class NavReader {
 
   // The first five lines shared by the RINEX 4 CNAV layouts (GPS/QZSS CNAV, CNAV-2; BeiDou CNAV).
   void decode_cnav_orbit(FieldReader& f, KeplerEphemeris& e) const {
+    e.a_dot_m_per_s = f.required(1, 0, "Adot");
+    decode_kepler_elements(f, e, "Delta n0");
+    e.delta_n_dot_rad_per_s2 = f.required(5, 1, "Delta n0 dot");
+  }
+
+  // The clock polynomial and Keplerian elements every Keplerian layout (legacy and CNAV) holds in
+  // the same places; the layouts differ in the first field of line 1 and from line 5 on.
+  static void decode_kepler_elements(FieldReader& f, KeplerEphemeris& e, const char* delta_n_name) {
     e.af0_s = f.required(0, 1, "SV clock bias");
     e.af1_s_per_s = f.required(0, 2, "SV clock drift");
     e.af2_s_per_s2 = f.required(0, 3, "SV clock drift rate");
-    e.a_dot_m_per_s = f.required(1, 0, "Adot");
     e.crs_m = f.required(1, 1, "Crs");
-    e.delta_n_rad_per_s = f.required(1, 2, "Delta n0");
+    e.delta_n_rad_per_s = f.required(1, 2, delta_n_name);
     e.m0_rad = f.required(1, 3, "M0");
     e.cuc_rad = f.required(2, 0, "Cuc");
     e.eccentricity = f.required(2, 1, "e Eccentricity");
@@ -786,7 +775,6 @@ class NavReader {
     e.omega_rad = f.required(4, 2, "omega");
     e.omega_dot_rad_per_s = f.required(4, 3, "OMEGA DOT");
     e.idot_rad_per_s = f.required(5, 0, "IDOT");
-    e.delta_n_dot_rad_per_s2 = f.required(5, 1, "Delta n0 dot");
   }
 
   Status decode_cnav(const RecordLines& rows, const SatelliteId& sat, NavMessage message, std::string source) {
