@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "skytrace/core/text_file.hpp"
+#include "skytrace/world/loaders.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -211,6 +212,103 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
   return r;
 }
 
+std::string parse_kind(const Node& node) { return node.as_choice({"building", "tree", "ground", "other"}); }
+
+MaterialClass parse_class(const Node& node) {
+  auto parsed = world::parse_material_class(node.as_string());
+  if (!parsed) node.fail(parsed.error().message);
+  return *parsed;
+}
+
+MeshSetting parse_mesh(const Node& node, const std::filesystem::path& base) {
+  node.expect_keys({"file", "name", "position_m", "rpy_deg", "scale", "up_axis", "kind", "material"});
+  MeshSetting m;
+  m.file = existing_file(node.required("file"), base);
+  m.name = m.file.filename().string();
+  if (auto c = node.child("name")) {
+    m.name = c->as_string();
+    if (m.name.empty() || m.name.find('/') != std::string::npos) c->fail("expected a name without '/'");
+  }
+  if (auto c = node.child("position_m")) m.position_m = c->as_vector3();
+  if (auto c = node.child("rpy_deg")) m.rpy_deg = c->as_vector3();
+  if (auto c = node.child("scale")) {
+    m.scale = c->as_double();
+    if (!(m.scale > 0.0)) c->fail("expected a scale above 0");
+  }
+  if (auto c = node.child("up_axis")) m.up_axis = c->as_choice({"auto", "y", "z"});
+  if (auto c = node.child("kind")) m.kind = parse_kind(*c);
+  if (auto c = node.child("material")) {
+    m.material = parse_class(*c);
+    if (m.material == MaterialClass::kVegetation) c->fail("give vegetation through world.materials or kind: tree");
+  }
+  return m;
+}
+
+MaterialRuleSetting parse_material_rule(const Node& node) {
+  node.expect_keys({"match", "class", "attenuation_db_per_m", "kind"});
+  MaterialRuleSetting rule;
+  rule.match = node.required("match").as_string();
+  if (rule.match.empty()) node.required("match").fail("expected a name pattern such as \"glass*\"");
+  rule.material_class = parse_class(node.required("class"));
+  if (auto c = node.child("attenuation_db_per_m")) {
+    if (rule.material_class != MaterialClass::kVegetation) c->fail("only vegetation has an attenuation (class: vegetation)");
+    rule.attenuation_db_per_m = c->as_double_in(0.0, 1000.0);
+  }
+  if (auto c = node.child("kind")) rule.kind = parse_kind(*c);
+  return rule;
+}
+
+void parse_world(const Node& world, const std::filesystem::path& base, WorldSettings& w) {
+  world.expect_keys({"sdf", "model_paths", "osm", "meshes", "materials", "moving", "vegetation_attenuation_db_per_m",
+                     "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
+  if (auto c = world.child("sdf")) w.sdf = existing_file(*c, base);
+  if (auto c = world.child("model_paths")) {
+    for (const Node& p : c->as_list_or_single()) w.model_paths.push_back(resolve(base, p.as_string()));
+  }
+  if (auto c = world.child("osm")) w.osm = existing_file(*c, base);
+  if (auto c = world.child("meshes")) {
+    for (const Node& m : c->elements()) {
+      w.meshes.push_back(parse_mesh(m, base));
+      for (size_t i = 0; i + 1 < w.meshes.size(); ++i) {
+        if (w.meshes[i].name == w.meshes.back().name) m.fail("two meshes named '" + w.meshes[i].name + "': give each a name");
+      }
+    }
+  }
+  if (auto c = world.child("materials")) {
+    for (const Node& m : c->elements()) w.materials.push_back(parse_material_rule(m));
+  }
+  if (auto c = world.child("vegetation_attenuation_db_per_m")) w.vegetation_attenuation_db_per_m = c->as_double_in(0.0, 1000.0);
+  if (auto c = world.child("latitude_deg")) w.latitude_deg = c->as_double_in(-90.0, 90.0);
+  if (auto c = world.child("longitude_deg")) w.longitude_deg = c->as_double_in(-360.0, 360.0);
+  if (auto c = world.child("elevation_m")) w.elevation_m = c->as_double_in(-500.0, 10000.0);
+  if (auto c = world.child("heading_deg")) w.heading_deg = c->as_double_in(-360.0, 360.0);
+  if (w.latitude_deg.has_value() != w.longitude_deg.has_value()) {
+    world.fail("give both world.latitude_deg and world.longitude_deg, or neither");
+  }
+  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.latitude_deg) {
+    world.required("meshes").fail("meshes are placed in the world frame: give world.latitude_deg and world.longitude_deg "
+                                  "(and elevation_m, heading_deg), or a world.sdf / world.osm that has an origin");
+  }
+  if (auto c = world.child("moving")) {
+    if (!w.any()) c->fail("moving models need a world (world.sdf, world.osm or world.meshes)");
+    for (const Node& m : c->elements()) {
+      m.expect_keys({"model", "trajectory", "time_scale"});
+      MovingModelSetting moving;
+      moving.model = m.required("model").as_string();
+      moving.trajectory = existing_file(m.required("trajectory"), base);
+      if (auto t = m.child("time_scale")) {
+        auto scale = parse_time_scale(t->as_string());
+        if (!scale) t->fail(scale.error().message);
+        moving.time_scale = *scale;
+      }
+      for (const auto& other : w.moving) {
+        if (other.model == moving.model) m.required("model").fail("model '" + moving.model + "' is listed twice");
+      }
+      w.moving.push_back(std::move(moving));
+    }
+  }
+}
+
 Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   root.expect_keys({"name", "time", "receiver", "receivers", "ephemeris", "models", "world", "output", "seed"});
   Scenario s;
@@ -276,22 +374,13 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (auto c = models->child("multipath")) s.models.multipath = c->as_bool();
   }
 
-  if (auto world = root.child("world")) {
-    world->expect_keys({"sdf", "model_paths", "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
-    if (auto c = world->child("sdf")) s.world.sdf = existing_file(*c, base);
-    if (auto c = world->child("model_paths")) {
-      for (const Node& p : c->as_list_or_single()) s.world.model_paths.push_back(resolve(base, p.as_string()));
-    }
-    if (auto c = world->child("latitude_deg")) s.world.latitude_deg = c->as_double_in(-90.0, 90.0);
-    if (auto c = world->child("longitude_deg")) s.world.longitude_deg = c->as_double_in(-360.0, 360.0);
-    if (auto c = world->child("elevation_m")) s.world.elevation_m = c->as_double_in(-500.0, 10000.0);
-    if (auto c = world->child("heading_deg")) s.world.heading_deg = c->as_double_in(-360.0, 360.0);
-  }
+  if (auto world = root.child("world")) parse_world(*world, base, s.world);
   for (const auto& r : s.receivers) {
     const bool needs_world = (r.position && r.position->kind == PositionSetting::Kind::kWorldEnu) ||
                              (r.trajectory && r.trajectory->frame == PositionSetting::Kind::kWorldEnu);
-    if (needs_world && !s.world.sdf && !(s.world.latitude_deg && s.world.longitude_deg)) {
-      root.fail("receiver '" + r.name + "' uses world_enu_m coordinates: give world.sdf or world.latitude_deg/longitude_deg");
+    if (needs_world && !s.world.sdf && !s.world.osm && !(s.world.latitude_deg && s.world.longitude_deg)) {
+      root.fail("receiver '" + r.name +
+                "' uses world_enu_m coordinates: give world.sdf, world.osm or world.latitude_deg/longitude_deg");
     }
   }
 
@@ -392,6 +481,32 @@ std::string scenario_to_json(const Scenario& s) {
   if (s.world.longitude_deg) w["longitude_deg"] = *s.world.longitude_deg;
   if (s.world.elevation_m) w["elevation_m"] = *s.world.elevation_m;
   if (s.world.heading_deg) w["heading_deg"] = *s.world.heading_deg;
+  if (s.world.osm) w["osm"] = s.world.osm->string();
+  if (s.world.vegetation_attenuation_db_per_m) w["vegetation_attenuation_db_per_m"] = *s.world.vegetation_attenuation_db_per_m;
+  w["meshes"] = json::array();
+  for (const auto& m : s.world.meshes) {
+    w["meshes"].push_back({{"file", m.file.string()},
+                           {"name", m.name},
+                           {"position_m", {m.position_m.x(), m.position_m.y(), m.position_m.z()}},
+                           {"rpy_deg", {m.rpy_deg.x(), m.rpy_deg.y(), m.rpy_deg.z()}},
+                           {"scale", m.scale},
+                           {"up_axis", m.up_axis},
+                           {"kind", m.kind},
+                           {"material", std::string(world::material_class_name(m.material))}});
+  }
+  w["materials"] = json::array();
+  for (const auto& r : s.world.materials) {
+    json rule = {{"match", r.match}, {"class", std::string(world::material_class_name(r.material_class))}};
+    if (r.attenuation_db_per_m) rule["attenuation_db_per_m"] = *r.attenuation_db_per_m;
+    if (r.kind) rule["kind"] = *r.kind;
+    w["materials"].push_back(rule);
+  }
+  w["moving"] = json::array();
+  for (const auto& m : s.world.moving) {
+    w["moving"].push_back({{"model", m.model},
+                           {"trajectory", m.trajectory.string()},
+                           {"time_scale", std::string(to_string(m.time_scale))}});
+  }
   j["world"] = w;
   j["output"] = {{"rinex_version", s.output.rinex_version}};
   j["seed"] = s.seed;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "skytrace/core/error.hpp"
+#include "skytrace/core/path_query.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/core/time.hpp"
 
@@ -67,11 +68,44 @@ struct ModelSettings {
   bool multipath = false;
 };
 
+// A mesh file placed in the world frame (world.meshes).
+struct MeshSetting {
+  std::filesystem::path file;
+  std::string name;  // objects are named NAME/node; default: the file name
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rpy_deg = Eigen::Vector3d::Zero();  // roll, pitch, yaw as in an SDF <pose>
+  double scale = 1.0;
+  std::string up_axis = "auto";   // auto | y | z
+  std::string kind = "building";  // of nodes no rule or name classifies: building | tree | ground | other
+  MaterialClass material = MaterialClass::kConcrete;
+};
+
+// world.materials: objects any of whose names match `match` get the class (and kind).
+struct MaterialRuleSetting {
+  std::string match;
+  MaterialClass material_class = MaterialClass::kConcrete;
+  std::optional<double> attenuation_db_per_m;  // vegetation only
+  std::optional<std::string> kind;             // building | tree | ground | other
+};
+
+// world.moving: a model that follows a CSV of time, x, y, z (world frame, m) and yaw (deg).
+struct MovingModelSetting {
+  std::string model;
+  std::filesystem::path trajectory;
+  TimeScale time_scale = TimeScale::kGpst;  // of ISO times in the CSV
+};
+
 struct WorldSettings {
   std::optional<std::filesystem::path> sdf;
   std::vector<std::filesystem::path> model_paths;
+  std::optional<std::filesystem::path> osm;  // .osm / .osm.pbf extract
+  std::vector<MeshSetting> meshes;
+  std::vector<MaterialRuleSetting> materials;
+  std::vector<MovingModelSetting> moving;
+  std::optional<double> vegetation_attenuation_db_per_m;  // default of vegetation no rule sets
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
+  [[nodiscard]] bool any() const { return sdf || osm || !meshes.empty(); }
 };
 
 struct OutputSettings {
