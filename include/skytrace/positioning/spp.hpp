@@ -6,9 +6,11 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "skytrace/core/error.hpp"
@@ -37,6 +39,7 @@ struct EpochMeasurements {
 };
 
 enum class FixType { kNone, kFix2D, kFix3D };
+[[nodiscard]] std::string_view to_string(FixType type);  // "none", "2d", "3d"
 
 struct SatelliteUse {
   SatelliteId satellite;
@@ -46,6 +49,8 @@ struct SatelliteUse {
   bool used = false;           // in the final solution
   bool rejected = false;       // excluded as an outlier
   double residual_m = 0.0;     // post-fit code residual
+  double sigma_m = 0.0;        // a-priori standard deviation of the corrected code
+  std::string note;            // why it is not used ("below the elevation mask", "no ephemeris", ...)
 };
 
 struct PositionFix {
@@ -65,8 +70,14 @@ struct PositionFix {
   Eigen::Matrix3d velocity_covariance_enu_m2ps2 = Eigen::Matrix3d::Zero();
   double gdop = 0.0, pdop = 0.0, hdop = 0.0, vdop = 0.0, tdop = 0.0;
   int satellites_used = 0;
+  // Weighted sum of squared post-fit residuals, its degrees of freedom (used satellites minus
+  // unknowns) and the chi-square threshold of the outlier test at the settings' probability.
+  double chi_square = 0.0;
+  int degrees_of_freedom = 0;
+  double chi_square_threshold = 0.0;
+  int iterations = 0;  // Gauss-Newton iterations of the final solution
   std::vector<SatelliteUse> satellites;  // every satellite considered, used or not
-  std::string message;  // why there is no fix, when type == kNone
+  std::string message;  // why there is no fix when type == kNone; else a warning or empty
 };
 
 struct SolverSettings {
@@ -78,14 +89,32 @@ struct SolverSettings {
   double sigma_code_zenith_m = 0.3;
   double sigma_code_elevation_m = 0.3;
   bool weight_by_cn0 = false;          // scale the variance by 10^((45 - C/N0) / 10) as well
+  // Model errors added to the code variance, as RTKLIB adds them: this fraction of the Klobuchar
+  // delay, the Saastamoinen error sigma / (sin el + 0.1), the broadcast accuracy (URA/SISA).
+  double ionosphere_error_fraction = 0.5;
+  double troposphere_error_m = 0.3;
+  bool use_broadcast_accuracy = true;
+  double sigma_doppler_mps = 0.1;      // range-rate sigma at zenith, scaled like the code
+  // Which signal's code to use for a satellite: the first of this list it has (a system without
+  // signals in the list: the built-in order, default_signal_priority), then any other signal.
+  std::vector<Signal> signal_priority;
   // Outlier rejection: drop the worst satellite while the normalised residual test fails
   // (chi-square at this false-alarm probability) and enough satellites remain.
   bool reject_outliers = false;
   double outlier_probability = 1e-3;
-  int max_iterations = 10;
+  int max_iterations = 10;      // per solution; from the Earth's centre twice this
+  double convergence_m = 1e-4;  // Gauss-Newton stops when the position step is smaller
   // Only these systems (empty: all in the measurements).
   std::vector<GnssSystem> systems;
 };
+
+// Signals of a system in the order a single-frequency receiver prefers their code (L1 C/A, E1,
+// B1I, G1 first).
+[[nodiscard]] std::vector<Signal> default_signal_priority(GnssSystem system);
+
+// Quantile of the chi-square distribution: x with P(X <= x) = probability for `dof` degrees of
+// freedom (probability in (0, 1), dof >= 1).
+[[nodiscard]] double chi_square_quantile(double probability, int dof);
 
 // The navigation engine. Keeps the last solution as the starting point of the next epoch.
 class SinglePointSolver {
@@ -103,6 +132,7 @@ class SinglePointSolver {
   SolverSettings settings_;
   std::optional<orbits::KlobucharCoefficients> klobuchar_;
   std::optional<Eigen::Vector3d> last_position_ecef_m_;
+  std::array<std::vector<Signal>, kAllSystems.size()> priority_;  // per system, from the settings
 };
 
 }  // namespace skytrace::positioning

@@ -1,0 +1,627 @@
+#include "skytrace/positioning/spp.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "skytrace/atmosphere/models.hpp"
+#include "skytrace/core/constants.hpp"
+
+namespace skytrace::positioning {
+namespace {
+
+constexpr double kC = constants::kSpeedOfLight_mps;
+// Sagnac with the WGS84 rate for every system, as the observation generator applies it.
+constexpr double kEarthRotation_radps = constants::kEarthRotationRateGps_radps;
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+// Below this distance from the Earth's centre the estimate is not yet a place on the Earth: no
+// elevation, mask or atmosphere (the first iterations from the Earth's centre).
+constexpr double kMinPositionRadius_m = 6.0e6;
+constexpr int kMaxSystems = static_cast<int>(kAllSystems.size());
+
+// The broadcast records a receiver holds for one satellite and signal.
+struct Records {
+  const orbits::KeplerEphemeris* orbit_kepler = nullptr;  // orbit (and clock unless clock_kepler)
+  const orbits::KeplerEphemeris* clock_kepler = nullptr;  // clock and group delay of the signal
+  const orbits::GlonassEphemeris* glonass = nullptr;
+  const orbits::SbasEphemeris* sbas = nullptr;
+};
+
+bool is_beidou_legacy(const Signal& signal) {
+  return signal.system == GnssSystem::kBeiDou &&
+         (signal.band == '2' || signal.band == '6' ||
+          (signal.band == '7' && (signal.attribute == 'I' || signal.attribute == 'Q' || signal.attribute == 'X')));
+}
+
+const orbits::KeplerEphemeris* find_with_fallback(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                                                  const GnssTime& t, std::optional<orbits::NavMessage> message) {
+  const orbits::KeplerEphemeris* found = ephemerides.find_kepler(sat, t, message);
+  if (found == nullptr && message) found = ephemerides.find_kepler(sat, t, std::nullopt);
+  return found;
+}
+
+// The records as the observation generator selects them: at the receiver's time tag, the orbit from
+// the system's default message (Galileo I/NAV; BeiDou B1I/B2I/B3I D1 or D2), the clock and group
+// delay from the message that belongs to the signal (Galileo E5a: F/NAV; GPS L5: CNAV), each
+// falling back to any message.
+std::optional<Records> select_records(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                                      const Signal& signal, const GnssTime& tag) {
+  Records out;
+  switch (sat.system) {
+    case GnssSystem::kGlonass:
+      out.glonass = ephemerides.find_glonass(sat, tag);
+      if (out.glonass == nullptr) return std::nullopt;
+      return out;
+    case GnssSystem::kSbas:
+      out.sbas = ephemerides.find_sbas(sat, tag);
+      if (out.sbas == nullptr) return std::nullopt;
+      return out;
+    default: break;
+  }
+  std::optional<orbits::NavMessage> orbit_message;
+  if (sat.system == GnssSystem::kGalileo) orbit_message = orbits::NavMessage::kGalileoInav;
+  if (is_beidou_legacy(signal)) {
+    orbit_message = orbits::is_beidou_geo(sat) ? orbits::NavMessage::kBeiDouD2 : orbits::NavMessage::kBeiDouD1;
+  }
+  out.orbit_kepler = find_with_fallback(ephemerides, sat, tag, orbit_message);
+  if (out.orbit_kepler == nullptr) return std::nullopt;
+  out.clock_kepler = out.orbit_kepler;
+  const auto wanted = orbits::preferred_message(signal);
+  if (wanted && *wanted != out.orbit_kepler->message) {
+    if (const auto* other = find_with_fallback(ephemerides, sat, tag, wanted)) out.clock_kepler = other;
+  }
+  return out;
+}
+
+// Coordinates in the frame at reception of a vector of the frame at transmission (the Earth
+// turned by angle_rad in between).
+Eigen::Vector3d rotate_earth(const Eigen::Vector3d& v, double angle_rad) {
+  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
+  return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
+}
+
+// One satellite's measurement with everything that does not depend on the receiver position.
+struct Candidate {
+  size_t use_index = 0;  // into PositionFix::satellites
+  int system = 0;        // GnssSystem as an index
+  const SignalMeasurement* measurement = nullptr;
+  double carrier_hz = 0.0;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // at transmission, frame of transmission
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
+  double clock_correction_m = 0.0;  // c (dt_sv + dt_rel - group delay): added to the pseudorange
+  double clock_rate_mps = 0.0;      // c (d dt_sv/dt + d dt_rel/dt)
+  double accuracy_m = 0.0;          // broadcast URA / SISA (0: unknown)
+};
+
+// The geometry of one candidate seen from a receiver position.
+struct Geometry {
+  Eigen::Vector3d satellite_m;     // rotated into the frame at reception
+  Eigen::Vector3d line_of_sight;   // unit, receiver to satellite (ECEF)
+  double range_m = 0.0;
+  double elevation_deg = 90.0;
+  double azimuth_deg = 0.0;
+};
+
+Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, const Eigen::Matrix3d* to_enu) {
+  Geometry g;
+  double flight_time_s = (c.position_m - receiver_m).norm() / kC;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    g.satellite_m = rotate_earth(c.position_m, kEarthRotation_radps * flight_time_s);
+    g.range_m = (g.satellite_m - receiver_m).norm();
+    flight_time_s = g.range_m / kC;
+  }
+  g.line_of_sight = (g.satellite_m - receiver_m) / g.range_m;
+  if (to_enu != nullptr) {
+    const Eigen::Vector3d enu = *to_enu * (g.satellite_m - receiver_m);
+    g.elevation_deg = std::atan2(enu.z(), std::hypot(enu.x(), enu.y())) * kDegPerRad;
+    const double azimuth_deg = std::atan2(enu.x(), enu.y()) * kDegPerRad;
+    g.azimuth_deg = azimuth_deg < 0.0 ? azimuth_deg + 360.0 : azimuth_deg;
+  }
+  return g;
+}
+
+// Regularised lower incomplete gamma function P(a, x) (series below a + 1, continued fraction
+// above; Numerical Recipes 6.2).
+double regularized_gamma_p(double a, double x) {
+  if (x <= 0.0) return 0.0;
+  const double log_prefactor = -x + a * std::log(x) - std::lgamma(a);
+  if (x < a + 1.0) {
+    double term = 1.0 / a, sum = term;
+    for (int n = 1; n < 1000; ++n) {
+      term *= x / (a + n);
+      sum += term;
+      if (std::abs(term) < std::abs(sum) * 1e-16) break;
+    }
+    return sum * std::exp(log_prefactor);
+  }
+  constexpr double kTiny = 1e-300;
+  double b = x + 1.0 - a, c = 1.0 / kTiny, d = 1.0 / b, h = d;
+  for (int i = 1; i < 1000; ++i) {
+    const double an = -i * (i - a);
+    b += 2.0;
+    d = an * d + b;
+    if (std::abs(d) < kTiny) d = kTiny;
+    c = b + an / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    d = 1.0 / d;
+    const double delta = d * c;
+    h *= delta;
+    if (std::abs(delta - 1.0) < 1e-16) break;
+  }
+  return 1.0 - std::exp(log_prefactor) * h;
+}
+
+// A weighted least-squares solution of the code equations for a given set of satellites.
+struct CodeSolution {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  std::array<double, kMaxSystems> clock_m{};
+  std::vector<int> systems;  // the clock columns, by system index
+  int iterations = 0;
+  bool converged = false;
+  std::string message;
+};
+
+}  // namespace
+
+std::string_view to_string(FixType type) {
+  switch (type) {
+    case FixType::kNone: return "none";
+    case FixType::kFix2D: return "2d";
+    case FixType::kFix3D: return "3d";
+  }
+  return "?";
+}
+
+std::vector<Signal> default_signal_priority(GnssSystem system) {
+  auto list = [system](std::initializer_list<const char*> codes) {
+    std::vector<Signal> out;
+    for (const char* code : codes) out.push_back(Signal{system, code[0], code[1]});
+    return out;
+  };
+  switch (system) {
+    case GnssSystem::kGps: return list({"1C", "1W", "1P", "1X", "1L", "1S", "2W", "2P", "2X", "2L", "2S", "5Q", "5X", "5I"});
+    case GnssSystem::kGlonass: return list({"1C", "1P", "2C", "2P", "4X", "4A", "4B", "6X", "6A", "6B", "3X", "3I", "3Q"});
+    case GnssSystem::kGalileo: return list({"1C", "1X", "1B", "7Q", "7X", "7I", "5Q", "5X", "5I", "8Q", "8X", "8I", "6C", "6X", "6B"});
+    case GnssSystem::kBeiDou: return list({"2I", "2X", "2Q", "1P", "1X", "1D", "7I", "7X", "7Q", "6I", "6X", "6Q", "5P", "5X", "5D", "7P", "7Z", "7D"});
+    case GnssSystem::kQzss: return list({"1C", "1X", "1L", "1S", "2L", "2X", "2S", "5Q", "5X", "5I"});
+    case GnssSystem::kNavic: return list({"5A", "5B", "5C", "5X", "9A", "9B", "9C", "9X"});
+    case GnssSystem::kSbas: return list({"1C", "5I", "5Q", "5X"});
+  }
+  return {};
+}
+
+double chi_square_quantile(double probability, int dof) {
+  if (!(probability > 0.0 && probability < 1.0) || dof < 1) return std::numeric_limits<double>::quiet_NaN();
+  const double a = 0.5 * dof;
+  double low = 0.0, high = dof + 10.0 * std::sqrt(2.0 * dof) + 50.0;
+  while (regularized_gamma_p(a, 0.5 * high) < probability) high *= 2.0;
+  for (int i = 0; i < 200 && high - low > 1e-12 * high; ++i) {
+    const double mid = 0.5 * (low + high);
+    (regularized_gamma_p(a, 0.5 * mid) < probability ? low : high) = mid;
+  }
+  return 0.5 * (low + high);
+}
+
+SinglePointSolver::SinglePointSolver(const orbits::BroadcastEphemerides& ephemerides, SolverSettings settings,
+                                     std::optional<orbits::KlobucharCoefficients> klobuchar)
+    : ephemerides_(ephemerides), settings_(std::move(settings)), klobuchar_(klobuchar) {
+  for (GnssSystem system : kAllSystems) {
+    auto& list = priority_[static_cast<size_t>(system)];
+    for (const Signal& signal : settings_.signal_priority) {
+      if (signal.system == system) list.push_back(signal);
+    }
+    if (list.empty()) list = default_signal_priority(system);
+  }
+}
+
+Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
+  PositionFix fix;
+  fix.receiver_time = epoch.receiver_time;
+  fix.time = epoch.receiver_time;
+  const GnssTime& tag = epoch.receiver_time;
+  const auto where = [&](const SatelliteId& sat) { return sat.to_string() + " at " + tag.to_iso8601(TimeScale::kGpst); };
+
+  // One signal per satellite: the first of the priority list the satellite has.
+  std::vector<SatelliteId> order;
+  std::map<SatelliteId, std::vector<const SignalMeasurement*>> by_satellite;
+  for (const SignalMeasurement& m : epoch.signals) {
+    if (m.signal.system != m.satellite.system) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "signal " + m.signal.to_string() + " given for satellite " + where(m.satellite));
+    }
+    if (!std::isfinite(m.pseudorange_m) || (m.doppler_hz && !std::isfinite(*m.doppler_hz))) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "pseudorange or Doppler of " + m.signal.to_string() + " of " + where(m.satellite) + " is not finite");
+    }
+    auto [it, inserted] = by_satellite.try_emplace(m.satellite);
+    if (inserted) order.push_back(m.satellite);
+    it->second.push_back(&m);
+  }
+  std::sort(order.begin(), order.end());
+  const auto system_wanted = [&](GnssSystem system) {
+    if (settings_.systems.empty()) return true;
+    return std::find(settings_.systems.begin(), settings_.systems.end(), system) != settings_.systems.end();
+  };
+
+  std::vector<Candidate> candidates;
+  for (const SatelliteId& sat : order) {
+    const auto& list = by_satellite.at(sat);
+    const SignalMeasurement* chosen = nullptr;
+    for (const Signal& wanted : priority_[static_cast<size_t>(sat.system)]) {
+      const auto it = std::find_if(list.begin(), list.end(), [&](const SignalMeasurement* m) { return m->signal == wanted; });
+      if (it != list.end()) {
+        chosen = *it;
+        break;
+      }
+    }
+    if (chosen == nullptr) chosen = list.front();
+    SatelliteUse use;
+    use.satellite = sat;
+    use.signal = chosen->signal;
+    use.cn0_dbhz = chosen->cn0_dbhz;
+    const size_t use_index = fix.satellites.size();
+    auto skip = [&](std::string note) {
+      use.note = std::move(note);
+      fix.satellites.push_back(std::move(use));
+    };
+    if (!system_wanted(sat.system)) {
+      skip("system not selected");
+      continue;
+    }
+    if (settings_.min_cn0_dbhz > 0.0 && chosen->cn0_dbhz < settings_.min_cn0_dbhz) {
+      skip("C/N0 below the minimum");
+      continue;
+    }
+    if (chosen->pseudorange_m <= 0.0) {
+      skip("no pseudorange");
+      continue;
+    }
+    const std::optional<Records> records = select_records(ephemerides_, sat, chosen->signal, tag);
+    if (!records) {
+      skip("no valid broadcast ephemeris");
+      continue;
+    }
+    Candidate c;
+    c.use_index = use_index;
+    c.system = static_cast<int>(sat.system);
+    c.measurement = chosen;
+    c.carrier_hz = chosen->carrier_hz;
+    if (c.carrier_hz <= 0.0) {
+      const SignalInfo* info = find_signal_info(chosen->signal);
+      if (info == nullptr) {
+        skip("signal not in the catalogue");
+        continue;
+      }
+      c.carrier_hz = info->carrier_frequency_hz(records->glonass != nullptr ? records->glonass->frequency_channel : 0);
+    }
+    // Transmission time from the pseudorange, corrected by the satellite clock (evaluated at the
+    // uncorrected time; the correction is below a millisecond and the orbit follows it to second
+    // order, as the generator expands it).
+    const GnssTime t0 = tag - chosen->pseudorange_m / kC;
+    orbits::SatelliteState orbit, clock;
+    double group_delay_s = 0.0;
+    if (records->orbit_kepler != nullptr) {
+      orbit = orbits::evaluate_kepler(*records->orbit_kepler, t0);
+      clock = records->clock_kepler == records->orbit_kepler ? orbit : orbits::evaluate_kepler(*records->clock_kepler, t0);
+      group_delay_s = orbits::group_delay_s(*records->clock_kepler, chosen->signal);
+      c.accuracy_m = records->orbit_kepler->accuracy_m;
+    } else if (records->glonass != nullptr) {
+      orbit = clock = orbits::evaluate_glonass(*records->glonass, t0);
+      group_delay_s = orbits::group_delay_s(*records->glonass, chosen->signal);
+    } else {
+      orbit = clock = orbits::evaluate_sbas(*records->sbas, t0);
+      c.accuracy_m = records->sbas->accuracy_m;
+    }
+    const double step_s = -(clock.clock_bias_s + clock.relativistic_s - group_delay_s);
+    const Eigen::Vector3d omega(0.0, 0.0, kEarthRotation_radps);
+    const Eigen::Vector3d& r0 = orbit.position_m;
+    const Eigen::Vector3d& v0 = orbit.velocity_mps;
+    const Eigen::Vector3d a0 = -constants::kGmGps_m3ps2 / std::pow(r0.norm(), 3) * r0 - 2.0 * omega.cross(v0) -
+                               omega.cross(omega.cross(r0));
+    c.position_m = r0 + v0 * step_s + 0.5 * a0 * step_s * step_s;
+    c.velocity_mps = v0 + a0 * step_s;
+    const double clock_s = clock.clock_bias_s + clock.clock_drift_s_per_s * step_s + clock.relativistic_s +
+                           clock.relativistic_drift_s_per_s * step_s;
+    c.clock_correction_m = kC * (clock_s - group_delay_s);
+    c.clock_rate_mps = kC * (clock.clock_drift_s_per_s + clock.relativistic_drift_s_per_s);
+    fix.satellites.push_back(std::move(use));
+    candidates.push_back(c);
+  }
+
+  // Per candidate, what the iterations found last.
+  struct State {
+    bool used = false;
+    bool rejected = false;
+    double residual_m = 0.0;
+    double variance_m2 = 0.0;
+    Geometry geometry;
+    std::string note;
+  };
+  std::vector<State> states(candidates.size());
+
+  const auto solve_code = [&](Eigen::Vector3d start_m, int max_iterations) {
+    CodeSolution s;
+    s.position_m = start_m;
+    for (int iteration = 0; iteration < max_iterations; ++iteration) {
+      const bool on_earth = s.position_m.norm() > kMinPositionRadius_m;
+      Geodetic geodetic;
+      Eigen::Matrix3d to_enu = Eigen::Matrix3d::Identity();
+      if (on_earth) {
+        geodetic = ecef_to_geodetic(s.position_m);
+        to_enu = ecef_to_enu_rotation(geodetic);
+      }
+      // The receiver clock of the previous iteration dates the reception for the ionosphere.
+      const GnssTime reception = tag - (s.systems.empty() ? 0.0 : s.clock_m[s.systems.front()]) / kC;
+      std::array<int, kMaxSystems> per_system{};
+      std::vector<double> observed_m(candidates.size(), 0.0);
+      for (size_t i = 0; i < candidates.size(); ++i) {
+        const Candidate& c = candidates[i];
+        State& st = states[i];
+        st.used = false;
+        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr);
+        if (st.rejected) continue;
+        const double elevation_deg = st.geometry.elevation_deg;
+        if (on_earth && elevation_deg < settings_.elevation_mask_deg) {
+          st.note = "below the elevation mask";
+          continue;
+        }
+        double ionosphere_m = 0.0, troposphere_m = 0.0;
+        const AzimuthElevation direction{st.geometry.azimuth_deg, elevation_deg};
+        if (on_earth && settings_.ionosphere_klobuchar && klobuchar_) {
+          ionosphere_m = atmosphere::klobuchar_delay_l1_m(*klobuchar_, reception, geodetic, direction).value_or(0.0) *
+                         std::pow(kFrequencyL1_Hz / c.carrier_hz, 2);
+        }
+        if (on_earth && settings_.troposphere_saastamoinen) {
+          troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, elevation_deg).value_or(0.0);
+        }
+        const double sin_el = std::max(std::sin(elevation_deg / kDegPerRad), 0.05);
+        double variance_m2 = settings_.sigma_code_zenith_m * settings_.sigma_code_zenith_m +
+                             std::pow(settings_.sigma_code_elevation_m / sin_el, 2);
+        if (settings_.weight_by_cn0 && c.measurement->cn0_dbhz > 0.0) {
+          variance_m2 *= std::pow(10.0, (45.0 - c.measurement->cn0_dbhz) / 10.0);
+        }
+        variance_m2 += std::pow(settings_.ionosphere_error_fraction * ionosphere_m, 2);
+        if (on_earth && settings_.troposphere_saastamoinen) {
+          variance_m2 += std::pow(settings_.troposphere_error_m / (sin_el + 0.1), 2);
+        }
+        if (settings_.use_broadcast_accuracy && c.accuracy_m > 0.0) variance_m2 += c.accuracy_m * c.accuracy_m;
+        st.variance_m2 = variance_m2;
+        observed_m[i] = c.measurement->pseudorange_m + c.clock_correction_m - ionosphere_m - troposphere_m;
+        st.used = true;
+        st.note.clear();
+        ++per_system[c.system];
+      }
+      // A system seen by one satellite only estimates its own clock from it: nothing left for the
+      // position, so neither the satellite nor the unknown enters.
+      s.systems.clear();
+      for (int system = 0; system < kMaxSystems; ++system) {
+        if (per_system[system] >= 2) s.systems.push_back(system);
+      }
+      std::array<int, kMaxSystems> column{};
+      column.fill(-1);
+      for (size_t k = 0; k < s.systems.size(); ++k) column[s.systems[k]] = 3 + static_cast<int>(k);
+      int used = 0;
+      for (size_t i = 0; i < candidates.size(); ++i) {
+        if (!states[i].used) continue;
+        if (column[candidates[i].system] < 0) {
+          states[i].used = false;
+          states[i].note = "only satellite of its system";
+          continue;
+        }
+        ++used;
+      }
+      const int unknowns = 3 + static_cast<int>(s.systems.size());
+      if (s.systems.empty() || used < unknowns) {
+        s.message = "too few satellites: " + std::to_string(used) + " usable for " + std::to_string(unknowns) +
+                    " unknowns (position and " + std::to_string(s.systems.size()) + " clock(s))";
+        return s;
+      }
+      Eigen::MatrixXd h(used, unknowns);
+      Eigen::VectorXd y(used), w(used);
+      h.setZero();
+      int row = 0;
+      for (size_t i = 0; i < candidates.size(); ++i) {
+        if (!states[i].used) continue;
+        h.block<1, 3>(row, 0) = -states[i].geometry.line_of_sight.transpose();
+        h(row, column[candidates[i].system]) = 1.0;
+        y(row) = observed_m[i] - states[i].geometry.range_m;
+        w(row) = 1.0 / states[i].variance_m2;
+        ++row;
+      }
+      const Eigen::MatrixXd normal = h.transpose() * w.asDiagonal() * h;
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(normal);
+      if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || std::abs(ldlt.vectorD().minCoeff()) < 1e-12) {
+        s.message = "singular geometry";
+        return s;
+      }
+      // The unknowns: position step and the full clocks (the equations are linear in the clocks).
+      const Eigen::VectorXd x = ldlt.solve(h.transpose() * (w.asDiagonal() * y));
+      const Eigen::Vector3d dx = x.head<3>();
+      s.position_m += dx;
+      for (size_t k = 0; k < s.systems.size(); ++k) s.clock_m[s.systems[k]] = x(3 + static_cast<Eigen::Index>(k));
+      s.iterations = iteration + 1;
+      if (!s.position_m.allFinite() || s.position_m.norm() > 1e8) {
+        s.message = "the solution diverged";
+        return s;
+      }
+      if (on_earth && dx.norm() < settings_.convergence_m) {
+        s.converged = true;
+        return s;
+      }
+    }
+    s.message = "no convergence in " + std::to_string(max_iterations) + " iterations";
+    return s;
+  };
+
+  // Solves from the previous fix, or from the Earth's centre (also when the previous start fails).
+  const auto solve_from_best_start = [&]() {
+    if (last_position_ecef_m_) {
+      CodeSolution s = solve_code(*last_position_ecef_m_, settings_.max_iterations);
+      if (s.converged) return s;
+    }
+    return solve_code(Eigen::Vector3d::Zero(), 2 * settings_.max_iterations);
+  };
+
+  CodeSolution solution;
+  const int min_candidates = 4;
+  if (static_cast<int>(candidates.size()) < min_candidates) {
+    fix.message = "too few satellites: " + std::to_string(candidates.size()) +
+                  " with a pseudorange and a valid ephemeris, at least 4 needed";
+    return fix;
+  }
+  // Residual tests: the fix is accepted, or the worst satellite excluded and the fix solved again.
+  Eigen::MatrixXd h_enu, covariance;
+  for (;;) {
+    solution = solve_from_best_start();
+    if (!solution.converged) break;
+    // Final residuals and matrices at the converged position.
+    const Geodetic geodetic = ecef_to_geodetic(solution.position_m);
+    const Eigen::Matrix3d to_enu = ecef_to_enu_rotation(geodetic);
+    const int used = static_cast<int>(std::count_if(states.begin(), states.end(), [](const State& s) { return s.used; }));
+    const int unknowns = 3 + static_cast<int>(solution.systems.size());
+    std::array<int, kMaxSystems> column{};
+    column.fill(-1);
+    for (size_t k = 0; k < solution.systems.size(); ++k) column[solution.systems[k]] = 3 + static_cast<int>(k);
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(used, unknowns);
+    h_enu = Eigen::MatrixXd::Zero(used, unknowns);
+    Eigen::VectorXd w(used), v(used);
+    std::vector<size_t> index_of_row;
+    int row = 0;
+    // The last iteration's residuals are those of the position before its (tiny) step: recompute.
+    const GnssTime reception = tag - solution.clock_m[solution.systems.front()] / kC;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      State& st = states[i];
+      if (!st.used) continue;
+      const Candidate& c = candidates[i];
+      st.geometry = geometry_from(c, solution.position_m, &to_enu);
+      const AzimuthElevation direction{st.geometry.azimuth_deg, st.geometry.elevation_deg};
+      double ionosphere_m = 0.0, troposphere_m = 0.0;
+      if (settings_.ionosphere_klobuchar && klobuchar_) {
+        ionosphere_m = atmosphere::klobuchar_delay_l1_m(*klobuchar_, reception, geodetic, direction).value_or(0.0) *
+                       std::pow(kFrequencyL1_Hz / c.carrier_hz, 2);
+      }
+      if (settings_.troposphere_saastamoinen) {
+        troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, st.geometry.elevation_deg).value_or(0.0);
+      }
+      st.residual_m = c.measurement->pseudorange_m + c.clock_correction_m - ionosphere_m - troposphere_m -
+                      st.geometry.range_m - solution.clock_m[c.system];
+      h.block<1, 3>(row, 0) = -st.geometry.line_of_sight.transpose();
+      h(row, column[c.system]) = 1.0;
+      h_enu.block<1, 3>(row, 0) = -(to_enu * st.geometry.line_of_sight).transpose();
+      h_enu(row, column[c.system]) = 1.0;
+      w(row) = 1.0 / st.variance_m2;
+      v(row) = st.residual_m;
+      index_of_row.push_back(i);
+      ++row;
+    }
+    covariance = (h.transpose() * w.asDiagonal() * h).inverse();
+    fix.chi_square = v.dot(w.asDiagonal() * v);
+    fix.degrees_of_freedom = used - unknowns;
+    fix.chi_square_threshold = fix.degrees_of_freedom > 0
+                                   ? chi_square_quantile(1.0 - settings_.outlier_probability, fix.degrees_of_freedom)
+                                   : 0.0;
+    const bool test_failed = fix.degrees_of_freedom > 0 && fix.chi_square > fix.chi_square_threshold;
+    if (!settings_.reject_outliers || !test_failed) break;
+    // Exclude the satellite with the largest standardised residual v_i / sigma(v_i), where the
+    // residual covariance is Sigma - H Q H^T; then solve again while redundancy remains.
+    if (fix.degrees_of_freedom < 2) {
+      fix.message = "residual test failed with too little redundancy to find the outlier";
+      break;
+    }
+    double worst = -1.0;
+    size_t worst_row = 0;
+    for (int r = 0; r < used; ++r) {
+      const double residual_variance = 1.0 / w(r) - h.row(r) * covariance * h.row(r).transpose();
+      const double standardized = std::abs(v(r)) / std::sqrt(std::max(residual_variance, 1e-6 / w(r)));
+      if (standardized > worst) {
+        worst = standardized;
+        worst_row = static_cast<size_t>(r);
+      }
+    }
+    State& excluded = states[index_of_row[worst_row]];
+    excluded.rejected = true;
+    excluded.used = false;
+    excluded.note = "rejected by the residual test";
+  }
+
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    SatelliteUse& use = fix.satellites[candidates[i].use_index];
+    const State& st = states[i];
+    use.direction = {st.geometry.azimuth_deg, st.geometry.elevation_deg};
+    use.used = solution.converged && st.used;
+    use.rejected = st.rejected;
+    use.residual_m = st.residual_m;
+    use.sigma_m = std::sqrt(st.variance_m2);
+    use.note = st.note;
+  }
+  if (!solution.converged) {
+    fix.message = solution.message;
+    fix.chi_square = 0.0;
+    fix.degrees_of_freedom = 0;
+    return fix;
+  }
+  fix.iterations = solution.iterations;
+  fix.position_ecef_m = solution.position_m;
+  fix.position = ecef_to_geodetic(solution.position_m);
+  for (int system : solution.systems) fix.clock_bias_m[static_cast<GnssSystem>(system)] = solution.clock_m[system];
+  fix.time = tag - solution.clock_m[solution.systems.front()] / kC;
+  fix.satellites_used = static_cast<int>(std::count_if(states.begin(), states.end(), [](const State& s) { return s.used; }));
+  fix.type = FixType::kFix3D;
+
+  const Eigen::Matrix3d to_enu = ecef_to_enu_rotation(fix.position);
+  fix.covariance_enu_m2 = to_enu * covariance.topLeftCorner<3, 3>() * to_enu.transpose();
+  const Eigen::MatrixXd dop = (h_enu.transpose() * h_enu).inverse();
+  fix.gdop = std::sqrt(dop.trace());
+  fix.pdop = std::sqrt(dop(0, 0) + dop(1, 1) + dop(2, 2));
+  fix.hdop = std::sqrt(dop(0, 0) + dop(1, 1));
+  fix.vdop = std::sqrt(dop(2, 2));
+  fix.tdop = std::sqrt(dop(3, 3));
+  last_position_ecef_m_ = fix.position_ecef_m;
+
+  // Velocity and clock drift from the Doppler of the satellites in the fix:
+  //   -lambda D = rr + c dt_r' - c (dt_sv' + dt_rel'),
+  // with rr the range rate as the generator defines it, the flight time changing too:
+  //   rr = (e.v_sat - e.v_rx) / (1 + (e.v_sat - omega e.(y_s, -x_s, 0)) / c).
+  std::vector<size_t> doppler_rows;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    if (states[i].used && candidates[i].measurement->doppler_hz) doppler_rows.push_back(i);
+  }
+  if (doppler_rows.size() >= 4) {
+    const auto n = static_cast<Eigen::Index>(doppler_rows.size());
+    Eigen::MatrixXd h(n, 4);
+    Eigen::VectorXd y(n), w(n);
+    for (Eigen::Index r = 0; r < n; ++r) {
+      const size_t i = doppler_rows[static_cast<size_t>(r)];
+      const Candidate& c = candidates[i];
+      const Geometry& g = states[i].geometry;
+      const double flight_time_s = g.range_m / kC;
+      const Eigen::Vector3d sat_velocity = rotate_earth(c.velocity_mps, kEarthRotation_radps * flight_time_s);
+      const double sat_term = g.line_of_sight.dot(sat_velocity);
+      const double sagnac_term = kEarthRotation_radps * g.line_of_sight.dot(Eigen::Vector3d(g.satellite_m.y(), -g.satellite_m.x(), 0.0));
+      const double scale = 1.0 + (sat_term - sagnac_term) / kC;
+      const double wavelength_m = kC / c.carrier_hz;
+      h.block<1, 3>(r, 0) = -g.line_of_sight.transpose() / scale;
+      h(r, 3) = 1.0;
+      y(r) = -wavelength_m * *c.measurement->doppler_hz + c.clock_rate_mps - sat_term / scale;
+      const double sin_el = std::max(std::sin(g.elevation_deg / kDegPerRad), 0.05);
+      w(r) = 2.0 / (settings_.sigma_doppler_mps * settings_.sigma_doppler_mps * (1.0 + 1.0 / (sin_el * sin_el)));
+    }
+    const Eigen::MatrixXd normal = h.transpose() * w.asDiagonal() * h;
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(normal);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+      const Eigen::Vector4d x = ldlt.solve(h.transpose() * (w.asDiagonal() * y));
+      fix.velocity_ecef_mps = x.head<3>();
+      fix.velocity_enu_mps = to_enu * fix.velocity_ecef_mps;
+      fix.clock_drift_mps = x(3);
+      const Eigen::Matrix4d q = normal.inverse();
+      fix.velocity_covariance_enu_m2ps2 = to_enu * q.topLeftCorner<3, 3>() * to_enu.transpose();
+      fix.velocity_valid = fix.velocity_ecef_mps.allFinite();
+    }
+  }
+  return fix;
+}
+
+}  // namespace skytrace::positioning
