@@ -266,6 +266,7 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
   world.name = path.stem().string();
   world.geo_origin = origin;
   const std::string file_name = path.filename().string();
+  world.model_poses[file_name] = options.pose;
 
   // Group parts into objects: one per node, or one for the whole file.
   std::vector<std::pair<std::string, std::vector<const MeshPart*>>> groups;

@@ -714,6 +714,9 @@ class SdfWalker {
 
   void model(const sdf::Model& model, const Eigen::Isometry3d& world_from_model, Chain chain,
              const Overrides& overrides = {}) {
+    if (chain.names.empty()) {
+      world_.model_poses[overrides.name.empty() ? model.Name() : overrides.name] = world_from_model;
+    }
     chain.names.push_back(overrides.name.empty() ? model.Name() : overrides.name);
     chain.uris.push_back(overrides.uri.empty() ? model_identity(model.Element()) : overrides.uri);
     chain.elements.push_back(model.Element());

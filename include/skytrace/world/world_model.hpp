@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,6 +43,9 @@ struct WorldModel {
   std::optional<GeoOrigin> geo_origin;
   std::vector<WorldObject> objects;
   std::vector<std::string> warnings;  // what was skipped and why (missing models, bad meshes)
+  // World poses of the top-level models by name (SDF models and includes, placed mesh files): the
+  // frame a moving model's new pose refers to; its objects follow it rigidly.
+  std::map<std::string, Eigen::Isometry3d> model_poses;
 };
 
 // Axis-aligned bounds of all objects in the world frame (min, max); zero box when empty.
