@@ -23,6 +23,7 @@
 #include "skytrace/orbits/precise.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
+#include "skytrace/sim/setup.hpp"
 #include "skytrace/sim/trajectory.hpp"
 #include "skytrace/sim/world_setup.hpp"
 
@@ -147,136 +148,16 @@ class EpochQueue {
   std::condition_variable not_full_, not_empty_;
 };
 
-// Marker position and the antenna reference point (marker + antenna height up + offsets east/north).
-Eigen::Vector3d antenna_point(const Eigen::Vector3d& marker_m, const ReceiverSettings& r) {
-  const Geodetic g = ecef_to_geodetic(marker_m);
-  const Eigen::Matrix3d to_enu = ecef_to_enu_rotation(g);
-  const Eigen::Vector3d offset_enu(r.antenna_offset_en_m.x(), r.antenna_offset_en_m.y(), r.antenna_height_m);
-  return marker_m + to_enu.transpose() * offset_enu;
-}
-
-// The frame of world_enu_m coordinates: the loaded world's, else the scenario's origin keys.
-std::optional<WorldOrigin> world_origin(const Scenario& s, const std::optional<LoadedWorld>& world) {
-  if (world) return world->frame;
-  if (s.world.latitude_deg && s.world.longitude_deg) {
-    return WorldOrigin{Geodetic{*s.world.latitude_deg, *s.world.longitude_deg, s.world.elevation_m.value_or(0.0)},
-                       s.world.heading_deg.value_or(0.0)};
-  }
-  return std::nullopt;
-}
-
-// Column of a signal's code observation in its system's list (phase, Doppler, C/N0 follow it).
-using SignalColumns = std::map<Signal, size_t>;
-
 struct ReceiverRun {
   const ReceiverSettings* settings = nullptr;
   Eigen::Vector3d marker_m = Eigen::Vector3d::Zero();  // first marker position
   std::shared_ptr<const receiver::KinematicsSource> kinematics;
   std::unique_ptr<receiver::ObservationGenerator> generator;
   io::ObservationHeader header;
-  SignalColumns columns;
+  std::unique_ptr<RinexRecordMaker> records;
   io::RinexObsWriter writer;
   std::string file_name;
 };
-
-Result<std::shared_ptr<const receiver::KinematicsSource>> make_kinematics(const Scenario& s, const ReceiverSettings& r,
-                                                                          const std::optional<WorldOrigin>& world,
-                                                                          Eigen::Vector3d& marker_m) {
-  if (r.position) {
-    auto ecef = position_to_ecef(*r.position, world);
-    if (!ecef) {
-      return ecef.error().with_context(s.source.string() + ": receiver '" + r.name + "'");
-    }
-    marker_m = *ecef;
-    return std::shared_ptr<const receiver::KinematicsSource>(std::make_shared<StaticPosition>(antenna_point(*ecef, r)));
-  }
-  auto samples = read_trajectory_csv(*r.trajectory, s.time.start, world);
-  if (!samples) return samples.error();
-  if (samples->empty()) return make_error(ErrorCode::kParse, r.trajectory->file.string() + ": no trajectory samples");
-  marker_m = samples->front().position_m;
-  for (auto& sample : *samples) sample.position_m = antenna_point(sample.position_m, r);
-  auto trajectory = InterpolatedTrajectory::create(std::move(*samples), r.trajectory->file.string());
-  if (!trajectory) return trajectory.error();
-  return std::shared_ptr<const receiver::KinematicsSource>(*trajectory);
-}
-
-io::ObservationHeader make_header(const Scenario& s, const ReceiverRun& rx, const orbits::BroadcastEphemerides& eph,
-                                  const std::string& rinex_version) {
-  io::ObservationHeader h;
-  h.version = rinex_version == "4.00" ? 4.00 : 3.04;
-  h.program = "skytrace 0.1.0";
-  h.run_by = "skytrace";
-  h.comments.push_back("Simulated by skytrace from scenario " + s.name);
-  h.comments.push_back("Profile " + rx.settings->profile + ", seed " + std::to_string(s.seed));
-  h.marker_name = rx.settings->name;
-  h.marker_type = rx.settings->trajectory ? "NON_GEODETIC" : "GEODETIC";
-  h.observer = "skytrace";
-  h.agency = "skytrace";
-  h.receiver_number = "1";
-  h.receiver_type = rx.settings->receiver_type;
-  h.receiver_version = "0.1.0";
-  h.antenna_number = "1";
-  h.antenna_type = rx.settings->antenna_type;
-  h.approx_position_ecef_m = {rx.marker_m.x(), rx.marker_m.y(), rx.marker_m.z()};
-  h.antenna_delta_hen_m = {rx.settings->antenna_height_m, rx.settings->antenna_offset_en_m.x(),
-                           rx.settings->antenna_offset_en_m.y()};
-  for (const Signal& signal : rx.settings->signals) {
-    auto& types = h.observation_types[signal.system];
-    for (char kind : {'C', 'L', 'D', 'S'}) types.push_back(io::ObservationType{std::string{kind} + signal.code(), ""});
-  }
-  h.signal_strength_unit = "DBHZ";
-  h.interval_s = s.time.interval_s;
-  h.time_system = TimeScale::kGpst;
-  h.leap_seconds = gps_minus_utc_s(s.time.start);
-  if (h.observation_types.count(GnssSystem::kGlonass) != 0) {
-    for (const SatelliteId& sat : eph.satellites()) {
-      if (sat.system != GnssSystem::kGlonass) continue;
-      if (auto k = eph.glonass_channel(sat)) h.glonass_slots.push_back({sat.number, *k});
-    }
-    for (const char* code : {"C1C", "C1P", "C2C", "C2P"}) h.glonass_code_phase_biases.push_back({code, 0.0});
-  }
-  return h;
-}
-
-int signal_strength_indicator(double cn0_dbhz) {
-  return std::clamp(static_cast<int>(std::floor(cn0_dbhz / 6.0)), 1, 9);
-}
-
-SignalColumns signal_columns(const io::ObservationHeader& header) {
-  SignalColumns columns;
-  for (const auto& [system, types] : header.observation_types) {
-    for (size_t i = 0; i < types.size(); ++i) {
-      const std::string& code = types[i].code;
-      if (code.size() == 3 && code[0] == 'C') columns[Signal{system, code[1], code[2]}] = i;
-    }
-  }
-  return columns;
-}
-
-io::ObservationEpoch to_rinex(const receiver::EpochObservations& epoch, const io::ObservationHeader& header,
-                              const SignalColumns& columns) {
-  io::ObservationEpoch out;
-  out.time = epoch.receiver_time;
-  for (const auto& sat : epoch.satellites) {
-    if (sat.status != receiver::SatelliteStatus::kTracked) continue;
-    const auto& types = header.observation_types.at(sat.satellite.system);
-    io::SatelliteObservations record;
-    record.satellite = sat.satellite;
-    record.values.resize(types.size());
-    for (const auto& m : sat.signals) {
-      const auto column = columns.find(m.signal);
-      if (column == columns.end()) continue;
-      const size_t* index = &column->second;
-      const auto ssi = static_cast<std::uint8_t>(signal_strength_indicator(m.cn0_dbhz));
-      record.values[*index] = {m.pseudorange_m, 0, ssi};
-      record.values[*index + 1] = {m.carrier_phase_cycles, static_cast<std::uint8_t>(m.loss_of_lock ? 1 : 0), ssi};
-      record.values[*index + 2] = {m.doppler_hz, 0, 0};
-      record.values[*index + 3] = {m.cn0_dbhz, 0, 0};
-    }
-    out.satellites.push_back(std::move(record));
-  }
-  return out;
-}
 
 constexpr const char* kTruthHeader =
     "time_gpst,receiver,sat,signal,status,az_deg,el_deg,range_m,range_rate_mps,sat_clock_m,relativistic_m,"
@@ -336,47 +217,6 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
   }
 }
 
-// The span the navigation data can serve, for a plain message when a scenario is outside it.
-std::pair<GnssTime, GnssTime> navigation_span(const orbits::NavigationData& nav) {
-  std::optional<GnssTime> first, last;
-  auto extend = [&](const GnssTime& toe, double half_window_s) {
-    const GnssTime a = toe - half_window_s, b = toe + half_window_s;
-    if (!first || a < *first) first = a;
-    if (!last || *last < b) last = b;
-  };
-  for (const auto& e : nav.kepler) extend(e.toe, orbits::validity_half_window_s(e));
-  for (const auto& e : nav.glonass) extend(e.toe, orbits::glonass_validity_half_window_s());
-  for (const auto& e : nav.sbas) extend(e.toe, orbits::sbas_validity_half_window_s());
-  return {first.value_or(GnssTime{}), last.value_or(GnssTime{})};
-}
-
-Status check_coverage(const Scenario& s, const orbits::BroadcastEphemerides& eph) {
-  std::set<GnssSystem> systems;
-  for (const auto& r : s.receivers) {
-    for (const auto& signal : r.signals) systems.insert(signal.system);
-  }
-  const GnssTime end = s.time.start + s.time.duration_s;
-  for (GnssSystem system : systems) {
-    bool at_start = false, at_end = false;
-    for (const SatelliteId& sat : eph.satellites()) {
-      if (sat.system != system) continue;
-      at_start = at_start || eph.state(sat, s.time.start).ok();
-      at_end = at_end || eph.state(sat, end).ok();
-      if (at_start && at_end) break;
-    }
-    if (!at_start || !at_end) {
-      const auto [first, last] = navigation_span(eph.data());
-      return make_error(ErrorCode::kOutOfRange,
-                        fmt::format("the navigation data has no valid {} ephemeris at the scenario's {} ({} GPST); the "
-                                    "navigation files cover {} to {} GPST",
-                                    system_name(system), at_start ? "end" : "start",
-                                    (at_start ? end : s.time.start).to_iso8601(TimeScale::kGpst, 0),
-                                    first.to_iso8601(TimeScale::kGpst, 0), last.to_iso8601(TimeScale::kGpst, 0)));
-    }
-  }
-  return Ok{};
-}
-
 orbits::NavigationData used_navigation(const orbits::NavigationData& all, const std::vector<ReceiverRun>& receivers) {
   orbits::NavigationData used;
   used.ionosphere = all.ionosphere;
@@ -398,55 +238,12 @@ orbits::NavigationData used_navigation(const orbits::NavigationData& all, const 
 
 }  // namespace
 
-Result<orbits::NavigationData> load_navigation(const Scenario& s) {
-  if (s.ephemeris.nominal) {
-    // Margin on both sides so the light-time iteration and the validity windows have records.
-    return orbits::make_nominal_constellation(s.time.start, s.time.duration_s);
-  }
-  orbits::NavigationData all;
-  for (const auto& path : s.ephemeris.navigation) {
-    auto data = orbits::read_rinex_nav(path);
-    if (!data) return data.error();
-    all.merge(std::move(*data));
-  }
-  return all;
-}
-
 Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& out_dir, const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
-  auto world = load_world(s);
-  if (!world) return world.error();
-  auto navigation = load_navigation(s);
-  if (!navigation) return navigation.error();
-  std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;
-  if (s.models.ionosphere == "ionex") {
-    auto maps = atmosphere::read_ionex(*s.models.ionex_file);
-    if (!maps) return maps.error();
-    ionosphere = std::make_shared<atmosphere::IonexIonosphere>(std::move(*maps));
-  } else if (s.models.ionosphere == "klobuchar" && navigation->ionosphere.gps) {
-    ionosphere = std::make_shared<atmosphere::KlobucharIonosphere>(*navigation->ionosphere.gps);
-  }
-  if (s.models.ionosphere == "klobuchar" && !navigation->ionosphere.gps) {
-    return make_error(ErrorCode::kNotFound,
-                      "models.ionosphere is klobuchar but no navigation file has GPS Klobuchar coefficients "
-                      "(IONOSPHERIC CORR GPSA/GPSB or ION ALPHA/BETA)");
-  }
-  const orbits::BroadcastEphemerides ephemerides(std::move(*navigation));
-  std::optional<orbits::PreciseEphemerides> precise;
-  if (!s.ephemeris.precise_orbits.empty()) {
-    auto orbits_data = orbits::read_sp3(s.ephemeris.precise_orbits);
-    if (!orbits_data) return orbits_data.error();
-    std::optional<orbits::RinexClockData> clocks;
-    if (!s.ephemeris.precise_clocks.empty()) {
-      auto clock_data = orbits::read_rinex_clock(s.ephemeris.precise_clocks);
-      if (!clock_data) return clock_data.error();
-      clocks = std::move(*clock_data);
-    }
-    auto created = orbits::PreciseEphemerides::create(std::move(*orbits_data), std::move(clocks));
-    if (!created) return created.error();
-    precise.emplace(std::move(*created));
-  }
-  if (auto coverage = check_coverage(s, ephemerides); !coverage) return coverage.error();
+  auto resources = prepare_resources(s);
+  if (!resources) return resources.error();
+  const std::optional<LoadedWorld>& world = resources->world;
+  const orbits::BroadcastEphemerides& ephemerides = *resources->ephemerides;
 
   auto staging = StagingDir::create(out_dir);
   if (!staging) return staging.error();
@@ -455,35 +252,15 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   for (size_t i = 0; i < s.receivers.size(); ++i) {
     ReceiverRun& rx = receivers[i];
     rx.settings = &s.receivers[i];
-    auto kinematics = make_kinematics(s, *rx.settings, world_origin(s, *world), rx.marker_m);
+    auto kinematics = make_kinematics(s, *rx.settings, world_origin(s, world), rx.marker_m);
     if (!kinematics) return kinematics.error();
-    if (*world) {
-      auto start_position = (*kinematics)->at(s.time.start);
-      if (start_position) {
-        if (auto inside = check_outside_objects(**world, start_position->position_m, rx.settings->name); !inside) {
-          return inside.error().with_context(s.source.string());
-        }
-      }
-    }
     rx.kinematics = *kinematics;
-    auto profile = receiver::builtin_profile(rx.settings->profile);
-    if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
-    receiver::GeneratorSettings g;
-    g.signals = rx.settings->signals;
-    g.elevation_mask_deg = rx.settings->elevation_mask_deg;
-    g.profile = *profile;
-    g.ionosphere = ionosphere;
-    g.troposphere_saastamoinen = s.models.troposphere == "saastamoinen";
-    g.noise = s.models.noise;
-    g.ideal_clock = s.models.receiver_clock == "ideal";
-    g.seed = s.seed;
-    g.receiver_index = static_cast<int>(i);
-    rx.generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), ephemerides, rx.kinematics,
-                                                                     precise ? &*precise : nullptr);
-    if (*world) rx.generator->set_world((*world)->scene.get(), (*world)->frame);
+    auto generator = make_generator(s, *resources, i, rx.kinematics);
+    if (!generator) return generator.error();
+    rx.generator = std::move(*generator);
     rx.file_name = s.receivers.size() == 1 ? "obs.rnx" : "obs_" + rx.settings->name + ".rnx";
-    rx.header = make_header(s, rx, ephemerides, s.output.rinex_version);
-    rx.columns = signal_columns(rx.header);
+    rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides);
+    rx.records = std::make_unique<RinexRecordMaker>(rx.header);
     if (auto st = rx.writer.open(staging->file(rx.file_name), rx.header); !st) {
       return st.error();
     }
@@ -503,7 +280,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   // Writes one computed epoch of one receiver: RINEX, counts, truth, report.
   auto write_epoch = [&](std::int64_t index, size_t receiver_index, const receiver::EpochObservations& epoch) -> Status {
     ReceiverRun& rx = receivers[receiver_index];
-    const io::ObservationEpoch record = to_rinex(epoch, rx.header, rx.columns);
+    const io::ObservationEpoch record = rx.records->record(epoch);
     if (auto st = rx.writer.write_epoch(record); !st) return st.error();
     for (const auto& sat : epoch.satellites) {
       if (sat.status != receiver::SatelliteStatus::kTracked) continue;
@@ -620,8 +397,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     for (const auto& [system, count] : summary.satellite_epochs_per_system) {
       meta.summary_rows.emplace_back(system + " satellite-epochs", std::to_string(count));
     }
-    if (*world) {
-      const LoadedWorld& w = **world;
+    if (world) {
+      const LoadedWorld& w = *world;
       meta.summary_rows.emplace_back("world", w.name + " (" + std::to_string(w.objects) + " objects, " +
                                                   std::to_string(w.buildings) + " buildings, " + std::to_string(w.trees) +
                                                   " trees)");
@@ -648,8 +425,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   j["signal_observations"] = summary.observations;
   j["navigation_records_used"] = used.record_count();
   j["wall_time_s"] = summary.wall_time_s;
-  if (*world) {
-    const LoadedWorld& w = **world;
+  if (world) {
+    const LoadedWorld& w = *world;
     j["world"] = {{"name", w.name},       {"objects", w.objects},     {"buildings", w.buildings},
                   {"trees", w.trees},     {"triangles", w.triangles}, {"warnings", w.warnings},
                   {"origin", {w.frame.origin.latitude_deg, w.frame.origin.longitude_deg, w.frame.origin.height_m}},

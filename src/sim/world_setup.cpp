@@ -35,8 +35,18 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
   loaded.trees = summary.trees;
   loaded.triangles = (*scene)->stats().triangles;
   loaded.warnings = model->warnings;
-  loaded.scene = std::shared_ptr<const PathQuery>(std::move(*scene));
+  std::shared_ptr<world::EmbreeScene> shared_scene(std::move(*scene));
+  loaded.move_object = [shared_scene](const std::string& name, const Eigen::Isometry3d& pose) {
+    return shared_scene->set_object_pose(name, pose);
+  };
+  loaded.scene = std::move(shared_scene);
   return std::optional<LoadedWorld>(std::move(loaded));
+}
+
+Status set_object_pose(LoadedWorld& world, const std::string& name, const Eigen::Isometry3d& pose_world) {
+  if (!world.move_object) return make_error(ErrorCode::kInvalidArgument, "the world '" + world.name + "' has no movable objects");
+  if (auto moved = world.move_object(name, pose_world); !moved) return moved.error().with_context("world '" + world.name + "'");
+  return Ok{};
 }
 
 Status check_outside_objects(const LoadedWorld& world, const Eigen::Vector3d& position_ecef_m, const std::string& receiver_name) {

@@ -32,9 +32,6 @@ struct RunSummary {
   std::vector<std::string> warnings;  // e.g. world models that were skipped
 };
 
-// Loads the navigation data a scenario names (files, or the nominal constellation for its span).
-[[nodiscard]] Result<orbits::NavigationData> load_navigation(const Scenario& scenario);
-
 // Runs the scenario and writes obs.rnx, nav.rnx, truth.csv and summary.json into out_dir.
 [[nodiscard]] Result<RunSummary> run_scenario(const Scenario& scenario, const std::filesystem::path& out_dir,
                                               const RunOptions& options = {});

@@ -110,6 +110,9 @@ struct WorldSettings {
 
 struct OutputSettings {
   std::string rinex_version = "3.04";  // 3.04 | 4.00
+  bool fix = true;     // fix.csv: the position engine on the first receiver's observations
+  bool nmea = false;   // fix.nmea: NMEA 0183 sentences of that fix
+  bool rtcm3 = false;  // obs.rtcm3: RTCM 3 MSM7 observations, station and ephemeris messages
 };
 
 struct Scenario {

@@ -3,6 +3,9 @@
 
 #include <Eigen/Core>
 
+#include <Eigen/Geometry>
+
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -21,7 +24,12 @@ struct LoadedWorld {
   std::shared_ptr<const PathQuery> scene;
   std::size_t objects = 0, buildings = 0, trees = 0, triangles = 0;
   std::vector<std::string> warnings;    // what the loader skipped
+  // Moves a movable (non-static) model of the scene; not concurrently with tracing.
+  std::function<Status(const std::string& name, const Eigen::Isometry3d& pose_world)> move_object;
 };
+
+// Moves a movable model of the world (e.g. another robot) to a pose in the world frame between epochs.
+[[nodiscard]] Status set_object_pose(LoadedWorld& world, const std::string& name, const Eigen::Isometry3d& pose_world);
 
 // Loads world.sdf when the scenario has one (nullopt otherwise). Errors name the file; a world
 // without <spherical_coordinates> needs world.latitude_deg and world.longitude_deg.

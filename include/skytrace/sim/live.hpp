@@ -1,0 +1,80 @@
+// A live session: one receiver of a scenario stepped epoch by epoch at times the caller chooses
+// (wall clock, ROS or Gazebo time), with the antenna pose and the moving models of the world given
+// from outside. The ROS node, the Gazebo bridge and `skytrace serve` are thin shells around it.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "skytrace/core/error.hpp"
+#include "skytrace/core/frames.hpp"
+#include "skytrace/positioning/spp.hpp"
+#include "skytrace/receiver/observation_generator.hpp"
+#include "skytrace/sim/scenario.hpp"
+#include "skytrace/sim/setup.hpp"
+
+namespace skytrace::sim {
+
+struct LiveOptions {
+  size_t receiver_index = 0;  // which receiver of the scenario
+  bool solve_position = true;
+  // Navigation engine settings; by default the receiver's elevation mask and the corrections the
+  // scenario's navigation data allows (Klobuchar when it has GPS coefficients).
+  std::optional<positioning::SolverSettings> solver;
+  // An external pose older than this is stale: the receiver stays where it was last put, at rest.
+  double pose_timeout_s = 1.0;
+};
+
+struct LiveEpoch {
+  receiver::EpochObservations observations;
+  std::optional<positioning::PositionFix> fix;  // when solve_position
+  bool pose_stale = false;  // the external pose had timed out (diagnostic for the caller)
+  bool restarted = false;   // the time went backwards (simulation reset): tracking started anew
+};
+
+class LiveSession {
+ public:
+  [[nodiscard]] static Result<std::unique_ptr<LiveSession>> create(const Scenario& scenario, const LiveOptions& options = {});
+  ~LiveSession();
+  LiveSession(const LiveSession&) = delete;
+  LiveSession& operator=(const LiveSession&) = delete;
+
+  // The antenna reference point from outside (from now on instead of the scenario's position or
+  // trajectory), at true GPST `time`. Without a velocity, it comes from the previous pose.
+  // Errors (the pose is ignored): non-finite values, a pose far below or above the Earth's surface.
+  // May be called from another thread than step().
+  [[nodiscard]] Status set_antenna_pose_ecef(const GnssTime& time, const Eigen::Vector3d& position_ecef_m,
+                                             const std::optional<Eigen::Vector3d>& velocity_ecef_mps = std::nullopt);
+  // The same in world_frame() coordinates (the Gazebo world frame).
+  [[nodiscard]] Status set_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
+                                              const std::optional<Eigen::Vector3d>& velocity_world_mps = std::nullopt);
+  // Moves a movable model of the world (not while step() runs).
+  [[nodiscard]] Status set_object_pose(const std::string& name, const Eigen::Isometry3d& pose_world);
+
+  // Observations (and the fix) at receiver time tag `tag`. A tag before the previous one restarts
+  // the receiver (new carrier arcs, new clock): a simulation reset.
+  [[nodiscard]] Result<LiveEpoch> step(const GnssTime& tag);
+
+  [[nodiscard]] const Scenario& scenario() const;
+  [[nodiscard]] const ScenarioResources& resources() const;
+  [[nodiscard]] const ReceiverSettings& receiver() const;
+  // The frame of world coordinates: the loaded world's, the scenario's origin keys, or else
+  // east-north-up at the receiver's first position.
+  [[nodiscard]] const LocalFrame& world_frame() const;
+  // The receiver's first marker position (the station position of RTCM 1005/1006).
+  [[nodiscard]] const Eigen::Vector3d& marker_ecef_m() const;
+  // The RINEX header of this receiver's observations and a maker of its records.
+  [[nodiscard]] const io::ObservationHeader& observation_header() const;
+  [[nodiscard]] const RinexRecordMaker& rinex_records() const;
+
+ private:
+  struct Impl;
+  explicit LiveSession(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace skytrace::sim

@@ -1,0 +1,268 @@
+#include "skytrace/sim/setup.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "skytrace/atmosphere/ionex.hpp"
+#include "skytrace/orbits/nominal.hpp"
+#include "skytrace/orbits/rinex_nav.hpp"
+#include "skytrace/sim/trajectory.hpp"
+
+namespace skytrace::sim {
+namespace {
+
+// The span the navigation data can serve, for a plain message when a scenario is outside it.
+std::pair<GnssTime, GnssTime> navigation_span(const orbits::NavigationData& nav) {
+  std::optional<GnssTime> first, last;
+  auto extend = [&](const GnssTime& toe, double half_window_s) {
+    const GnssTime a = toe - half_window_s, b = toe + half_window_s;
+    if (!first || a < *first) first = a;
+    if (!last || *last < b) last = b;
+  };
+  for (const auto& e : nav.kepler) extend(e.toe, orbits::validity_half_window_s(e));
+  for (const auto& e : nav.glonass) extend(e.toe, orbits::glonass_validity_half_window_s());
+  for (const auto& e : nav.sbas) extend(e.toe, orbits::sbas_validity_half_window_s());
+  return {first.value_or(GnssTime{}), last.value_or(GnssTime{})};
+}
+
+}  // namespace
+
+Result<orbits::NavigationData> load_navigation(const Scenario& s) {
+  if (s.ephemeris.nominal) return orbits::make_nominal_constellation(s.time.start, s.time.duration_s);
+  orbits::NavigationData all;
+  for (const auto& path : s.ephemeris.navigation) {
+    auto data = orbits::read_rinex_nav(path);
+    if (!data) return data.error();
+    all.merge(std::move(*data));
+  }
+  return all;
+}
+
+Status check_coverage(const Scenario& s, const orbits::BroadcastEphemerides& eph, const GnssTime& start,
+                      const GnssTime& end) {
+  std::set<GnssSystem> systems;
+  for (const auto& r : s.receivers) {
+    for (const auto& signal : r.signals) systems.insert(signal.system);
+  }
+  for (GnssSystem system : systems) {
+    bool at_start = false, at_end = false;
+    for (const SatelliteId& sat : eph.satellites()) {
+      if (sat.system != system) continue;
+      at_start = at_start || eph.state(sat, start).ok();
+      at_end = at_end || eph.state(sat, end).ok();
+      if (at_start && at_end) break;
+    }
+    if (!at_start || !at_end) {
+      const auto [first, last] = navigation_span(eph.data());
+      return make_error(ErrorCode::kOutOfRange,
+                        fmt::format("the navigation data has no valid {} ephemeris at the scenario's {} ({} GPST); the "
+                                    "navigation files cover {} to {} GPST",
+                                    system_name(system), at_start ? "end" : "start",
+                                    (at_start ? end : start).to_iso8601(TimeScale::kGpst, 0),
+                                    first.to_iso8601(TimeScale::kGpst, 0), last.to_iso8601(TimeScale::kGpst, 0)));
+    }
+  }
+  return Ok{};
+}
+
+Result<ScenarioResources> prepare_resources(const Scenario& s) {
+  ScenarioResources r;
+  auto world = load_world(s);
+  if (!world) return world.error();
+  r.world = std::move(*world);
+  auto navigation = load_navigation(s);
+  if (!navigation) return navigation.error();
+  if (s.models.ionosphere == "ionex") {
+    auto maps = atmosphere::read_ionex(*s.models.ionex_file);
+    if (!maps) return maps.error();
+    r.ionosphere = std::make_shared<atmosphere::IonexIonosphere>(std::move(*maps));
+  } else if (s.models.ionosphere == "klobuchar") {
+    if (!navigation->ionosphere.gps) {
+      return make_error(ErrorCode::kNotFound,
+                        "models.ionosphere is klobuchar but no navigation file has GPS Klobuchar coefficients "
+                        "(IONOSPHERIC CORR GPSA/GPSB or ION ALPHA/BETA)");
+    }
+    r.ionosphere = std::make_shared<atmosphere::KlobucharIonosphere>(*navigation->ionosphere.gps);
+  }
+  r.ephemerides = std::make_unique<orbits::BroadcastEphemerides>(std::move(*navigation));
+  if (!s.ephemeris.precise_orbits.empty()) {
+    auto orbits_data = orbits::read_sp3(s.ephemeris.precise_orbits);
+    if (!orbits_data) return orbits_data.error();
+    std::optional<orbits::RinexClockData> clocks;
+    if (!s.ephemeris.precise_clocks.empty()) {
+      auto clock_data = orbits::read_rinex_clock(s.ephemeris.precise_clocks);
+      if (!clock_data) return clock_data.error();
+      clocks = std::move(*clock_data);
+    }
+    auto created = orbits::PreciseEphemerides::create(std::move(*orbits_data), std::move(clocks));
+    if (!created) return created.error();
+    r.precise = std::make_unique<orbits::PreciseEphemerides>(std::move(*created));
+  }
+  if (auto coverage = check_coverage(s, *r.ephemerides, s.time.start, s.time.start + s.time.duration_s); !coverage) {
+    return coverage.error();
+  }
+  return r;
+}
+
+Eigen::Vector3d antenna_point(const Eigen::Vector3d& marker_m, const ReceiverSettings& r) {
+  const Geodetic g = ecef_to_geodetic(marker_m);
+  const Eigen::Matrix3d to_enu = ecef_to_enu_rotation(g);
+  const Eigen::Vector3d offset_enu(r.antenna_offset_en_m.x(), r.antenna_offset_en_m.y(), r.antenna_height_m);
+  return marker_m + to_enu.transpose() * offset_enu;
+}
+
+std::optional<LocalFrame> world_origin(const Scenario& s, const std::optional<LoadedWorld>& world) {
+  if (world) return world->frame;
+  if (s.world.latitude_deg && s.world.longitude_deg) {
+    return LocalFrame{Geodetic{*s.world.latitude_deg, *s.world.longitude_deg, s.world.elevation_m.value_or(0.0)},
+                      s.world.heading_deg.value_or(0.0)};
+  }
+  return std::nullopt;
+}
+
+Result<std::shared_ptr<const receiver::KinematicsSource>> make_kinematics(const Scenario& s, const ReceiverSettings& r,
+                                                                          const std::optional<LocalFrame>& world,
+                                                                          Eigen::Vector3d& marker_m) {
+  if (r.position) {
+    auto ecef = position_to_ecef(*r.position, world);
+    if (!ecef) return ecef.error().with_context(s.source.string() + ": receiver '" + r.name + "'");
+    marker_m = *ecef;
+    return std::shared_ptr<const receiver::KinematicsSource>(std::make_shared<StaticPosition>(antenna_point(*ecef, r)));
+  }
+  auto samples = read_trajectory_csv(*r.trajectory, s.time.start, world);
+  if (!samples) return samples.error();
+  if (samples->empty()) return make_error(ErrorCode::kParse, r.trajectory->file.string() + ": no trajectory samples");
+  marker_m = samples->front().position_m;
+  for (auto& sample : *samples) sample.position_m = antenna_point(sample.position_m, r);
+  auto trajectory = InterpolatedTrajectory::create(std::move(*samples), r.trajectory->file.string());
+  if (!trajectory) return trajectory.error();
+  return std::shared_ptr<const receiver::KinematicsSource>(*trajectory);
+}
+
+Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
+    const Scenario& s, const ScenarioResources& resources, size_t index,
+    std::shared_ptr<const receiver::KinematicsSource> kinematics) {
+  const ReceiverSettings& rx = s.receivers.at(index);
+  if (resources.world) {
+    if (auto start_position = kinematics->at(s.time.start)) {
+      if (auto inside = check_outside_objects(*resources.world, start_position->position_m, rx.name); !inside) {
+        return inside.error().with_context(s.source.string());
+      }
+    }
+  }
+  auto profile = receiver::builtin_profile(rx.profile);
+  if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
+  receiver::GeneratorSettings g;
+  g.signals = rx.signals;
+  g.elevation_mask_deg = rx.elevation_mask_deg;
+  g.profile = *profile;
+  g.ionosphere = resources.ionosphere;
+  g.troposphere_saastamoinen = s.models.troposphere == "saastamoinen";
+  g.noise = s.models.noise;
+  g.ideal_clock = s.models.receiver_clock == "ideal";
+  g.seed = s.seed;
+  g.receiver_index = static_cast<int>(index);
+  auto generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), *resources.ephemerides,
+                                                                    std::move(kinematics), resources.precise.get());
+  if (resources.world) generator->set_world(resources.world->scene.get(), resources.world->frame);
+  return generator;
+}
+
+io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverSettings& rx,
+                                              const Eigen::Vector3d& marker_m, const orbits::BroadcastEphemerides& eph) {
+  io::ObservationHeader h;
+  h.version = s.output.rinex_version == "4.00" ? 4.00 : 3.04;
+  h.program = "skytrace 0.1.0";
+  h.run_by = "skytrace";
+  h.comments.push_back("Simulated by skytrace from scenario " + s.name);
+  h.comments.push_back("Profile " + rx.profile + ", seed " + std::to_string(s.seed));
+  h.marker_name = rx.name;
+  h.marker_type = rx.trajectory ? "NON_GEODETIC" : "GEODETIC";
+  h.observer = "skytrace";
+  h.agency = "skytrace";
+  h.receiver_number = "1";
+  h.receiver_type = rx.receiver_type;
+  h.receiver_version = "0.1.0";
+  h.antenna_number = "1";
+  h.antenna_type = rx.antenna_type;
+  h.approx_position_ecef_m = {marker_m.x(), marker_m.y(), marker_m.z()};
+  h.antenna_delta_hen_m = {rx.antenna_height_m, rx.antenna_offset_en_m.x(), rx.antenna_offset_en_m.y()};
+  for (const Signal& signal : rx.signals) {
+    auto& types = h.observation_types[signal.system];
+    for (char kind : {'C', 'L', 'D', 'S'}) types.push_back(io::ObservationType{std::string{kind} + signal.code(), ""});
+  }
+  h.signal_strength_unit = "DBHZ";
+  h.interval_s = s.time.interval_s;
+  h.time_system = TimeScale::kGpst;
+  h.leap_seconds = gps_minus_utc_s(s.time.start);
+  if (h.observation_types.count(GnssSystem::kGlonass) != 0) {
+    for (const SatelliteId& sat : eph.satellites()) {
+      if (sat.system != GnssSystem::kGlonass) continue;
+      if (auto k = eph.glonass_channel(sat)) h.glonass_slots.push_back({sat.number, *k});
+    }
+    for (const char* code : {"C1C", "C1P", "C2C", "C2P"}) h.glonass_code_phase_biases.push_back({code, 0.0});
+  }
+  return h;
+}
+
+int signal_strength_indicator(double cn0_dbhz) {
+  return std::clamp(static_cast<int>(std::floor(cn0_dbhz / 6.0)), 1, 9);
+}
+
+RinexRecordMaker::RinexRecordMaker(const io::ObservationHeader& header) : header_(header) {
+  for (const auto& [system, types] : header.observation_types) {
+    for (size_t i = 0; i < types.size(); ++i) {
+      const std::string& code = types[i].code;
+      if (code.size() == 3 && code[0] == 'C') code_column_[Signal{system, code[1], code[2]}] = i;
+    }
+  }
+}
+
+io::ObservationEpoch RinexRecordMaker::record(const receiver::EpochObservations& epoch) const {
+  io::ObservationEpoch out;
+  out.time = epoch.receiver_time;
+  for (const auto& sat : epoch.satellites) {
+    if (sat.status != receiver::SatelliteStatus::kTracked) continue;
+    const auto types = header_.observation_types.find(sat.satellite.system);
+    if (types == header_.observation_types.end()) continue;
+    io::SatelliteObservations record;
+    record.satellite = sat.satellite;
+    record.values.resize(types->second.size());
+    for (const auto& m : sat.signals) {
+      const auto column = code_column_.find(m.signal);
+      if (column == code_column_.end()) continue;
+      const size_t index = column->second;
+      const auto ssi = static_cast<std::uint8_t>(signal_strength_indicator(m.cn0_dbhz));
+      record.values[index] = {m.pseudorange_m, 0, ssi};
+      record.values[index + 1] = {m.carrier_phase_cycles, static_cast<std::uint8_t>(m.loss_of_lock ? 1 : 0), ssi};
+      record.values[index + 2] = {m.doppler_hz, 0, 0};
+      record.values[index + 3] = {m.cn0_dbhz, 0, 0};
+    }
+    out.satellites.push_back(std::move(record));
+  }
+  return out;
+}
+
+positioning::EpochMeasurements to_measurements(const receiver::EpochObservations& epoch) {
+  positioning::EpochMeasurements out;
+  out.receiver_time = epoch.receiver_time;
+  for (const auto& sat : epoch.satellites) {
+    if (sat.status != receiver::SatelliteStatus::kTracked) continue;
+    for (const auto& m : sat.signals) {
+      positioning::SignalMeasurement pm;
+      pm.satellite = sat.satellite;
+      pm.signal = m.signal;
+      pm.pseudorange_m = m.pseudorange_m;
+      pm.doppler_hz = m.doppler_hz;
+      pm.carrier_hz = m.carrier_hz;
+      pm.cn0_dbhz = m.cn0_dbhz;
+      out.signals.push_back(pm);
+    }
+  }
+  return out;
+}
+
+}  // namespace skytrace::sim
