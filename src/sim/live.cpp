@@ -1,0 +1,198 @@
+#include "skytrace/sim/live.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <mutex>
+
+#include "skytrace/core/constants.hpp"
+
+namespace skytrace::sim {
+namespace {
+
+// The antenna where the outside world last put it, falling back to the scenario's own kinematics
+// until the first pose arrives. Poses arrive from another thread (ROS callbacks, UDP).
+class ExternalPose final : public receiver::KinematicsSource {
+ public:
+  ExternalPose(std::shared_ptr<const receiver::KinematicsSource> fallback, double timeout_s)
+      : fallback_(std::move(fallback)), timeout_s_(timeout_s) {}
+
+  void set(const GnssTime& time, const Eigen::Vector3d& position_m, const std::optional<Eigen::Vector3d>& velocity_mps) {
+    std::lock_guard lock(mutex_);
+    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+    if (velocity_mps) {
+      velocity = *velocity_mps;
+    } else if (pose_) {
+      // Velocity from successive poses, when they are close enough in time to mean it.
+      const double dt_s = time - pose_->time;
+      if (dt_s > 1e-3 && dt_s <= 2.0 * timeout_s_) velocity = (position_m - pose_->position_m) / dt_s;
+    }
+    pose_ = Pose{time, position_m, velocity};
+  }
+
+  [[nodiscard]] bool has_pose() const {
+    std::lock_guard lock(mutex_);
+    return pose_.has_value();
+  }
+  // Whether the last pose is older than the timeout at time t.
+  [[nodiscard]] bool stale(const GnssTime& t) const {
+    std::lock_guard lock(mutex_);
+    return pose_ && (t - pose_->time) > timeout_s_;
+  }
+
+  [[nodiscard]] Result<receiver::Kinematics> at(const GnssTime& t) const override {
+    std::optional<Pose> pose;
+    {
+      std::lock_guard lock(mutex_);
+      pose = pose_;
+    }
+    if (!pose) return fallback_->at(t);
+    // Extrapolate with the pose's velocity, but not beyond the timeout: a robot whose pose stopped
+    // arriving is held where it was, at rest.
+    const double dt_s = t - pose->time;
+    if (std::abs(dt_s) > timeout_s_) {
+      const double held_s = std::clamp(dt_s, -timeout_s_, timeout_s_);
+      return receiver::Kinematics{pose->position_m + pose->velocity_mps * held_s, Eigen::Vector3d::Zero()};
+    }
+    return receiver::Kinematics{pose->position_m + pose->velocity_mps * dt_s, pose->velocity_mps};
+  }
+
+ private:
+  struct Pose {
+    GnssTime time;
+    Eigen::Vector3d position_m;
+    Eigen::Vector3d velocity_mps;
+  };
+  std::shared_ptr<const receiver::KinematicsSource> fallback_;
+  double timeout_s_;
+  mutable std::mutex mutex_;
+  std::optional<Pose> pose_;
+};
+
+}  // namespace
+
+struct LiveSession::Impl {
+  Scenario scenario;
+  LiveOptions options;
+  ScenarioResources resources;
+  Eigen::Vector3d marker_m = Eigen::Vector3d::Zero();
+  LocalFrame frame;
+  std::shared_ptr<ExternalPose> pose;
+  std::unique_ptr<receiver::ObservationGenerator> generator;
+  std::optional<positioning::SinglePointSolver> solver;
+  io::ObservationHeader header;
+  std::unique_ptr<RinexRecordMaker> records;
+  std::optional<GnssTime> last_tag;
+
+  [[nodiscard]] positioning::SolverSettings solver_settings() const {
+    if (options.solver) return *options.solver;
+    positioning::SolverSettings settings;
+    settings.elevation_mask_deg = std::max(scenario.receivers[options.receiver_index].elevation_mask_deg, 5.0);
+    settings.ionosphere_klobuchar = resources.ephemerides->data().ionosphere.gps.has_value();
+    settings.troposphere_saastamoinen = true;
+    return settings;
+  }
+  Status restart() {
+    auto generator_made = make_generator(scenario, resources, options.receiver_index, pose);
+    if (!generator_made) return generator_made.error();
+    generator = std::move(*generator_made);
+    if (options.solve_position) {
+      solver.emplace(*resources.ephemerides, solver_settings(), resources.ephemerides->data().ionosphere.gps);
+    }
+    return Ok{};
+  }
+};
+
+LiveSession::LiveSession(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+LiveSession::~LiveSession() = default;
+
+Result<std::unique_ptr<LiveSession>> LiveSession::create(const Scenario& scenario, const LiveOptions& options) {
+  if (options.receiver_index >= scenario.receivers.size()) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: the scenario has {} receivers, receiver {} was asked for", scenario.source.string(),
+                                  scenario.receivers.size(), options.receiver_index));
+  }
+  if (!(options.pose_timeout_s > 0.0)) {
+    return make_error(ErrorCode::kInvalidArgument, "the pose timeout must be positive");
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->scenario = scenario;
+  impl->options = options;
+  auto resources = prepare_resources(impl->scenario);
+  if (!resources) return resources.error();
+  impl->resources = std::move(*resources);
+  const ReceiverSettings& rx = impl->scenario.receivers[options.receiver_index];
+  const std::optional<LocalFrame> origin = world_origin(impl->scenario, impl->resources.world);
+  auto kinematics = make_kinematics(impl->scenario, rx, origin, impl->marker_m);
+  if (!kinematics) return kinematics.error();
+  impl->frame = origin.value_or(LocalFrame{ecef_to_geodetic(impl->marker_m), 0.0});
+  impl->pose = std::make_shared<ExternalPose>(*kinematics, options.pose_timeout_s);
+  if (auto st = impl->restart(); !st) return st.error();
+  impl->header = make_observation_header(impl->scenario, rx, impl->marker_m, *impl->resources.ephemerides);
+  impl->records = std::make_unique<RinexRecordMaker>(impl->header);
+  return std::unique_ptr<LiveSession>(new LiveSession(std::move(impl)));
+}
+
+Status LiveSession::set_antenna_pose_ecef(const GnssTime& time, const Eigen::Vector3d& position_ecef_m,
+                                          const std::optional<Eigen::Vector3d>& velocity_ecef_mps) {
+  if (!position_ecef_m.allFinite() || (velocity_ecef_mps && !velocity_ecef_mps->allFinite())) {
+    return make_error(ErrorCode::kInvalidArgument, "antenna pose with non-finite values ignored");
+  }
+  // Between 1,000 km below and 100,000 km above the surface: anything else is a unit or frame mistake.
+  const double radius_m = position_ecef_m.norm();
+  if (radius_m < 5.3e6 || radius_m > 1.1e8) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("antenna pose {:.1f} km from the Earth's centre ignored (not near the Earth)", radius_m / 1e3));
+  }
+  impl_->pose->set(time, position_ecef_m, velocity_ecef_mps);
+  return Ok{};
+}
+
+Status LiveSession::set_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
+                                           const std::optional<Eigen::Vector3d>& velocity_world_mps) {
+  if (!position_world_m.allFinite() || (velocity_world_mps && !velocity_world_mps->allFinite())) {
+    return make_error(ErrorCode::kInvalidArgument, "antenna pose with non-finite values ignored");
+  }
+  std::optional<Eigen::Vector3d> velocity_ecef;
+  if (velocity_world_mps) velocity_ecef = impl_->frame.ecef_to_local_rotation().transpose() * *velocity_world_mps;
+  return set_antenna_pose_ecef(time, impl_->frame.to_ecef(position_world_m), velocity_ecef);
+}
+
+Status LiveSession::set_object_pose(const std::string& name, const Eigen::Isometry3d& pose_world) {
+  if (!impl_->resources.world) {
+    return make_error(ErrorCode::kInvalidArgument, "cannot move '" + name + "': the scenario has no world");
+  }
+  if (!pose_world.matrix().allFinite()) {
+    return make_error(ErrorCode::kInvalidArgument, "pose of '" + name + "' with non-finite values ignored");
+  }
+  return sim::set_object_pose(*impl_->resources.world, name, pose_world);
+}
+
+Result<LiveEpoch> LiveSession::step(const GnssTime& tag) {
+  LiveEpoch out;
+  if (impl_->last_tag && !(*impl_->last_tag < tag)) {
+    if (auto st = impl_->restart(); !st) return st.error();
+    out.restarted = true;
+  }
+  impl_->last_tag = tag;
+  out.pose_stale = impl_->pose->stale(tag);
+  auto observations = impl_->generator->observe(tag);
+  if (!observations) return observations.error();
+  out.observations = std::move(*observations);
+  if (impl_->solver) {
+    auto fix = impl_->solver->solve(to_measurements(out.observations));
+    if (!fix) return fix.error();
+    out.fix = std::move(*fix);
+  }
+  return out;
+}
+
+const Scenario& LiveSession::scenario() const { return impl_->scenario; }
+const ScenarioResources& LiveSession::resources() const { return impl_->resources; }
+const ReceiverSettings& LiveSession::receiver() const { return impl_->scenario.receivers[impl_->options.receiver_index]; }
+const LocalFrame& LiveSession::world_frame() const { return impl_->frame; }
+const Eigen::Vector3d& LiveSession::marker_ecef_m() const { return impl_->marker_m; }
+const io::ObservationHeader& LiveSession::observation_header() const { return impl_->header; }
+const RinexRecordMaker& LiveSession::rinex_records() const { return *impl_->records; }
+
+}  // namespace skytrace::sim
