@@ -10,6 +10,7 @@
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/satellite_catalog.hpp"
+#include "skytrace/receiver/link_budget.hpp"
 
 namespace skytrace::receiver {
 namespace {
@@ -123,11 +124,23 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
       kinematics_(std::move(kinematics)),
       clock_(settings_.profile.oscillator, settings_.ideal_clock,
              stream_key(settings_.seed, {hash_name("receiver-clock"), static_cast<std::uint64_t>(settings_.receiver_index)})) {
+  // The scenario's signals the receiver can track; the others are left out (run: a warning).
+  std::vector<Signal> trackable;
   for (const Signal& signal : settings_.signals) {
     const SignalInfo* info = find_signal_info(signal);
     if (info == nullptr) throw std::invalid_argument("signal " + signal.to_string() + " is not in the catalogue");
+    const TrackedSignal* tracked = settings_.profile.tracked(signal);
+    if (tracked == nullptr) {
+      untrackable_.push_back(signal);
+      continue;
+    }
+    trackable.push_back(signal);
     signal_info_[signal] = info;
+    tracked_[signal] = *tracked;
+    data_modulated_[signal] = has_data_modulation(*info);
   }
+  settings_.signals = std::move(trackable);
+  elevation_mask_deg_ = std::max(settings_.elevation_mask_deg, settings_.profile.elevation_mask_deg);
   for (const SatelliteId& sat : ephemerides_.satellites()) {
     const bool wanted = std::any_of(settings_.signals.begin(), settings_.signals.end(),
                                     [&](const Signal& s) { return s.system == sat.system; });
@@ -266,7 +279,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     obs.satellite_clock_m = kC * record->state.clock_bias_s;
     obs.relativistic_m = kC * record->state.relativistic_s;
     if (record->glonass != nullptr) obs.glonass_channel = record->glonass->frequency_channel;
-    if (obs.direction.elevation_deg < settings_.elevation_mask_deg) {
+    if (obs.direction.elevation_deg < elevation_mask_deg_) {
       obs.status = SatelliteStatus::kBelowMask;
       epoch.satellites.push_back(std::move(obs));
       continue;
@@ -295,7 +308,17 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     outcomes = world_->trace(world_frame_.from_ecef(rx_m), directions);
   }
 
-  for (size_t pending_index = 0; pending_index < pending.size(); ++pending_index) {
+  // Channels go to the highest satellites first.
+  std::vector<size_t> order(pending.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return epoch.satellites[pending[a].index].direction.elevation_deg >
+           epoch.satellites[pending[b].index].direction.elevation_deg;
+  });
+  const ReceiverProfile& profile = settings_.profile;
+  int channels_used = 0;
+
+  for (const size_t pending_index : order) {
     Pending& p = pending[pending_index];
     SatelliteObservation& obs = epoch.satellites[p.index];
     const SatelliteId sat = obs.satellite;
@@ -317,12 +340,57 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.vegetation_attenuation_db = outcome.vegetation_attenuation_db;
       attenuation_db = outcome.vegetation_attenuation_db;
     }
+    std::string not_tracked_because;
     for (const Signal& signal : settings_.signals) {
       if (signal.system != sat.system) continue;
       const SignalInfo* info = signal_info_.at(signal);
       // A receiver records only what the satellite transmits (GPS L5 only from Block IIF on, no
       // B2I from BeiDou-3, ...); the answer is kept for the GPST day.
       if (!transmitted(sat, signal, tag)) continue;
+      const auto key = std::make_pair(sat, signal);
+      Arc& arc = arcs_[key];
+      const bool was_tracked = arc.active && last_tag_ && arc.last_tag == *last_tag_;
+
+      // C/N0 from the link budget; the tracking state follows it with hysteresis.
+      const double cn0_dbhz = link_budget(profile, tracked_.at(signal), obs.satellite_position_m, rx_m,
+                                          obs.direction.elevation_deg, obs.direction.azimuth_deg, attenuation_db)
+                                  .cn0_dbhz();
+      if (profile.channel_count > 0 && channels_used >= profile.channel_count) {
+        arc.active = false;
+        arc.above_since.reset();
+        not_tracked_because = "no free channel";
+        continue;
+      }
+      bool new_arc = false;
+      if (was_tracked) {
+        if (cn0_dbhz < profile.tracking_threshold_dbhz) {
+          arc.active = false;
+          arc.above_since.reset();
+          not_tracked_because = "below the tracking threshold";
+          continue;
+        }
+        ++channels_used;
+      } else {
+        arc.active = false;
+        if (cn0_dbhz < profile.acquisition_threshold_dbhz) {
+          arc.above_since.reset();
+          not_tracked_because = "below the acquisition threshold";
+          continue;
+        }
+        ++channels_used;  // a channel searches for it
+        if (!arc.above_since || !last_tag_ || arc.acquiring_tag != *last_tag_) {
+          // Rose (or reappeared) since the last epoch: assume halfway. At the first epoch the
+          // receiver has been running before the scenario starts and tracks already.
+          arc.above_since = last_tag_ ? *last_tag_ + 0.5 * (tag - *last_tag_) : tag - 1e9;
+        }
+        arc.acquiring_tag = tag;
+        if (tag - *arc.above_since < profile.acquisition_time_s) {
+          not_tracked_because = "acquiring";
+          continue;
+        }
+        new_arc = true;
+      }
+
       // The clock and group delay come from the record that belongs to the signal (Galileo E5a:
       // F/NAV); the orbit is the same for both records of one issue of data.
       const RecordState* signal_record = &*record;
@@ -355,46 +423,57 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       m.group_delay_m = kC * (precise_truth ? precise_clock_group_delay_s(*signal_record, signal)
                                             : group_delay_of(*signal_record, signal));
       m.ionosphere_code_m = obs.ionosphere_l1_m * std::pow(kFrequencyL1_Hz / m.carrier_hz, 2);
+      m.cn0_dbhz = quantize(cn0_dbhz, profile.cn0_resolution_dbhz);
 
-      // C/N0 until the link budget lands: from the horizon value to the zenith value with sqrt(sin el).
-      const double sin_el = std::sin(obs.direction.elevation_deg * std::numbers::pi / 180.0);
-      const double cn0_dbhz = settings_.profile.cn0_horizon_dbhz +
-                              (settings_.profile.cn0_zenith_dbhz - settings_.profile.cn0_horizon_dbhz) *
-                                  std::sqrt(std::max(sin_el, 0.0)) -
-                              attenuation_db;
-      if (settings_.profile.tracking_threshold_dbhz > 0.0 && cn0_dbhz < settings_.profile.tracking_threshold_dbhz) continue;
-      m.cn0_dbhz = quantize(cn0_dbhz, settings_.profile.cn0_resolution_dbhz);
-
-      const auto key = std::make_pair(sat, signal);
+      SignalStreams* streams = nullptr;
       if (settings_.noise) {
         auto it = streams_.find(key);
         if (it == streams_.end()) {
-          it = streams_.emplace(key, SignalStreams(stream_key(settings_.seed, {hash_name("tracking-noise"),
-                                                                               static_cast<std::uint64_t>(settings_.receiver_index),
-                                                                               satellite_key(sat), signal_key(signal)})))
+          const auto rx = static_cast<std::uint64_t>(settings_.receiver_index);
+          it = streams_
+                   .emplace(key, SignalStreams(stream_key(settings_.seed, {hash_name("tracking-noise"), rx,
+                                                                          satellite_key(sat), signal_key(signal)}),
+                                               stream_key(settings_.seed, {hash_name("cycle-slips"), rx,
+                                                                          satellite_key(sat), signal_key(signal)})))
                    .first;
         }
-        const TrackingNoise sigma = tracking_noise(settings_.profile, *info, m.carrier_hz, cn0_dbhz);
-        m.code_noise_m = sigma.code_m * it->second.noise.gaussian();
-        m.phase_noise_m = sigma.phase_m * it->second.noise.gaussian();
-        m.doppler_noise_mps = sigma.doppler_mps * it->second.noise.gaussian();
+        streams = &it->second;
+        const TrackingNoise sigma = tracking_noise(profile, *info, m.carrier_hz, cn0_dbhz);
+        m.code_noise_m = sigma.code_m * streams->noise.gaussian();
+        m.phase_noise_m = sigma.phase_m * streams->noise.gaussian();
+        m.doppler_noise_mps = sigma.doppler_mps * streams->noise.gaussian();
       }
 
-      // Carrier-phase arcs: a signal tracked at the previous epoch continues its arc; otherwise a
-      // new arc starts with a new integer ambiguity and the loss-of-lock flag.
-      Arc& arc = arcs_[key];
-      const bool continues = arc.active && last_tag_ && arc.last_tag == *last_tag_;
-      if (!continues) {
+      // Carrier-phase arcs: a signal tracked at the previous epoch continues its arc unless the
+      // loop slips (more likely the weaker the signal); an acquisition starts a new arc with a new
+      // integer ambiguity. Both set the loss-of-lock flag and restart the lock time.
+      const bool data = data_modulated_.at(signal);
+      if (new_arc) {
         ++arc.index;
         RandomStream ambiguity(stream_key(settings_.seed, {hash_name("ambiguity"), static_cast<std::uint64_t>(settings_.receiver_index),
                                                            satellite_key(sat), signal_key(signal),
                                                            static_cast<std::uint64_t>(arc.index)}));
         arc.ambiguity_cycles = ambiguity.uniform_int(-1000000, 1000000);
-        arc.active = true;
+        arc.lock_start = tag;
         m.loss_of_lock = true;
+      } else if (streams != nullptr && profile.pll_bandwidth_hz > 0.0) {
+        const double mean_s = mean_time_to_slip_s(pll_jitter_rad(profile, cn0_dbhz), profile.pll_bandwidth_hz, data);
+        const double probability = -std::expm1(-(tag - *last_tag_) / mean_s);
+        if (streams->slips.uniform() < probability) {
+          // The slip is a whole number of cycles (half cycles of a Costas loop resolve again).
+          const std::int64_t size = streams->slips.uniform_int(1, 5);
+          arc.ambiguity_cycles += streams->slips.uniform() < 0.5 ? -size : size;
+          ++arc.index;
+          arc.lock_start = tag;
+          m.loss_of_lock = true;
+        }
       }
+      arc.active = true;
+      arc.above_since.reset();
       arc.last_tag = tag;
       m.ambiguity_cycles = arc.ambiguity_cycles;
+      m.lock_time_s = tag - arc.lock_start;
+      m.half_cycle_unresolved = data && m.lock_time_s < profile.half_cycle_resolution_s;
 
       const double satellite_clock_total_m = m.satellite_clock_m + obs.relativistic_m;
       m.pseudorange_m = range_m + rx_clock_m - (satellite_clock_total_m - m.group_delay_m) + m.ionosphere_code_m +
@@ -408,8 +487,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.signals.push_back(m);
     }
     if (obs.signals.empty()) {
-      obs.status = attenuation_db > 0.0 ? SatelliteStatus::kAttenuated : SatelliteStatus::kNoSignal;
-      obs.detail = attenuation_db > 0.0 ? "below the tracking threshold after vegetation" : "no listed signal tracked";
+      const bool attenuated = attenuation_db > 0.0 && not_tracked_because.starts_with("below");
+      obs.status = attenuated ? SatelliteStatus::kAttenuated : SatelliteStatus::kNoSignal;
+      obs.detail = attenuated ? not_tracked_because + " after vegetation"
+                              : (not_tracked_because.empty() ? "no listed signal tracked" : not_tracked_because);
     }
   }
   last_tag_ = tag;

@@ -1,46 +1,398 @@
 #include "skytrace/receiver/profile.hpp"
 
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <numbers>
+#include <set>
+#include <sstream>
 
 #include "skytrace/core/constants.hpp"
+#include "skytrace/core/text_file.hpp"
+
+#ifndef SKYTRACE_PROFILE_DIR
+#define SKYTRACE_PROFILE_DIR "profiles"
+#endif
 
 namespace skytrace::receiver {
+namespace {
 
-std::vector<std::string> builtin_profile_names() { return {"ideal", "septentrio-polarx5"}; }
+// Thrown inside the parser and turned into an Error at the boundary.
+struct ProfileError {
+  std::string message;
+};
 
-Result<ReceiverProfile> builtin_profile(const std::string& name) {
-  ReceiverProfile p;
-  p.name = name;
-  if (name == "ideal") {
-    // No noise, ideal clock, every signal above the mask in open sky (C/N0 33 dB-Hz at the
-    // horizon); signals attenuated by vegetation below 25 dB-Hz are lost.
-    p.tracking_threshold_dbhz = 25.0;
-    return p;
+// A YAML node with its key path, for messages like "file:12: tracking.pll_bandwidth_hz: ...".
+class Field {
+ public:
+  Field(YAML::Node node, std::string path, const std::string* file) : node_(std::move(node)), path_(std::move(path)), file_(file) {}
+
+  [[noreturn]] void fail(const std::string& what) const {
+    std::string where = *file_;
+    if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
+    throw ProfileError{where + ": " + (path_.empty() ? std::string("profile") : path_) + ": " + what};
   }
-  if (name == "septentrio-polarx5") {
-    // Provisional geodetic receiver: narrow correlator, carrier-aided DLL, OCXO-class steered clock.
-    p.dll_bandwidth_hz = 0.25;
-    p.pll_bandwidth_hz = 10.0;
-    p.fll_bandwidth_hz = 2.0;
-    p.correlator_spacing_chips = 0.1;
-    p.integration_time_s = 0.01;
-    p.cn0_zenith_dbhz = 51.0;
-    p.cn0_horizon_dbhz = 35.0;
-    p.cn0_resolution_dbhz = 0.25;
-    p.tracking_threshold_dbhz = 28.0;
-    p.oscillator.h0 = 2e-21;
-    p.oscillator.h_minus2 = 1e-24;
-    p.oscillator.initial_bias_s = 5e-7;
-    p.oscillator.initial_drift_s_per_s = 1e-9;
-    p.oscillator.steered = true;
-    p.channel_count = 544;
-    return p;
+  void expect_keys(std::initializer_list<const char*> allowed) const {
+    if (!node_.IsMap()) fail("expected a mapping of keys");
+    for (const auto& item : node_) {
+      const std::string key = item.first.as<std::string>();
+      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        Field(item.first, join(key), file_).fail("unknown key (expected one of: " + list + ")");
+      }
+    }
   }
-  std::string names;
-  for (const auto& n : builtin_profile_names()) names += (names.empty() ? "" : ", ") + n;
-  return make_error(ErrorCode::kNotFound, "unknown receiver profile '" + name + "' (known: " + names + ")");
+  [[nodiscard]] std::optional<Field> child(const std::string& key) const {
+    const YAML::Node c = node_[key];
+    if (!c || c.IsNull()) return std::nullopt;
+    return Field(c, join(key), file_);
+  }
+  [[nodiscard]] Field required(const std::string& key) const {
+    auto c = child(key);
+    if (!c) fail("missing required key '" + key + "'");
+    return *c;
+  }
+  [[nodiscard]] bool is_sequence() const { return node_.IsSequence(); }
+  [[nodiscard]] bool is_map() const { return node_.IsMap(); }
+  [[nodiscard]] std::vector<Field> elements() const {
+    if (!node_.IsSequence()) fail("expected a list");
+    std::vector<Field> out;
+    for (size_t i = 0; i < node_.size(); ++i) out.emplace_back(node_[i], path_ + "[" + std::to_string(i) + "]", file_);
+    return out;
+  }
+  [[nodiscard]] std::vector<std::pair<std::string, Field>> entries() const {
+    if (!node_.IsMap()) fail("expected a mapping of keys");
+    std::vector<std::pair<std::string, Field>> out;
+    for (const auto& item : node_) {
+      const std::string key = item.first.as<std::string>();
+      out.emplace_back(key, Field(item.second, join(key), file_));
+    }
+    return out;
+  }
+  [[nodiscard]] std::string as_string() const {
+    if (!node_.IsScalar()) fail("expected a single value");
+    return node_.Scalar();
+  }
+  [[nodiscard]] double as_double_in(double low, double high) const {
+    const std::string text = as_string();
+    double v = 0.0;
+    try {
+      size_t used = 0;
+      v = std::stod(text, &used);
+      if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
+    } catch (const std::exception&) {
+      fail("expected a number, got '" + text + "'");
+    }
+    if (v < low || v > high) {
+      std::ostringstream s;
+      s << "value " << v << " out of range [" << low << ", " << high << "]";
+      fail(s.str());
+    }
+    return v;
+  }
+  [[nodiscard]] int as_int_in(int low, int high) const {
+    const double v = as_double_in(low, high);
+    if (v != std::floor(v)) fail("expected a whole number, got '" + as_string() + "'");
+    return static_cast<int>(v);
+  }
+  [[nodiscard]] std::string as_choice(std::initializer_list<const char*> choices) const {
+    const std::string text = as_string();
+    if (std::any_of(choices.begin(), choices.end(), [&](const char* c) { return text == c; })) return text;
+    std::string list;
+    for (const char* c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
+    fail("unknown value '" + text + "' (expected one of: " + list + ")");
+  }
+  [[nodiscard]] std::vector<double> as_doubles_in(double low, double high) const {
+    std::vector<double> out;
+    for (const Field& e : elements()) out.push_back(e.as_double_in(low, high));
+    return out;
+  }
+
+ private:
+  [[nodiscard]] std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  YAML::Node node_;
+  std::string path_;
+  const std::string* file_;
+};
+
+// Gain rows: one list (no azimuth) or one list per azimuth, each as long as the elevations.
+std::vector<std::vector<double>> parse_gain_rows(const Field& node, size_t elevations, size_t azimuths) {
+  std::vector<std::vector<double>> rows;
+  if (azimuths == 0) {
+    rows.push_back(node.as_doubles_in(-60.0, 25.0));
+  } else {
+    const auto items = node.elements();
+    if (items.size() != azimuths) {
+      node.fail("expected one row per azimuth (" + std::to_string(azimuths) + "), got " + std::to_string(items.size()));
+    }
+    for (const Field& row : items) rows.push_back(row.as_doubles_in(-60.0, 25.0));
+  }
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].size() != elevations) {
+      node.fail("expected " + std::to_string(elevations) + " gains (one per elevation), got " +
+                std::to_string(rows[i].size()));
+    }
+  }
+  return rows;
 }
+
+void check_increasing(const Field& node, const std::vector<double>& values) {
+  if (values.size() < 2) node.fail("expected at least 2 values");
+  for (size_t i = 1; i < values.size(); ++i) {
+    if (values[i] <= values[i - 1]) node.fail("values must increase");
+  }
+}
+
+AntennaPattern parse_antenna(const Field& node) {
+  node.expect_keys({"model", "elevation_deg", "azimuth_deg", "rhcp_gain_dbic", "lhcp_gain_dbic"});
+  AntennaPattern a;
+  const Field elevation = node.required("elevation_deg");
+  a.elevation_deg = elevation.as_doubles_in(-90.0, 90.0);
+  check_increasing(elevation, a.elevation_deg);
+  if (auto c = node.child("azimuth_deg")) {
+    a.azimuth_deg = c->as_doubles_in(0.0, 359.999999);
+    check_increasing(*c, a.azimuth_deg);
+  }
+  a.rhcp_gain_dbic = parse_gain_rows(node.required("rhcp_gain_dbic"), a.elevation_deg.size(), a.azimuth_deg.size());
+  a.lhcp_gain_dbic = parse_gain_rows(node.required("lhcp_gain_dbic"), a.elevation_deg.size(), a.azimuth_deg.size());
+  return a;
+}
+
+OscillatorSettings parse_oscillator(const Field& node) {
+  node.expect_keys({"preset", "h0", "h_minus1", "h_minus2", "initial_bias_s", "initial_drift_s_per_s", "steering"});
+  OscillatorSettings o;
+  bool preset = false;
+  if (auto c = node.child("preset")) {
+    o = *oscillator_preset(c->as_choice({"tcxo", "ocxo"}));
+    preset = true;
+  }
+  // Without a preset the three coefficients are required.
+  auto coefficient = [&](const char* key, double& value) {
+    if (auto c = preset ? node.child(key) : std::optional<Field>(node.required(key))) value = c->as_double_in(0.0, 1e-15);
+  };
+  coefficient("h0", o.h0);
+  coefficient("h_minus1", o.h_minus1);
+  coefficient("h_minus2", o.h_minus2);
+  o.initial_bias_s = node.required("initial_bias_s").as_double_in(0.0, 1e-3);
+  o.initial_drift_s_per_s = node.required("initial_drift_s_per_s").as_double_in(0.0, 1e-5);
+  o.steered = node.required("steering").as_choice({"steered", "free-running"}) == "steered";
+  return o;
+}
+
+ReceiverProfile parse_root(const Field& root, const std::string& source) {
+  root.expect_keys({"name", "description", "signals", "signal_extra_loss_db", "channels", "elevation_mask_deg",
+                    "antenna", "front_end", "tracking", "oscillator"});
+  ReceiverProfile p;
+  p.source = source;
+  p.name = root.required("name").as_string();
+  const Field signals = root.required("signals");
+  if (!signals.is_sequence()) {
+    if (signals.as_string() != "all") signals.fail("expected a list of signals (e.g. [G1C, E1C]) or 'all'");
+    p.all_signals = true;
+  } else {
+    for (const Field& item : signals.elements()) {
+      auto signal = Signal::parse(item.as_string());
+      if (!signal) item.fail(signal.error().message);
+      if (find_signal_info(*signal) == nullptr) item.fail("signal " + signal->to_string() + " is not in the catalogue");
+      if (p.tracked(*signal) != nullptr) item.fail("signal " + signal->to_string() + " listed twice");
+      p.signals.push_back({*signal, 0.0});
+    }
+    if (p.signals.empty()) signals.fail("list at least one signal");
+  }
+  if (auto losses = root.child("signal_extra_loss_db")) {
+    for (const auto& [key, value] : losses->entries()) {
+      auto signal = Signal::parse(key);
+      if (!signal) value.fail(signal.error().message);
+      const TrackedSignal* tracked = p.tracked(*signal);
+      if (tracked == nullptr || p.all_signals) value.fail("signal " + key + " is not among the profile's signals");
+      const_cast<TrackedSignal*>(tracked)->extra_loss_db = value.as_double_in(0.0, 40.0);
+    }
+  }
+  p.channel_count = root.required("channels").as_int_in(0, 100000);
+  p.elevation_mask_deg = root.required("elevation_mask_deg").as_double_in(-10.0, 90.0);
+  p.antenna = parse_antenna(root.required("antenna"));
+
+  const Field front_end = root.required("front_end");
+  front_end.expect_keys({"system_noise_temperature_k", "implementation_loss_db"});
+  p.system_noise_temperature_k = front_end.required("system_noise_temperature_k").as_double_in(10.0, 10000.0);
+  p.implementation_loss_db = front_end.required("implementation_loss_db").as_double_in(0.0, 20.0);
+
+  const Field tracking = root.required("tracking");
+  tracking.expect_keys({"dll_bandwidth_hz", "pll_bandwidth_hz", "fll_bandwidth_hz", "correlator_spacing_chips",
+                        "integration_time_s", "acquisition_threshold_dbhz", "tracking_threshold_dbhz",
+                        "acquisition_time_s", "half_cycle_resolution_s", "cn0_resolution_dbhz"});
+  p.dll_bandwidth_hz = tracking.required("dll_bandwidth_hz").as_double_in(0.0, 50.0);
+  p.pll_bandwidth_hz = tracking.required("pll_bandwidth_hz").as_double_in(0.0, 100.0);
+  p.fll_bandwidth_hz = tracking.required("fll_bandwidth_hz").as_double_in(0.0, 50.0);
+  p.correlator_spacing_chips = tracking.required("correlator_spacing_chips").as_double_in(0.01, 1.5);
+  p.integration_time_s = tracking.required("integration_time_s").as_double_in(0.001, 0.2);
+  p.acquisition_threshold_dbhz = tracking.required("acquisition_threshold_dbhz").as_double_in(0.0, 60.0);
+  const Field tracking_threshold = tracking.required("tracking_threshold_dbhz");
+  p.tracking_threshold_dbhz = tracking_threshold.as_double_in(0.0, 60.0);
+  if (p.tracking_threshold_dbhz > p.acquisition_threshold_dbhz) {
+    tracking_threshold.fail("must not exceed tracking.acquisition_threshold_dbhz (a receiver keeps tracking weaker "
+                            "signals than it can acquire)");
+  }
+  p.acquisition_time_s = tracking.required("acquisition_time_s").as_double_in(0.0, 600.0);
+  p.half_cycle_resolution_s = tracking.required("half_cycle_resolution_s").as_double_in(0.0, 600.0);
+  p.cn0_resolution_dbhz = tracking.required("cn0_resolution_dbhz").as_double_in(0.0, 10.0);
+
+  p.oscillator = parse_oscillator(root.required("oscillator"));
+  return p;
+}
+
+bool looks_like_path(const std::string& text) {
+  return text.find('/') != std::string::npos || (text.size() > 5 && text.ends_with(".yaml"));
+}
+
+double interpolate_row(const std::vector<double>& x, const std::vector<double>& y, double at) {
+  if (at <= x.front()) return y.front();
+  if (at >= x.back()) return y.back();
+  const auto upper = std::upper_bound(x.begin(), x.end(), at);
+  const size_t i = static_cast<size_t>(upper - x.begin());
+  const double w = (at - x[i - 1]) / (x[i] - x[i - 1]);
+  return y[i - 1] + w * (y[i] - y[i - 1]);
+}
+
+double interpolate_pattern(const AntennaPattern& a, const std::vector<std::vector<double>>& rows, double elevation_deg,
+                           double azimuth_deg) {
+  if (rows.empty()) return 0.0;
+  if (a.azimuth_deg.empty() || rows.size() == 1) return interpolate_row(a.elevation_deg, rows.front(), elevation_deg);
+  // Azimuth wraps: between the last azimuth and the first plus 360.
+  double az = std::fmod(azimuth_deg, 360.0);
+  if (az < 0.0) az += 360.0;
+  const auto& azimuths = a.azimuth_deg;
+  size_t upper = static_cast<size_t>(std::upper_bound(azimuths.begin(), azimuths.end(), az) - azimuths.begin());
+  const size_t lower = upper == 0 ? azimuths.size() - 1 : upper - 1;
+  if (upper == azimuths.size()) upper = 0;
+  double span = azimuths[upper] - azimuths[lower];
+  double offset = az - azimuths[lower];
+  if (span <= 0.0) span += 360.0;
+  if (offset < 0.0) offset += 360.0;
+  const double w = offset / span;
+  return (1.0 - w) * interpolate_row(a.elevation_deg, rows[lower], elevation_deg) +
+         w * interpolate_row(a.elevation_deg, rows[upper], elevation_deg);
+}
+
+}  // namespace
+
+std::optional<OscillatorSettings> oscillator_preset(const std::string& name) {
+  // Typical crystal oscillators (Brown & Hwang, Introduction to Random Signals and Applied Kalman
+  // Filtering, 3rd ed., table 9.2; also Van Dierendonck, GPS: Theory and Applications I, ch. 8).
+  OscillatorSettings o;
+  if (name == "tcxo") {
+    o.h0 = 2e-19;
+    o.h_minus1 = 7e-21;
+    o.h_minus2 = 2e-20;
+    return o;
+  }
+  if (name == "ocxo") {
+    o.h0 = 2e-25;
+    o.h_minus1 = 7e-25;
+    o.h_minus2 = 6e-25;
+    return o;
+  }
+  return std::nullopt;
+}
+
+double AntennaPattern::rhcp_dbic(double elevation_deg_, double azimuth_deg_) const {
+  return interpolate_pattern(*this, rhcp_gain_dbic, elevation_deg_, azimuth_deg_);
+}
+double AntennaPattern::lhcp_dbic(double elevation_deg_, double azimuth_deg_) const {
+  return interpolate_pattern(*this, lhcp_gain_dbic, elevation_deg_, azimuth_deg_);
+}
+
+const TrackedSignal* ReceiverProfile::tracked(const Signal& signal) const {
+  if (all_signals) {
+    static thread_local TrackedSignal any;
+    any = TrackedSignal{signal, 0.0};
+    return &any;
+  }
+  for (const TrackedSignal& s : signals) {
+    if (s.signal == signal) return &s;
+  }
+  return nullptr;
+}
+
+Result<ReceiverProfile> parse_profile(const std::string& yaml_text, const std::string& source) {
+  try {
+    const YAML::Node root = YAML::Load(yaml_text);
+    if (!root || root.IsNull()) return make_error(ErrorCode::kParse, source + ": empty profile");
+    return parse_root(Field(root, "", &source), source);
+  } catch (const ProfileError& e) {
+    return make_error(ErrorCode::kParse, e.message);
+  } catch (const YAML::Exception& e) {
+    return make_error(ErrorCode::kParse, source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
+std::vector<std::filesystem::path> profile_search_path(const std::filesystem::path& scenario_dir) {
+  std::vector<std::filesystem::path> dirs;
+  if (!scenario_dir.empty()) dirs.push_back(scenario_dir / "profiles");
+  if (const char* env = std::getenv("SKYTRACE_PROFILE_PATH")) {
+    std::string text(env);
+    size_t start = 0;
+    while (start <= text.size()) {
+      const size_t end = std::min(text.find(':', start), text.size());
+      if (end > start) dirs.emplace_back(text.substr(start, end - start));
+      start = end + 1;
+    }
+  }
+  dirs.emplace_back(SKYTRACE_PROFILE_DIR);
+  return dirs;
+}
+
+Result<ReceiverProfile> load_profile(const std::string& name_or_path, const std::filesystem::path& scenario_dir) {
+  std::filesystem::path file;
+  std::error_code ec;
+  if (looks_like_path(name_or_path)) {
+    file = name_or_path;
+    if (file.is_relative() && !scenario_dir.empty()) file = scenario_dir / file;
+    if (!std::filesystem::is_regular_file(file, ec)) {
+      return make_error(ErrorCode::kNotFound, "receiver profile file not found: " + file.string());
+    }
+  } else {
+    std::string searched;
+    for (const auto& dir : profile_search_path(scenario_dir)) {
+      const auto candidate = dir / (name_or_path + ".yaml");
+      if (std::filesystem::is_regular_file(candidate, ec)) {
+        file = candidate;
+        break;
+      }
+      searched += (searched.empty() ? "" : ", ") + dir.string();
+    }
+    if (file.empty()) {
+      std::string names;
+      for (const auto& n : available_profile_names(scenario_dir)) names += (names.empty() ? "" : ", ") + n;
+      return make_error(ErrorCode::kNotFound, "unknown receiver profile '" + name_or_path + "' (known: " + names +
+                                                  "; searched " + searched + ")");
+    }
+  }
+  auto text = read_text_file(file);
+  if (!text) return text.error();
+  auto profile = parse_profile(*text, file.string());
+  if (!profile) return profile.error();
+  return profile;
+}
+
+std::vector<std::string> available_profile_names(const std::filesystem::path& scenario_dir) {
+  std::set<std::string> names;
+  std::error_code ec;
+  for (const auto& dir : profile_search_path(scenario_dir)) {
+    if (!std::filesystem::is_directory(dir, ec)) continue;
+    for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+      if (entry.path().extension() == ".yaml") names.insert(entry.path().stem().string());
+    }
+  }
+  return {names.begin(), names.end()};
+}
+
+Result<ReceiverProfile> builtin_profile(const std::string& name) { return load_profile(name); }
 
 TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& signal, double carrier_hz,
                              double cn0_dbhz) {
@@ -59,8 +411,7 @@ TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& s
   }
   const double wavelength_m = constants::kSpeedOfLight_mps / carrier_hz;
   if (profile.pll_bandwidth_hz > 0.0) {
-    const double var_rad2 = profile.pll_bandwidth_hz / cn0_hz * (1.0 + 1.0 / (2.0 * t_s * cn0_hz));
-    noise.phase_m = std::sqrt(var_rad2) * wavelength_m / (2.0 * std::numbers::pi);
+    noise.phase_m = pll_jitter_rad(profile, cn0_dbhz) * wavelength_m / (2.0 * std::numbers::pi);
   }
   if (profile.fll_bandwidth_hz > 0.0) {
     // FLL thermal noise (Hz) scaled to range rate.
@@ -69,6 +420,42 @@ TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& s
     noise.doppler_mps = std::sqrt(var_hz2) * wavelength_m;
   }
   return noise;
+}
+
+double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz) {
+  if (profile.pll_bandwidth_hz <= 0.0) return 0.0;
+  const double cn0_hz = std::pow(10.0, cn0_dbhz / 10.0);
+  const double var_rad2 =
+      profile.pll_bandwidth_hz / cn0_hz * (1.0 + 1.0 / (2.0 * profile.integration_time_s * cn0_hz));
+  return std::sqrt(var_rad2);
+}
+
+double mean_time_to_slip_s(double jitter_rad, double bandwidth_hz, bool costas) {
+  if (jitter_rad <= 0.0 || bandwidth_hz <= 0.0) return std::numeric_limits<double>::infinity();
+  const double rho = costas ? 1.0 / (4.0 * jitter_rad * jitter_rad) : 1.0 / (jitter_rad * jitter_rad);
+  // I0(rho)^2 overflows beyond rho ~ 350: by then the time is astronomically long anyway.
+  if (rho > 300.0) return std::numeric_limits<double>::infinity();
+  const double i0 = std::cyl_bessel_i(0.0, rho);
+  return std::numbers::pi * std::numbers::pi * rho * i0 * i0 / (2.0 * bandwidth_hz);
+}
+
+bool has_data_modulation(const SignalInfo& signal) {
+  // Pilot components, and data+pilot tracking (which follows the pilot), carry no navigation data
+  // bits, hence no half-cycle ambiguity. RINEX 3 attributes of the pilot-tracked signals:
+  const char band = signal.signal.band;
+  const char a = signal.signal.attribute;
+  const auto in = [](char c, std::string_view set) { return set.find(c) != std::string_view::npos; };
+  switch (signal.signal.system) {
+    case GnssSystem::kGps: return !(in(a, "LX") && in(band, "12")) && !(in(a, "QX") && band == '5');
+    case GnssSystem::kGlonass: return !(in(a, "BX") && in(band, "46")) && !(in(a, "QX") && band == '3');
+    case GnssSystem::kGalileo: return !in(a, "CQXZ");
+    case GnssSystem::kBeiDou:
+      return !(a == 'P' || (a == 'X' && in(band, "158")) || (a == 'Z' && band == '7'));
+    case GnssSystem::kQzss: return !(in(a, "LX") && in(band, "126")) && !(in(a, "QXPZ") && band == '5');
+    case GnssSystem::kNavic: return !in(a, "CXP");
+    case GnssSystem::kSbas: return !(in(a, "QX") && band == '5');
+  }
+  return true;
 }
 
 }  // namespace skytrace::receiver

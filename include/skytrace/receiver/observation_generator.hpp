@@ -69,6 +69,8 @@ struct SignalMeasurement {
   double doppler_hz = 0.0;
   double cn0_dbhz = 0.0;
   bool loss_of_lock = false;  // RINEX LLI bit 0: a new carrier-phase arc starts here
+  bool half_cycle_unresolved = false;  // RINEX LLI bit 1: data signal whose phase polarity is not yet known
+  double lock_time_s = 0.0;            // continuous carrier tracking up to this epoch
   // Truth of the terms.
   double satellite_clock_m = 0.0;   // c * clock polynomial of the record used for this signal
   double group_delay_m = 0.0;       // c * code group delay of the signal
@@ -129,17 +131,24 @@ class ObservationGenerator {
   [[nodiscard]] const GeneratorSettings& settings() const { return settings_; }
   // Satellites the generator considers (those of the systems of the listed signals).
   [[nodiscard]] const std::vector<SatelliteId>& satellites() const { return satellites_; }
+  // Listed signals the profile cannot track (left out of the observations).
+  [[nodiscard]] const std::vector<Signal>& untrackable_signals() const { return untrackable_; }
 
  private:
+  // Tracking state and carrier arc of one signal of one satellite.
   struct Arc {
     std::int64_t ambiguity_cycles = 0;
     int index = 0;
-    GnssTime last_tag;
-    bool active = false;
+    GnssTime last_tag;       // last epoch it was tracked
+    bool active = false;     // tracked at last_tag
+    GnssTime lock_start;     // acquisition or last slip
+    std::optional<GnssTime> above_since;  // acquiring: above the acquisition threshold since
+    GnssTime acquiring_tag;  // last epoch it was seen acquiring
   };
   struct SignalStreams {
     RandomStream noise;
-    explicit SignalStreams(std::uint64_t key) : noise(key) {}
+    RandomStream slips;
+    SignalStreams(std::uint64_t noise_key, std::uint64_t slip_key) : noise(noise_key), slips(slip_key) {}
   };
 
   // Ends every carrier arc of a satellite (its signals are blocked).
@@ -149,6 +158,10 @@ class ObservationGenerator {
 
   GeneratorSettings settings_;
   std::map<Signal, const SignalInfo*> signal_info_;
+  std::map<Signal, TrackedSignal> tracked_;
+  std::map<Signal, bool> data_modulated_;
+  std::vector<Signal> untrackable_;
+  double elevation_mask_deg_ = 0.0;  // the scenario's and the profile's, whichever is higher
   std::map<std::pair<SatelliteId, Signal>, std::pair<std::int64_t, bool>> transmits_cache_;
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;

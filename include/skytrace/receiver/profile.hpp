@@ -1,7 +1,9 @@
-// Receiver profiles: what a receiver tracks and how well. Built-in until profiles become YAML files
-// (receiver-realism issue); every value has its unit in the name.
+// Receiver profiles: what a receiver (with its antenna) tracks and how well. Profiles are YAML
+// files (profiles/*.yaml, format in docs/profiles.md); every value has its unit in the name.
 #pragma once
 
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,36 +13,90 @@
 namespace skytrace::receiver {
 
 struct OscillatorSettings {
-  // Allan-variance coefficients of the power-law model (white frequency h0, random-walk frequency h-2).
+  // Allan-variance coefficients of the power-law model: white frequency h0 (s), flicker frequency
+  // h-1 (dimensionless), random-walk frequency h-2 (1/s).
   double h0 = 0.0;
+  double h_minus1 = 0.0;
   double h_minus2 = 0.0;
   double initial_bias_s = 0.0;           // magnitude bound of the start offset
   double initial_drift_s_per_s = 0.0;    // magnitude bound of the start drift
-  // Steering: the receiver keeps its clock within this bound of system time by adjusting it
-  // continuously (0 = free running with millisecond jumps when the bias exceeds 1 ms... see clock.hpp).
+  // Steered: the receiver keeps its clock near system time by adjusting it continuously.
+  // Free running: the bias drifts and the receiver jumps it by whole milliseconds (clock.hpp).
   bool steered = true;
+};
+
+// Oscillator presets by name: "tcxo", "ocxo" (Allan coefficients only; start offsets and steering
+// stay those of the profile). nullopt for an unknown name.
+[[nodiscard]] std::optional<OscillatorSettings> oscillator_preset(const std::string& name);
+
+// Antenna gain versus direction, right-hand (the direct signal) and left-hand circular (what a
+// single reflection mostly becomes: the polarisation rejection is RHCP minus LHCP gain).
+struct AntennaPattern {
+  std::vector<double> elevation_deg;  // increasing, within [-90, 90]
+  std::vector<double> azimuth_deg;    // empty: no azimuth dependence; else increasing within [0, 360)
+  // Rows per azimuth (one row without azimuths), one value per elevation.
+  std::vector<std::vector<double>> rhcp_gain_dbic;
+  std::vector<std::vector<double>> lhcp_gain_dbic;
+
+  // Gain towards a direction, linear interpolation in elevation (clamped at the table's ends) and
+  // azimuth (wrapping around north).
+  [[nodiscard]] double rhcp_dbic(double elevation_deg, double azimuth_deg) const;
+  [[nodiscard]] double lhcp_dbic(double elevation_deg, double azimuth_deg) const;
+};
+
+struct TrackedSignal {
+  Signal signal;
+  double extra_loss_db = 0.0;  // beyond the implementation loss (semi-codeless tracking, ...)
 };
 
 struct ReceiverProfile {
   std::string name;
+  std::string source;  // the file it was read from
+  // Signals the receiver can track; `all_signals` = every signal of the catalogue (ideal).
+  bool all_signals = false;
+  std::vector<TrackedSignal> signals;
+  int channel_count = 0;  // signal channels; 0 = unlimited
+  double elevation_mask_deg = 0.0;
+  AntennaPattern antenna;
+  double system_noise_temperature_k = 290.0;
+  double implementation_loss_db = 0.0;
   // Tracking-loop parameters for the thermal-noise formulas (Kaplan & Hegarty, ch. 8).
-  double dll_bandwidth_hz = 0.0;        // 0 = no noise
-  double pll_bandwidth_hz = 0.0;
-  double fll_bandwidth_hz = 0.0;
+  double dll_bandwidth_hz = 0.0;  // 0 = no code noise
+  double pll_bandwidth_hz = 0.0;  // 0 = no phase noise and no cycle slips
+  double fll_bandwidth_hz = 0.0;  // 0 = no Doppler noise
   double correlator_spacing_chips = 0.1;
   double integration_time_s = 0.02;
-  // C/N0 model until the link budget lands: zenith value and value at the horizon (dB-Hz).
-  double cn0_zenith_dbhz = 50.0;
-  double cn0_horizon_dbhz = 33.0;
+  // Tracking state: a signal is acquired after `acquisition_time_s` above the acquisition
+  // threshold and tracked down to the tracking threshold; a data signal's half-cycle ambiguity is
+  // resolved `half_cycle_resolution_s` after acquisition.
+  double acquisition_threshold_dbhz = 0.0;
+  double tracking_threshold_dbhz = 0.0;
+  double acquisition_time_s = 0.0;
+  double half_cycle_resolution_s = 0.0;
   double cn0_resolution_dbhz = 0.25;
-  double tracking_threshold_dbhz = 0.0;  // below: not tracked
   OscillatorSettings oscillator;
-  int channel_count = 0;  // 0 = unlimited
+
+  // The profile's entry for a signal, or nullptr when the receiver cannot track it.
+  [[nodiscard]] const TrackedSignal* tracked(const Signal& signal) const;
 };
 
-// The profile of that name: `ideal` (noise-free, every signal) or a provisional real receiver.
+// Parses a profile from YAML text; `source` names the file in messages ("file:line: key: ...").
+[[nodiscard]] Result<ReceiverProfile> parse_profile(const std::string& yaml_text, const std::string& source);
+
+// Folders searched for a profile by name, in order: `scenario_dir`/profiles, the entries of
+// SKYTRACE_PROFILE_PATH (separated by ':'), the project's profiles folder.
+[[nodiscard]] std::vector<std::filesystem::path> profile_search_path(const std::filesystem::path& scenario_dir);
+
+// A profile by name (searched as above) or by path (contains '/' or ends in .yaml; relative to
+// `scenario_dir`).
+[[nodiscard]] Result<ReceiverProfile> load_profile(const std::string& name_or_path,
+                                                   const std::filesystem::path& scenario_dir = {});
+
+// Names of the profiles found on the search path (sorted, without duplicates).
+[[nodiscard]] std::vector<std::string> available_profile_names(const std::filesystem::path& scenario_dir = {});
+
+// Former built-in lookup, now by name from the project's folder (kept for existing callers).
 [[nodiscard]] Result<ReceiverProfile> builtin_profile(const std::string& name);
-[[nodiscard]] std::vector<std::string> builtin_profile_names();
 
 // 1-sigma thermal noise of the code (m), carrier phase (m) and Doppler (m/s) for a signal at a
 // given C/N0; zero for a profile without tracking loops (ideal).
@@ -51,5 +107,17 @@ struct TrackingNoise {
 };
 [[nodiscard]] TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& signal,
                                            double carrier_hz, double cn0_dbhz);
+
+// PLL thermal phase jitter (rad, 1 sigma) of the profile at a C/N0.
+[[nodiscard]] double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz);
+
+// Mean time to a cycle slip (s) of a first-order loop with thermal jitter `jitter_rad` and noise
+// bandwidth `bandwidth_hz` (Viterbi 1966: T = pi^2 rho I0(rho)^2 / (2 B_L), rho the loop SNR).
+// A Costas loop (data signals) slips by half cycles: its SNR is 1 / (4 sigma^2) instead of 1 / sigma^2.
+[[nodiscard]] double mean_time_to_slip_s(double jitter_rad, double bandwidth_hz, bool costas);
+
+// Whether the signal carries navigation data on the tracked component (a Costas loop with a
+// half-cycle ambiguity) rather than a pilot.
+[[nodiscard]] bool has_data_modulation(const SignalInfo& signal);
 
 }  // namespace skytrace::receiver

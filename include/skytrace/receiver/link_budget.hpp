@@ -1,0 +1,74 @@
+// C/N0 from a link budget: the power a satellite delivers (the ICD minimum received power plus
+// the usual margin, scaled by the satellite antenna's off-boresight gain and the true range),
+// the receiver antenna's gain, the implementation loss and the noise density k T_sys; minus the
+// attenuation on the way (vegetation). Numbers and sources in docs/profiles.md.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string_view>
+
+#include "skytrace/core/signal.hpp"
+#include "skytrace/receiver/profile.hpp"
+
+namespace skytrace::receiver {
+
+// 10 log10(k), k = 1.380649e-23 J/K (Boltzmann).
+inline constexpr double kBoltzmann_dbw_per_k_hz = -228.5991631;
+// Mean Earth radius for the reference geometry of the ICD minima (receivers near the ground).
+inline constexpr double kEarthRadiusMean_m = 6371000.0;
+
+struct SignalPowerSpec {
+  double minimum_dbw = 0.0;               // ICD minimum received power of the tracked component
+  double reference_elevation_deg = 5.0;   // lowest elevation at which the ICD guarantees it
+  double margin_db = 0.0;                 // usual excess of operational satellites over the minimum
+  std::string_view source;                // document and paragraph
+};
+
+// The power specification of a signal; nullopt for signals without a public one (military, PRS).
+[[nodiscard]] std::optional<SignalPowerSpec> signal_power_spec(const Signal& signal);
+
+// The shaped beams of navigation satellites rise from nadir to the Earth's limb, compensating
+// the longer path: GPS IIR-M/IIF L1 patterns (Marquis & Reigh 2015; Steigenberger et al. 2018)
+// by about 2 dB; the published Galileo, GLONASS and BeiDou patterns are alike.
+inline constexpr double kSatelliteLimbBoost_db = 2.0;
+
+// Gain of the satellite's antenna at an angle off boresight (nadir), relative to its gain towards
+// the limb: quadratic in the angle, -kSatelliteLimbBoost_db at nadir, flat beyond the limb.
+[[nodiscard]] double satellite_antenna_gain_db(double off_boresight_deg, double orbit_radius_m);
+
+// Range (m) from a receiver on a sphere of radius kEarthRadiusMean_m to a satellite at radius
+// `orbit_radius_m` seen at `elevation_deg`, and the satellite's off-boresight angle (deg) there.
+[[nodiscard]] double slant_range_m(double orbit_radius_m, double elevation_deg);
+[[nodiscard]] double off_boresight_deg(double orbit_radius_m, double elevation_deg);
+
+// Received power (dBW, into a 0 dBic antenna) at the true range and off-boresight angle: the
+// minimum plus margin at the reference geometry, scaled by the free-space loss ratio and the
+// satellite antenna's gain change.
+[[nodiscard]] double received_power_dbw(const SignalPowerSpec& spec, double range_m, double orbit_radius_m,
+                                        double off_boresight_angle_deg);
+
+// Noise density (dBW/Hz) of a system noise temperature.
+[[nodiscard]] double noise_density_dbw_per_hz(double system_noise_temperature_k);
+
+// The terms of one signal's budget (dB).
+struct LinkBudget {
+  double received_power_dbw = 0.0;
+  double antenna_gain_dbic = 0.0;
+  double implementation_loss_db = 0.0;  // profile's loss plus the signal's extra loss
+  double noise_density_dbw_per_hz = 0.0;
+  double attenuation_db = 0.0;          // vegetation, ...
+  [[nodiscard]] double cn0_dbhz() const {
+    return received_power_dbw + antenna_gain_dbic - implementation_loss_db - attenuation_db - noise_density_dbw_per_hz;
+  }
+};
+
+// The budget of a signal from a satellite at `satellite_m` (ECEF) to a receiver at `receiver_m`
+// seen at (elevation, azimuth), through `attenuation_db` of obstacles. A signal without a power
+// specification is treated like its system's L1 civil signal.
+[[nodiscard]] LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal,
+                                     const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m,
+                                     double elevation_deg, double azimuth_deg, double attenuation_db);
+
+}  // namespace skytrace::receiver
