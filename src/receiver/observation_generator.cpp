@@ -340,21 +340,33 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.vegetation_attenuation_db = outcome.vegetation_attenuation_db;
       attenuation_db = outcome.vegetation_attenuation_db;
     }
-    std::string not_tracked_because;
+    // C/N0 of every signal from the link budget. A receiver acquires a satellite on a signal above
+    // the acquisition threshold and hands the others over: while one signal of the satellite is
+    // (or becomes) tracked, the others acquire down to the tracking threshold.
+    candidates_.clear();
+    bool satellite_acquirable = false;
     for (const Signal& signal : settings_.signals) {
-      if (signal.system != sat.system) continue;
-      const SignalInfo* info = signal_info_.at(signal);
       // A receiver records only what the satellite transmits (GPS L5 only from Block IIF on, no
       // B2I from BeiDou-3, ...); the answer is kept for the GPST day.
-      if (!transmitted(sat, signal, tag)) continue;
-      const auto key = std::make_pair(sat, signal);
-      Arc& arc = arcs_[key];
-      const bool was_tracked = arc.active && last_tag_ && arc.last_tag == *last_tag_;
-
-      // C/N0 from the link budget; the tracking state follows it with hysteresis.
+      if (signal.system != sat.system || !transmitted(sat, signal, tag)) continue;
       const double cn0_dbhz = link_budget(profile, tracked_.at(signal), obs.satellite_position_m, rx_m,
                                           obs.direction.elevation_deg, obs.direction.azimuth_deg, attenuation_db)
                                   .cn0_dbhz();
+      candidates_.emplace_back(&signal, cn0_dbhz);
+      const Arc& arc = arcs_[std::make_pair(sat, signal)];
+      if (cn0_dbhz >= profile.acquisition_threshold_dbhz || (arc.active && last_tag_ && arc.last_tag == *last_tag_)) {
+        satellite_acquirable = true;
+      }
+    }
+    const double acquisition_threshold_dbhz =
+        satellite_acquirable ? profile.tracking_threshold_dbhz : profile.acquisition_threshold_dbhz;
+    std::string not_tracked_because;
+    for (const auto& [signal_pointer, cn0_dbhz] : candidates_) {
+      const Signal& signal = *signal_pointer;
+      const SignalInfo* info = signal_info_.at(signal);
+      const auto key = std::make_pair(sat, signal);
+      Arc& arc = arcs_[key];
+      const bool was_tracked = arc.active && last_tag_ && arc.last_tag == *last_tag_;
       if (profile.channel_count > 0 && channels_used >= profile.channel_count) {
         arc.active = false;
         arc.above_since.reset();
@@ -372,7 +384,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         ++channels_used;
       } else {
         arc.active = false;
-        if (cn0_dbhz < profile.acquisition_threshold_dbhz) {
+        if (cn0_dbhz < acquisition_threshold_dbhz) {
           arc.above_since.reset();
           not_tracked_because = "below the acquisition threshold";
           continue;

@@ -210,7 +210,7 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
       if (!signal) value.fail(signal.error().message);
       const TrackedSignal* tracked = p.tracked(*signal);
       if (tracked == nullptr || p.all_signals) value.fail("signal " + key + " is not among the profile's signals");
-      const_cast<TrackedSignal*>(tracked)->extra_loss_db = value.as_double_in(0.0, 40.0);
+      const_cast<TrackedSignal*>(tracked)->extra_loss_db = value.as_double_in(-10.0, 40.0);
     }
   }
   p.channel_count = root.required("channels").as_int_in(0, 100000);

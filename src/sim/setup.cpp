@@ -153,8 +153,21 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
       }
     }
   }
-  auto profile = receiver::builtin_profile(rx.profile);
+  auto profile = receiver::load_profile(rx.profile, s.source.parent_path());
   if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
+  // A signal the receiver cannot track is an error rather than a silently shorter file.
+  for (const Signal& signal : rx.signals) {
+    if (profile->tracked(signal) != nullptr) continue;
+    std::string list;
+    for (const auto& t : profile->signals) list += (list.empty() ? "" : ", ") + t.signal.to_string();
+    return make_error(ErrorCode::kInvalidArgument, s.source.string() + ": receiver.signals: profile '" + profile->name +
+                                                       "' cannot track " + signal.to_string() + " (it tracks " + list + ")");
+  }
+  if (auto preset = receiver::oscillator_preset(s.models.receiver_clock)) {
+    profile->oscillator.h0 = preset->h0;
+    profile->oscillator.h_minus1 = preset->h_minus1;
+    profile->oscillator.h_minus2 = preset->h_minus2;
+  }
   receiver::GeneratorSettings g;
   g.signals = rx.signals;
   g.elevation_mask_deg = rx.elevation_mask_deg;
@@ -237,7 +250,7 @@ io::ObservationEpoch RinexRecordMaker::record(const receiver::EpochObservations&
       const size_t index = column->second;
       const auto ssi = static_cast<std::uint8_t>(signal_strength_indicator(m.cn0_dbhz));
       record.values[index] = {m.pseudorange_m, 0, ssi};
-      record.values[index + 1] = {m.carrier_phase_cycles, static_cast<std::uint8_t>(m.loss_of_lock ? 1 : 0), ssi};
+      record.values[index + 1] = {m.carrier_phase_cycles, static_cast<std::uint8_t>((m.loss_of_lock ? 1 : 0) | (m.half_cycle_unresolved ? 2 : 0)), ssi};
       record.values[index + 2] = {m.doppler_hz, 0, 0};
       record.values[index + 3] = {m.cn0_dbhz, 0, 0};
     }

@@ -162,6 +162,7 @@ class ObservationGenerator {
   std::map<Signal, bool> data_modulated_;
   std::vector<Signal> untrackable_;
   double elevation_mask_deg_ = 0.0;  // the scenario's and the profile's, whichever is higher
+  std::vector<std::pair<const Signal*, double>> candidates_;  // a satellite's signals and C/N0 (scratch)
   std::map<std::pair<SatelliteId, Signal>, std::pair<std::int64_t, bool>> transmits_cache_;
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;

@@ -46,7 +46,9 @@ struct AntennaPattern {
 
 struct TrackedSignal {
   Signal signal;
-  double extra_loss_db = 0.0;  // beyond the implementation loss (semi-codeless tracking, ...)
+  // Beyond the implementation loss (semi-codeless tracking, antenna band response); negative when
+  // a fit on real data finds the signal stronger than the link budget says.
+  double extra_loss_db = 0.0;
 };
 
 struct ReceiverProfile {
