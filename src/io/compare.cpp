@@ -43,9 +43,13 @@ SignalColumns signal_columns(const ObservationHeader& header, const Signal& sign
           header.type_index(signal.system, "S" + suffix)};
 }
 
+// An exact 0.000 counts as absent: receivers write it for observables they do not produce (the
+// Trimble NetR9 at NYA1 writes D5X as .000 for every satellite), and RTKLIB reads it the same way.
 const ObservationValue* value_at(const SatelliteObservations& s,
                                  const std::optional<size_t>& column) {
-  if (!column || *column >= s.values.size() || !s.values[*column].value) return nullptr;
+  if (!column || *column >= s.values.size() || !s.values[*column].value || *s.values[*column].value == 0.0) {
+    return nullptr;
+  }
   return &s.values[*column];
 }
 

@@ -304,6 +304,22 @@ TEST_F(Compare, FileAgainstItselfIsZero) {
   }
 }
 
+// Receivers write .000 for observables they do not produce (NetR9 D5X at NYA1): not a Doppler of 0.
+TEST_F(Compare, ZeroValuesCountAsAbsent) {
+  auto epochs = real_epochs();
+  for (auto& epoch : epochs) {
+    for (auto& sat : epoch.satellites) {
+      if (sat.satellite.system == G::kGps) sat.values[2].value = 0.0;
+    }
+  }
+  ASSERT_TRUE(write_rinex_obs(real_, header(true), epochs).ok());
+  auto report = compare_observation_files(real_, sim_, {});
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(row(*report, "G1C").doppler_mps.count, 0u);
+  EXPECT_EQ(row(*report, "G1C").pseudorange_m.count, 45u);
+  EXPECT_EQ(row(*report, "E1C").doppler_mps.count, 40u);
+}
+
 TEST_F(Compare, SystemAndSignalSelection) {
   CompareOptions options;
   options.systems = *parse_system_letters("GE");
