@@ -89,30 +89,55 @@ struct Candidate {
   int system = 0;        // GnssSystem as an index
   const SignalMeasurement* measurement = nullptr;
   double carrier_hz = 0.0;
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // at transmission, frame of transmission
+  // Orbit evaluated once at t0 = tag - P / c, in the frame of t0, with the acceleration (gravity,
+  // Coriolis, centrifugal) to move it along by the microseconds to the transmission time.
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
-  double clock_correction_m = 0.0;  // c (dt_sv + dt_rel - group delay): added to the pseudorange
-  double clock_rate_mps = 0.0;      // c (d dt_sv/dt + d dt_rel/dt)
-  double accuracy_m = 0.0;          // broadcast URA / SISA (0: unknown)
+  Eigen::Vector3d acceleration_mps2 = Eigen::Vector3d::Zero();
+  double clock_s = 0.0;          // dt_sv + dt_rel at t0
+  double clock_rate_s_per_s = 0.0;
+  double group_delay_s = 0.0;
+  double accuracy_m = 0.0;       // broadcast URA / SISA (0: unknown)
+  // Transmission time minus t0 as the satellite clock alone gives it (before a receiver clock is
+  // estimated): -(dt_sv + dt_rel - group delay).
+  [[nodiscard]] double clock_step_s() const { return -(clock_s - group_delay_s); }
 };
 
 // The geometry of one candidate seen from a receiver position.
 struct Geometry {
-  Eigen::Vector3d satellite_m;     // rotated into the frame at reception
+  Eigen::Vector3d satellite_m;     // at transmission, rotated into the frame at reception
+  Eigen::Vector3d satellite_velocity_mps;  // likewise
+  double clock_correction_m = 0.0; // c (dt_sv + dt_rel - group delay) at transmission
   Eigen::Vector3d line_of_sight;   // unit, receiver to satellite (ECEF)
   double range_m = 0.0;
   double elevation_deg = 90.0;
   double azimuth_deg = 0.0;
 };
 
-Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, const Eigen::Matrix3d* to_enu) {
+// With the receiver's clock for the satellite's system known, the transmission time is the true
+// reception time minus the flight time (light-time iteration, exactly as the signal was made);
+// before that, the pseudorange corrected by the satellite clock dates it.
+Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, const Eigen::Matrix3d* to_enu,
+                       std::optional<double> receiver_clock_m) {
   Geometry g;
-  double flight_time_s = (c.position_m - receiver_m).norm() / kC;
-  for (int iteration = 0; iteration < 3; ++iteration) {
-    g.satellite_m = rotate_earth(c.position_m, kEarthRotation_radps * flight_time_s);
+  const auto move_to = [&](double step_s) {
+    g.satellite_m = c.position_m + c.velocity_mps * step_s + 0.5 * c.acceleration_mps2 * step_s * step_s;
+    g.clock_correction_m = kC * (c.clock_s + c.clock_rate_s_per_s * step_s - c.group_delay_s);
+    return step_s;
+  };
+  double step_s = move_to(c.clock_step_s());
+  const double pseudorange_s = c.measurement->pseudorange_m / kC;
+  double flight_time_s = (g.satellite_m - receiver_m).norm() / kC;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    if (receiver_clock_m) step_s = move_to(pseudorange_s - *receiver_clock_m / kC - flight_time_s);
+    const Eigen::Vector3d at_transmission = g.satellite_m;
+    g.satellite_m = rotate_earth(at_transmission, kEarthRotation_radps * flight_time_s);
     g.range_m = (g.satellite_m - receiver_m).norm();
     flight_time_s = g.range_m / kC;
+    if (iteration < 3) g.satellite_m = at_transmission;
   }
+  g.satellite_velocity_mps =
+      rotate_earth(c.velocity_mps + c.acceleration_mps2 * step_s, kEarthRotation_radps * flight_time_s);
   g.line_of_sight = (g.satellite_m - receiver_m) / g.range_m;
   if (to_enu != nullptr) {
     const Eigen::Vector3d enu = *to_enu * (g.satellite_m - receiver_m);
@@ -315,18 +340,16 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       orbit = clock = orbits::evaluate_sbas(*records->sbas, t0);
       c.accuracy_m = records->sbas->accuracy_m;
     }
-    const double step_s = -(clock.clock_bias_s + clock.relativistic_s - group_delay_s);
     const Eigen::Vector3d omega(0.0, 0.0, kEarthRotation_radps);
     const Eigen::Vector3d& r0 = orbit.position_m;
     const Eigen::Vector3d& v0 = orbit.velocity_mps;
-    const Eigen::Vector3d a0 = -constants::kGmGps_m3ps2 / std::pow(r0.norm(), 3) * r0 - 2.0 * omega.cross(v0) -
-                               omega.cross(omega.cross(r0));
-    c.position_m = r0 + v0 * step_s + 0.5 * a0 * step_s * step_s;
-    c.velocity_mps = v0 + a0 * step_s;
-    const double clock_s = clock.clock_bias_s + clock.clock_drift_s_per_s * step_s + clock.relativistic_s +
-                           clock.relativistic_drift_s_per_s * step_s;
-    c.clock_correction_m = kC * (clock_s - group_delay_s);
-    c.clock_rate_mps = kC * (clock.clock_drift_s_per_s + clock.relativistic_drift_s_per_s);
+    c.position_m = r0;
+    c.velocity_mps = v0;
+    c.acceleration_mps2 = -constants::kGmGps_m3ps2 / std::pow(r0.norm(), 3) * r0 - 2.0 * omega.cross(v0) -
+                          omega.cross(omega.cross(r0));
+    c.clock_s = clock.clock_bias_s + clock.relativistic_s;
+    c.clock_rate_s_per_s = clock.clock_drift_s_per_s + clock.relativistic_drift_s_per_s;
+    c.group_delay_s = group_delay_s;
     fix.satellites.push_back(std::move(use));
     candidates.push_back(c);
   }
@@ -361,7 +384,11 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
         const Candidate& c = candidates[i];
         State& st = states[i];
         st.used = false;
-        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr);
+        // Reception is dated by the receiver clock (the first system's), whatever the satellite's
+        // system: inter-system biases are offsets of the measurements, not of the instant.
+        std::optional<double> receiver_clock_m;
+        if (on_earth && !s.systems.empty()) receiver_clock_m = s.clock_m[s.systems.front()];
+        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr, receiver_clock_m);
         if (st.rejected) continue;
         const double elevation_deg = st.geometry.elevation_deg;
         if (on_earth && elevation_deg < settings_.elevation_mask_deg) {
@@ -389,7 +416,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
         }
         if (settings_.use_broadcast_accuracy && c.accuracy_m > 0.0) variance_m2 += c.accuracy_m * c.accuracy_m;
         st.variance_m2 = variance_m2;
-        observed_m[i] = c.measurement->pseudorange_m + c.clock_correction_m - ionosphere_m - troposphere_m;
+        observed_m[i] = c.measurement->pseudorange_m + st.geometry.clock_correction_m - ionosphere_m - troposphere_m;
         st.used = true;
         st.note.clear();
         ++per_system[c.system];
@@ -496,7 +523,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       State& st = states[i];
       if (!st.used) continue;
       const Candidate& c = candidates[i];
-      st.geometry = geometry_from(c, solution.position_m, &to_enu);
+      st.geometry = geometry_from(c, solution.position_m, &to_enu, solution.clock_m[solution.systems.front()]);
       const AzimuthElevation direction{st.geometry.azimuth_deg, st.geometry.elevation_deg};
       double ionosphere_m = 0.0, troposphere_m = 0.0;
       if (settings_.ionosphere_klobuchar && klobuchar_) {
@@ -506,7 +533,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       if (settings_.troposphere_saastamoinen) {
         troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, st.geometry.elevation_deg).value_or(0.0);
       }
-      st.residual_m = c.measurement->pseudorange_m + c.clock_correction_m - ionosphere_m - troposphere_m -
+      st.residual_m = c.measurement->pseudorange_m + st.geometry.clock_correction_m - ionosphere_m - troposphere_m -
                       st.geometry.range_m - solution.clock_m[c.system];
       h.block<1, 3>(row, 0) = -st.geometry.line_of_sight.transpose();
       h(row, column[c.system]) = 1.0;
@@ -597,15 +624,13 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       const size_t i = doppler_rows[static_cast<size_t>(r)];
       const Candidate& c = candidates[i];
       const Geometry& g = states[i].geometry;
-      const double flight_time_s = g.range_m / kC;
-      const Eigen::Vector3d sat_velocity = rotate_earth(c.velocity_mps, kEarthRotation_radps * flight_time_s);
-      const double sat_term = g.line_of_sight.dot(sat_velocity);
+      const double sat_term = g.line_of_sight.dot(g.satellite_velocity_mps);
       const double sagnac_term = kEarthRotation_radps * g.line_of_sight.dot(Eigen::Vector3d(g.satellite_m.y(), -g.satellite_m.x(), 0.0));
       const double scale = 1.0 + (sat_term - sagnac_term) / kC;
       const double wavelength_m = kC / c.carrier_hz;
       h.block<1, 3>(r, 0) = -g.line_of_sight.transpose() / scale;
       h(r, 3) = 1.0;
-      y(r) = -wavelength_m * *c.measurement->doppler_hz + c.clock_rate_mps - sat_term / scale;
+      y(r) = -wavelength_m * *c.measurement->doppler_hz + kC * c.clock_rate_s_per_s - sat_term / scale;
       const double sin_el = std::max(std::sin(g.elevation_deg / kDegPerRad), 0.05);
       w(r) = 2.0 / (settings_.sigma_doppler_mps * settings_.sigma_doppler_mps * (1.0 + 1.0 / (sin_el * sin_el)));
     }
