@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
+#include <complex>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -37,6 +39,62 @@ struct RayOutcome {
   double vegetation_attenuation_db = 0.0;
 };
 
+enum class PathType : std::uint8_t { kDirect, kReflected, kDiffracted };
+
+// One way a satellite's signal reaches the receiver (multipath work, world/propagation.hpp).
+struct SignalPath {
+  PathType type = PathType::kDirect;
+  // Path length minus the direct geometric range (m); >= 0.
+  double excess_delay_m = 0.0;
+  // Complex field amplitude relative to the unobstructed direct signal (unit RHCP), split into its
+  // right- and left-hand circular components at PathSearchSettings::frequency_hz: reflection
+  // coefficients, diffraction and vegetation losses, but not the phase of the excess path (the
+  // receiver adds -2 pi excess_delay_m / wavelength per signal) nor the receiving antenna's gain.
+  std::complex<double> rhcp_amplitude{1.0, 0.0};
+  std::complex<double> lhcp_amplitude{0.0, 0.0};
+  // Unit vector (world frame) from the receiver towards where the path arrives from.
+  Eigen::Vector3d arrival_direction = Eigen::Vector3d::UnitZ();
+  // Reflection or diffraction point nearest the receiver (world frame); a second-order reflection
+  // also has the one nearest the satellite.
+  Eigen::Vector3d point_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d second_point_m = Eigen::Vector3d::Zero();
+  int reflections = 0;  // odd: RHCP became mostly LHCP
+  MaterialClass material = MaterialClass::kUnknown;
+  std::string object;                   // reflecting or diffracting object (last one before the receiver)
+  double diffraction_v = 0.0;           // Fresnel-Kirchhoff parameter (diffracted paths, direct with an edge loss)
+  double diffraction_loss_db = 0.0;     // ITU-R P.526 knife-edge loss J(v)
+  double vegetation_attenuation_db = 0.0;
+  // Gradients of excess_delay_m with respect to the receiver position and to the unit direction
+  // towards the satellite (world frame): the rate of the excess delay is
+  // grad_origin . v_receiver + grad_direction . d(direction)/dt.
+  Eigen::Vector3d delay_gradient_origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d delay_gradient_direction = Eigen::Vector3d::Zero();
+
+  [[nodiscard]] double power_linear() const { return std::norm(rhcp_amplitude) + std::norm(lhcp_amplitude); }
+  [[nodiscard]] double relative_power_db() const { return 10.0 * std::log10(power_linear()); }
+};
+
+struct PathSearchSettings {
+  // Reflecting facets whose closest point is within this distance of the receiver.
+  double radius_m = 150.0;
+  int max_reflection_order = 1;  // 0: none, 1: single bounce, 2: also double bounce
+  bool diffraction = true;       // knife-edge diffraction over building edges
+  // Carrier frequency for the reflection coefficients and the diffraction parameter.
+  double frequency_hz = 1575.42e6;
+  // Paths weaker than this (relative to the unobstructed direct signal) are dropped.
+  double min_relative_power_db = -35.0;
+  // Facets smaller than this reflect no coherent specular signal (smaller than a Fresnel zone,
+  // about sqrt(wavelength * distance) ~ 2 m across at 20 m).
+  double min_facet_area_m2 = 1.0;
+};
+
+// Every path of one satellite: the direct ray's outcome (blocked or not, vegetation) and the
+// paths that reach the receiver (the direct path first when it is not blocked).
+struct PathSet {
+  RayOutcome direct;
+  std::vector<SignalPath> paths;
+};
+
 // Batched line-of-sight queries in the world frame (local ENU metres of the world origin).
 class PathQuery {
  public:
@@ -44,6 +102,29 @@ class PathQuery {
   // One outcome per direction (unit vectors, world frame) from `origin_m`.
   [[nodiscard]] virtual std::vector<RayOutcome> trace(const Eigen::Vector3d& origin_m,
                                                       const std::vector<Eigen::Vector3d>& directions) const = 0;
+
+  // Every path per direction. This default knows only the direct ray; world::PropagationScene
+  // adds reflections and diffraction.
+  [[nodiscard]] virtual std::vector<PathSet> paths(const Eigen::Vector3d& origin_m,
+                                                   const std::vector<Eigen::Vector3d>& directions,
+                                                   const PathSearchSettings& /*settings*/) const {
+    std::vector<PathSet> out;
+    auto outcomes = trace(origin_m, directions);
+    out.reserve(outcomes.size());
+    for (std::size_t i = 0; i < outcomes.size(); ++i) {
+      PathSet set;
+      set.direct = std::move(outcomes[i]);
+      if (!set.direct.blocked) {
+        SignalPath direct;
+        direct.rhcp_amplitude = std::pow(10.0, -set.direct.vegetation_attenuation_db / 20.0);
+        direct.arrival_direction = directions[i];
+        direct.vegetation_attenuation_db = set.direct.vegetation_attenuation_db;
+        set.paths.push_back(std::move(direct));
+      }
+      out.push_back(std::move(set));
+    }
+    return out;
+  }
 };
 
 }  // namespace skytrace

@@ -1,0 +1,123 @@
+// Signal paths through the 3D world for multipath work: the direct ray, specular reflections off
+// planar facets (image method, first and optionally second order) and knife-edge diffraction over
+// building edges (ITU-R P.526), each leg checked against the scene for obstruction and vegetation.
+// The electrical side: complex permittivities of the material classes (ITU-R P.2040-1 Table 3,
+// ground from ITU-R P.527), Fresnel coefficients for both linear polarisations combined into
+// co- and cross-polar circular coefficients. docs/multipath.md explains the models and limits.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <complex>
+#include <cstddef>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "skytrace/core/error.hpp"
+#include "skytrace/core/path_query.hpp"
+#include "skytrace/world/world_model.hpp"
+
+namespace skytrace::world {
+
+// Relative permittivity (real part) and conductivity of a material class at a frequency:
+// eps' = a f^b, sigma = c f^d with f in GHz (ITU-R P.2040-1 Table 3; "medium dry ground" for
+// kGround; concrete for kUnknown; metal as a near-perfect conductor).
+struct ElectricalProperties {
+  double relative_permittivity = 1.0;
+  double conductivity_s_per_m = 0.0;
+};
+[[nodiscard]] ElectricalProperties electrical_properties(MaterialClass material, double frequency_hz);
+
+// Complex relative permittivity eps' - j 17.98 sigma / f_GHz (ITU-R P.2040-1 eq. 9b).
+[[nodiscard]] std::complex<double> complex_permittivity(MaterialClass material, double frequency_hz);
+
+// Reflection coefficients of a plane wave from air on a half-space of complex permittivity `eta`
+// at an incidence angle theta from the normal (ITU-R P.2040-1 eqs. 31, 32):
+//   TE (perpendicular) = (cos t - sqrt(eta - sin^2 t)) / (cos t + sqrt(eta - sin^2 t))
+//   TM (parallel)      = (eta cos t - sqrt(eta - sin^2 t)) / (eta cos t + sqrt(eta - sin^2 t))
+// With this sign convention TM = -TE at normal incidence; the circular coefficients are
+// co = (TE + TM) / 2 (RHCP stays RHCP) and cross = (TE - TM) / 2 (RHCP turns LHCP): a perfect
+// conductor gives co = 0, |cross| = 1; grazing incidence gives co = -1, cross = 0.
+struct FresnelCoefficients {
+  std::complex<double> te, tm, co, cross;
+};
+[[nodiscard]] FresnelCoefficients fresnel_coefficients(std::complex<double> eta, double cos_incidence);
+
+// ITU-R P.526 single knife-edge loss (dB): J(v) = 6.9 + 20 log10(sqrt((v - 0.1)^2 + 1) + v - 0.1)
+// for v > -0.78, 0 below.
+[[nodiscard]] double knife_edge_loss_db(double v);
+
+// A planar reflector: coplanar triangles of one static object merged.
+struct Facet {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit; the plane is normal . x = offset_m
+  double offset_m = 0.0;
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();  // a point of the plane, origin of (axis_u, axis_v)
+  Eigen::Vector3d axis_u = Eigen::Vector3d::UnitX(), axis_v = Eigen::Vector3d::UnitY();
+  std::vector<Eigen::Vector2d> triangles_uv;  // 3 per triangle, in the plane's coordinates
+  Eigen::Vector2d min_uv = Eigen::Vector2d::Zero(), max_uv = Eigen::Vector2d::Zero();
+  Eigen::Vector3d min_m = Eigen::Vector3d::Zero(), max_m = Eigen::Vector3d::Zero();  // 3D bounds
+  double area_m2 = 0.0;
+  MaterialClass material = MaterialClass::kConcrete;
+  std::size_t object = 0;  // index into PropagationScene::object_names()
+
+  // Whether a point of the plane lies in one of the facet's triangles (boundary included).
+  [[nodiscard]] bool contains(const Eigen::Vector3d& point_m) const;
+};
+
+// A convex edge of a static building-like object (not ground, not vegetation) where diffraction
+// happens: between two faces meeting at an outward angle, or the boundary of an open surface.
+struct DiffractionEdge {
+  Eigen::Vector3d start_m = Eigen::Vector3d::Zero(), end_m = Eigen::Vector3d::Zero();
+  // Unit outward direction away from the object (bisector of the faces' normals): the offset
+  // for rays leaving the edge.
+  Eigen::Vector3d outward = Eigen::Vector3d::UnitZ();
+  std::size_t object = 0;
+  MaterialClass material = MaterialClass::kConcrete;
+};
+
+// A PathQuery that answers trace() with the given scene and paths() with reflections and
+// diffraction from the static objects of the world model (movable objects block but do not
+// reflect). paths() is const and thread-safe.
+class PropagationScene final : public PathQuery {
+ public:
+  // `scene` must answer for the same world (it does the ray casting); blocking details are
+  // needed (EmbreeSceneOptions::blocking_details, the default).
+  [[nodiscard]] static Result<std::unique_ptr<PropagationScene>> build(const WorldModel& world,
+                                                                       std::shared_ptr<const PathQuery> scene);
+
+  [[nodiscard]] std::vector<RayOutcome> trace(const Eigen::Vector3d& origin_m,
+                                              const std::vector<Eigen::Vector3d>& directions) const override;
+  [[nodiscard]] std::vector<PathSet> paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
+                                           const PathSearchSettings& settings) const override;
+
+  [[nodiscard]] const std::vector<Facet>& facets() const { return facets_; }
+  [[nodiscard]] const std::vector<DiffractionEdge>& edges() const { return edges_; }
+  [[nodiscard]] const std::vector<std::string>& object_names() const { return object_names_; }
+
+ private:
+  PropagationScene() = default;
+  struct Candidates {
+    Eigen::Vector3d origin_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    double radius_m = 0.0, min_area_m2 = 0.0;
+    std::vector<std::size_t> facets, edges;
+  };
+  // Facets and edges near a point (a uniform grid in x, y; the last answer is cached).
+  std::shared_ptr<const Candidates> candidates(const Eigen::Vector3d& origin_m, const PathSearchSettings& settings) const;
+
+  std::shared_ptr<const PathQuery> scene_;
+  std::vector<Facet> facets_;
+  std::vector<DiffractionEdge> edges_;
+  std::vector<std::string> object_names_;
+  // Grid of facet and edge indices by cell (x, y).
+  double cell_m_ = 20.0;
+  Eigen::Vector2d grid_min_ = Eigen::Vector2d::Zero();
+  int grid_nx_ = 0, grid_ny_ = 0;
+  std::vector<std::vector<std::size_t>> facet_cells_, edge_cells_;
+  mutable std::mutex cache_mutex_;
+  mutable std::shared_ptr<const Candidates> cache_;
+};
+
+}  // namespace skytrace::world

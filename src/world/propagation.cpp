@@ -1,0 +1,610 @@
+// Reflections (image method on merged planar facets) and knife-edge diffraction over convex
+// edges, every leg checked with the scene. Geometry in double precision in the world frame.
+#include "skytrace/world/propagation.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <tuple>
+#include <unordered_map>
+
+#include "skytrace/world/scene.hpp"
+
+namespace skytrace::world {
+
+namespace {
+
+constexpr double kSpeedOfLight_mps = 299792458.0;
+// Leg origins are lifted off the surface they leave so that the ray does not hit it again.
+constexpr double kSurfaceOffset_m = 0.005;
+constexpr double kEdgeOffset_m = 0.02;
+// Diffraction candidates kept per blocked satellite (least loss first).
+constexpr std::size_t kMaxDiffractedPaths = 3;
+
+double leg_tolerance_m(double length_m) { return std::max(0.02, 1e-4 * length_m); }
+
+bool is_reflecting(const WorldObject& object) {
+  return object.is_static && !object.material.is_vegetation() && !object.mesh.triangles.empty();
+}
+bool is_diffracting(const WorldObject& object) {
+  return is_reflecting(object) && object.kind != ObjectKind::kGround &&
+         object.material.material_class != MaterialClass::kGround;
+}
+
+Eigen::Vector3d any_perpendicular(const Eigen::Vector3d& n) {
+  const Eigen::Vector3d helper = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  return n.cross(helper).normalized();
+}
+
+struct KeyHash {
+  std::size_t operator()(const std::array<std::int64_t, 4>& k) const {
+    std::size_t h = 1469598103934665603ULL;
+    for (const auto v : k) h = (h ^ static_cast<std::size_t>(v)) * 1099511628211ULL;
+    return h;
+  }
+};
+
+// RHCP/LHCP field components after a reflection with the given circular coefficients.
+void reflect_state(std::complex<double>& rhcp, std::complex<double>& lhcp, const FresnelCoefficients& f) {
+  const std::complex<double> r = f.co * rhcp + f.cross * lhcp;
+  const std::complex<double> l = f.cross * rhcp + f.co * lhcp;
+  rhcp = r;
+  lhcp = l;
+}
+
+}  // namespace
+
+ElectricalProperties electrical_properties(MaterialClass material, double frequency_hz) {
+  const double f_ghz = frequency_hz * 1e-9;
+  // a, b, c, d of ITU-R P.2040-1 Table 3 (frequency in GHz).
+  struct Coefficients {
+    double a, b, c, d;
+  };
+  Coefficients k{5.31, 0.0, 0.0326, 0.8095};  // concrete
+  switch (material) {
+    case MaterialClass::kConcrete:
+    case MaterialClass::kUnknown: break;
+    case MaterialClass::kBrick: k = {3.75, 0.0, 0.038, 0.0}; break;
+    case MaterialClass::kGlass: k = {6.27, 0.0, 0.0043, 1.1925}; break;
+    case MaterialClass::kMetal: k = {1.0, 0.0, 1e7, 0.0}; break;
+    case MaterialClass::kWood: k = {1.99, 0.0, 0.0047, 1.0718}; break;
+    case MaterialClass::kGround: k = {15.0, -0.1, 0.035, 1.63}; break;  // medium dry ground, 1-10 GHz
+    case MaterialClass::kVegetation: k = {1.0, 0.0, 0.0, 0.0}; break;   // not a reflector
+  }
+  return {k.a * std::pow(f_ghz, k.b), k.c * std::pow(f_ghz, k.d)};
+}
+
+std::complex<double> complex_permittivity(MaterialClass material, double frequency_hz) {
+  const ElectricalProperties e = electrical_properties(material, frequency_hz);
+  return {e.relative_permittivity, -17.98 * e.conductivity_s_per_m / (frequency_hz * 1e-9)};
+}
+
+FresnelCoefficients fresnel_coefficients(std::complex<double> eta, double cos_incidence) {
+  const double c = std::clamp(cos_incidence, 0.0, 1.0);
+  const double sin2 = 1.0 - c * c;
+  const std::complex<double> root = std::sqrt(eta - sin2);
+  FresnelCoefficients f;
+  f.te = (c - root) / (c + root);
+  f.tm = (eta * c - root) / (eta * c + root);
+  f.co = 0.5 * (f.te + f.tm);
+  f.cross = 0.5 * (f.te - f.tm);
+  return f;
+}
+
+double knife_edge_loss_db(double v) {
+  if (v <= -0.78) return 0.0;
+  const double x = v - 0.1;
+  return 6.9 + 20.0 * std::log10(std::sqrt(x * x + 1.0) + x);
+}
+
+bool Facet::contains(const Eigen::Vector3d& point_m) const {
+  const Eigen::Vector3d d = point_m - origin_m;
+  const Eigen::Vector2d p(d.dot(axis_u), d.dot(axis_v));
+  constexpr double kSlack = 1e-9;
+  if ((p.array() < min_uv.array() - kSlack).any() || (p.array() > max_uv.array() + kSlack).any()) return false;
+  for (std::size_t i = 0; i + 2 < triangles_uv.size(); i += 3) {
+    const Eigen::Vector2d& a = triangles_uv[i];
+    const Eigen::Vector2d e1 = triangles_uv[i + 1] - a, e2 = triangles_uv[i + 2] - a, q = p - a;
+    const double det = e1.x() * e2.y() - e1.y() * e2.x();
+    if (det == 0.0) continue;
+    const double s = (q.x() * e2.y() - q.y() * e2.x()) / det;
+    const double t = (e1.x() * q.y() - e1.y() * q.x()) / det;
+    if (s >= -kSlack && t >= -kSlack && s + t <= 1.0 + kSlack) return true;
+  }
+  return false;
+}
+
+Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldModel& world,
+                                                                  std::shared_ptr<const PathQuery> scene) {
+  if (!scene) return make_error(ErrorCode::kInvalidArgument, "propagation scene: no ray-casting scene given");
+  if (auto valid = validate_world_for_scene(world); !valid) return valid.error();
+  std::unique_ptr<PropagationScene> out(new PropagationScene());
+  out->scene_ = std::move(scene);
+
+  for (const WorldObject& object : world.objects) {
+    if (!is_reflecting(object)) continue;
+    const std::size_t object_index = out->object_names_.size();
+    out->object_names_.push_back(object.name);
+    std::vector<Eigen::Vector3d> vertices;
+    vertices.reserve(object.mesh.vertices_m.size());
+    for (const auto& v : object.mesh.vertices_m) vertices.push_back(object.pose * v.cast<double>());
+    // Weld vertices (meshes often repeat them per face) so that edges are shared.
+    std::map<std::array<std::int64_t, 3>, int> welded;
+    std::vector<int> weld_id(vertices.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      const std::array<std::int64_t, 3> key{std::llround(vertices[i].x() * 1000.0), std::llround(vertices[i].y() * 1000.0),
+                                            std::llround(vertices[i].z() * 1000.0)};
+      weld_id[i] = welded.try_emplace(key, static_cast<int>(welded.size())).first->second;
+    }
+
+    // Coplanar triangles: keyed by the plane (normal to 0.005, offset to 2 cm), the normal turned
+    // so that its largest component is positive (meshes are not always wound consistently).
+    struct Group {
+      Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();
+      double offset_sum = 0.0, area = 0.0;
+      std::vector<Eigen::Vector3d> corners;
+    };
+    std::unordered_map<std::array<std::int64_t, 4>, std::size_t, KeyHash> group_of;
+    std::vector<Group> groups;
+    struct EdgeUse {
+      int count = 0;
+      std::array<std::size_t, 2> triangle{};
+      std::array<int, 2> opposite{};
+    };
+    std::map<std::pair<int, int>, EdgeUse> edge_uses;
+    std::vector<Eigen::Vector3d> triangle_normals;
+    std::vector<std::array<int, 3>> triangle_ids;
+    for (const auto& tri : object.mesh.triangles) {
+      const Eigen::Vector3d& a = vertices[static_cast<std::size_t>(tri[0])];
+      const Eigen::Vector3d& b = vertices[static_cast<std::size_t>(tri[1])];
+      const Eigen::Vector3d& c = vertices[static_cast<std::size_t>(tri[2])];
+      if (triangle_is_degenerate(a, b, c)) continue;
+      const Eigen::Vector3d cross = (b - a).cross(c - a);
+      const double area = 0.5 * cross.norm();
+      const Eigen::Vector3d n = cross.normalized();
+      Eigen::Index largest = 0;
+      n.cwiseAbs().maxCoeff(&largest);
+      const Eigen::Vector3d canonical = n[largest] < 0.0 ? Eigen::Vector3d(-n) : n;
+      const double offset = canonical.dot((a + b + c) / 3.0);
+      const std::array<std::int64_t, 4> key{std::llround(canonical.x() / 0.005), std::llround(canonical.y() / 0.005),
+                                            std::llround(canonical.z() / 0.005), std::llround(offset / 0.02)};
+      auto [it, inserted] = group_of.try_emplace(key, groups.size());
+      if (inserted) groups.emplace_back();
+      Group& g = groups[it->second];
+      g.normal_sum += area * canonical;
+      g.offset_sum += area * offset;
+      g.area += area;
+      g.corners.insert(g.corners.end(), {a, b, c});
+
+      const std::size_t t = triangle_normals.size();
+      triangle_normals.push_back(n);
+      const std::array<int, 3> ids{weld_id[static_cast<std::size_t>(tri[0])], weld_id[static_cast<std::size_t>(tri[1])],
+                                   weld_id[static_cast<std::size_t>(tri[2])]};
+      triangle_ids.push_back(ids);
+      for (int e = 0; e < 3; ++e) {
+        const int i0 = ids[static_cast<std::size_t>(e)], i1 = ids[static_cast<std::size_t>((e + 1) % 3)];
+        EdgeUse& use = edge_uses[{std::min(i0, i1), std::max(i0, i1)}];
+        if (use.count < 2) {
+          use.triangle[static_cast<std::size_t>(use.count)] = t;
+          use.opposite[static_cast<std::size_t>(use.count)] = ids[static_cast<std::size_t>((e + 2) % 3)];
+        }
+        ++use.count;
+      }
+    }
+    for (Group& g : groups) {
+      Facet f;
+      f.normal = g.normal_sum.normalized();
+      f.offset_m = g.offset_sum / g.area;
+      f.area_m2 = g.area;
+      f.material = object.material.material_class;
+      f.object = object_index;
+      f.origin_m = g.corners.front() - (f.normal.dot(g.corners.front()) - f.offset_m) * f.normal;
+      f.axis_u = any_perpendicular(f.normal);
+      f.axis_v = f.normal.cross(f.axis_u);
+      f.min_uv = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+      f.max_uv = -f.min_uv;
+      f.min_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+      f.max_m = -f.min_m;
+      for (const Eigen::Vector3d& corner : g.corners) {
+        const Eigen::Vector3d d = corner - f.origin_m;
+        const Eigen::Vector2d uv(d.dot(f.axis_u), d.dot(f.axis_v));
+        f.triangles_uv.push_back(uv);
+        f.min_uv = f.min_uv.cwiseMin(uv);
+        f.max_uv = f.max_uv.cwiseMax(uv);
+        f.min_m = f.min_m.cwiseMin(corner);
+        f.max_m = f.max_m.cwiseMax(corner);
+      }
+      out->facets_.push_back(std::move(f));
+    }
+
+    if (!is_diffracting(object)) continue;
+    std::vector<Eigen::Vector3d> welded_position(welded.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) welded_position[static_cast<std::size_t>(weld_id[i])] = vertices[i];
+    for (const auto& [ends, use] : edge_uses) {
+      const Eigen::Vector3d& p0 = welded_position[static_cast<std::size_t>(ends.first)];
+      const Eigen::Vector3d& p1 = welded_position[static_cast<std::size_t>(ends.second)];
+      DiffractionEdge edge;
+      edge.start_m = p0;
+      edge.end_m = p1;
+      edge.object = object_index;
+      edge.material = object.material.material_class;
+      if (use.count == 1) {
+        // Boundary of an open surface: outward in the triangle's plane, away from its third vertex.
+        const Eigen::Vector3d n = triangle_normals[use.triangle[0]];
+        Eigen::Vector3d out_dir = (p1 - p0).cross(n).normalized();
+        if (out_dir.dot(welded_position[static_cast<std::size_t>(use.opposite[0])] - p0) > 0.0) out_dir = -out_dir;
+        edge.outward = out_dir;
+      } else if (use.count == 2) {
+        const Eigen::Vector3d& n0 = triangle_normals[use.triangle[0]];
+        const Eigen::Vector3d& n1 = triangle_normals[use.triangle[1]];
+        if (n0.dot(n1) > std::cos(20.0 * std::numbers::pi / 180.0)) continue;  // (nearly) flat: no edge
+        // Convex (outward winding): the other face's far vertex lies behind this face's plane.
+        const Eigen::Vector3d& far = welded_position[static_cast<std::size_t>(use.opposite[1])];
+        if (n0.dot(far - p0) > 1e-6) continue;
+        const Eigen::Vector3d bisector = n0 + n1;
+        if (bisector.norm() < 1e-9) continue;  // a zero-thickness fin
+        edge.outward = bisector.normalized();
+      } else {
+        continue;  // non-manifold
+      }
+      out->edges_.push_back(edge);
+    }
+  }
+
+  // Grid over x, y of everything that can take part.
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Facet& f : out->facets_) {
+    lo = lo.cwiseMin(f.min_m.head<2>());
+    hi = hi.cwiseMax(f.max_m.head<2>());
+  }
+  for (const DiffractionEdge& e : out->edges_) {
+    lo = lo.cwiseMin(e.start_m.head<2>().cwiseMin(e.end_m.head<2>()));
+    hi = hi.cwiseMax(e.start_m.head<2>().cwiseMax(e.end_m.head<2>()));
+  }
+  if (out->facets_.empty() && out->edges_.empty()) return out;
+  const Eigen::Vector2d span = hi - lo;
+  out->cell_m_ = std::max({20.0, span.x() / 1000.0, span.y() / 1000.0});
+  out->grid_min_ = lo;
+  out->grid_nx_ = static_cast<int>(std::floor(span.x() / out->cell_m_)) + 1;
+  out->grid_ny_ = static_cast<int>(std::floor(span.y() / out->cell_m_)) + 1;
+  const auto cells = static_cast<std::size_t>(out->grid_nx_) * static_cast<std::size_t>(out->grid_ny_);
+  out->facet_cells_.resize(cells);
+  out->edge_cells_.resize(cells);
+  auto insert = [&](std::vector<std::vector<std::size_t>>& grid, std::size_t index, const Eigen::Vector2d& a,
+                    const Eigen::Vector2d& b) {
+    const int x0 = static_cast<int>((a.x() - lo.x()) / out->cell_m_), x1 = static_cast<int>((b.x() - lo.x()) / out->cell_m_);
+    const int y0 = static_cast<int>((a.y() - lo.y()) / out->cell_m_), y1 = static_cast<int>((b.y() - lo.y()) / out->cell_m_);
+    for (int x = std::max(0, x0); x <= std::min(out->grid_nx_ - 1, x1); ++x) {
+      for (int y = std::max(0, y0); y <= std::min(out->grid_ny_ - 1, y1); ++y) {
+        grid[static_cast<std::size_t>(y) * static_cast<std::size_t>(out->grid_nx_) + static_cast<std::size_t>(x)].push_back(index);
+      }
+    }
+  };
+  for (std::size_t i = 0; i < out->facets_.size(); ++i) {
+    insert(out->facet_cells_, i, out->facets_[i].min_m.head<2>(), out->facets_[i].max_m.head<2>());
+  }
+  for (std::size_t i = 0; i < out->edges_.size(); ++i) {
+    const DiffractionEdge& e = out->edges_[i];
+    insert(out->edge_cells_, i, e.start_m.head<2>().cwiseMin(e.end_m.head<2>()), e.start_m.head<2>().cwiseMax(e.end_m.head<2>()));
+  }
+  return out;
+}
+
+std::vector<RayOutcome> PropagationScene::trace(const Eigen::Vector3d& origin_m,
+                                                const std::vector<Eigen::Vector3d>& directions) const {
+  return scene_->trace(origin_m, directions);
+}
+
+std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates(const Eigen::Vector3d& origin_m,
+                                                                                const PathSearchSettings& settings) const {
+  {
+    const std::lock_guard lock(cache_mutex_);
+    if (cache_ && cache_->origin_m == origin_m && cache_->radius_m == settings.radius_m &&
+        cache_->min_area_m2 == settings.min_facet_area_m2) {
+      return cache_;
+    }
+  }
+  auto c = std::make_shared<Candidates>();
+  c->origin_m = origin_m;
+  c->radius_m = settings.radius_m;
+  c->min_area_m2 = settings.min_facet_area_m2;
+  if (grid_nx_ > 0) {
+    const double r = settings.radius_m;
+    const int x0 = std::max(0, static_cast<int>(std::floor((origin_m.x() - r - grid_min_.x()) / cell_m_)));
+    const int x1 = std::min(grid_nx_ - 1, static_cast<int>(std::floor((origin_m.x() + r - grid_min_.x()) / cell_m_)));
+    const int y0 = std::max(0, static_cast<int>(std::floor((origin_m.y() - r - grid_min_.y()) / cell_m_)));
+    const int y1 = std::min(grid_ny_ - 1, static_cast<int>(std::floor((origin_m.y() + r - grid_min_.y()) / cell_m_)));
+    for (int x = x0; x <= x1; ++x) {
+      for (int y = y0; y <= y1; ++y) {
+        const auto cell = static_cast<std::size_t>(y) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(x);
+        c->facets.insert(c->facets.end(), facet_cells_[cell].begin(), facet_cells_[cell].end());
+        c->edges.insert(c->edges.end(), edge_cells_[cell].begin(), edge_cells_[cell].end());
+      }
+    }
+    for (auto* list : {&c->facets, &c->edges}) {
+      std::sort(list->begin(), list->end());
+      list->erase(std::unique(list->begin(), list->end()), list->end());
+    }
+    // Exact tests: the facet's box within the radius; an edge's nearest point within it.
+    std::erase_if(c->facets, [&](std::size_t i) {
+      const Facet& f = facets_[i];
+      const Eigen::Vector3d nearest = origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m);
+      return f.area_m2 < settings.min_facet_area_m2 || (nearest - origin_m).norm() > r;
+    });
+    std::erase_if(c->edges, [&](std::size_t i) {
+      const DiffractionEdge& e = edges_[i];
+      const Eigen::Vector3d d = e.end_m - e.start_m;
+      const double u = std::clamp((origin_m - e.start_m).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      return (e.start_m + u * d - origin_m).norm() > r;
+    });
+  }
+  const std::lock_guard lock(cache_mutex_);
+  cache_ = c;
+  return c;
+}
+
+std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
+                                             const PathSearchSettings& settings) const {
+  const Eigen::Vector3d& r = origin_m;
+  std::vector<PathSet> out(directions.size());
+  std::vector<RayOutcome> direct = scene_->trace(r, directions);
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    out[i].direct = std::move(direct[i]);
+    if (!out[i].direct.blocked) {
+      SignalPath p;
+      p.rhcp_amplitude = std::pow(10.0, -out[i].direct.vegetation_attenuation_db / 20.0);
+      p.arrival_direction = directions[i];
+      p.vegetation_attenuation_db = out[i].direct.vegetation_attenuation_db;
+      out[i].paths.push_back(std::move(p));
+    }
+  }
+  const std::shared_ptr<const Candidates> near = candidates(r, settings);
+  const double wavelength_m = kSpeedOfLight_mps / settings.frequency_hz;
+  const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
+
+  // A path in the making: its geometry and the legs still to be checked beyond the first.
+  struct Leg {
+    Eigen::Vector3d origin_m, direction;
+    double length_m;  // infinity: towards the satellite
+  };
+  struct Pending {
+    std::size_t satellite = 0;
+    SignalPath path;
+    double first_leg_m = 0.0;
+    std::vector<Leg> legs;
+  };
+  std::vector<Pending> pending;
+  std::vector<Eigen::Vector3d> first_legs;
+  const double kInf = std::numeric_limits<double>::infinity();
+
+  // Circular reflection coefficients per facet are recomputed per angle; the permittivity per facet.
+  std::vector<std::complex<double>> eta(near->facets.size());
+  for (std::size_t k = 0; k < near->facets.size(); ++k) {
+    eta[k] = complex_permittivity(facets_[near->facets[k]].material, settings.frequency_hz);
+  }
+  // Side of each candidate facet the receiver is on (reflections happen on that side).
+  std::vector<Eigen::Vector3d> facing(near->facets.size());
+  std::vector<double> height(near->facets.size());
+  for (std::size_t k = 0; k < near->facets.size(); ++k) {
+    const Facet& f = facets_[near->facets[k]];
+    const double h = f.normal.dot(r) - f.offset_m;
+    facing[k] = h >= 0.0 ? f.normal : Eigen::Vector3d(-f.normal);
+    height[k] = std::abs(h);
+  }
+
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    const Eigen::Vector3d& s = directions[i];
+    // First order: the image of the receiver in the facet's plane, the line from it towards the
+    // satellite meets the plane at the reflection point.
+    if (settings.max_reflection_order >= 1) {
+      for (std::size_t k = 0; k < near->facets.size(); ++k) {
+        const Facet& f = facets_[near->facets[k]];
+        const Eigen::Vector3d& n = facing[k];
+        const double h = height[k];
+        const double ns = n.dot(s);
+        if (h < 1e-6 || ns <= 1e-6) continue;
+        const double t = h / ns;  // receiver to reflection point
+        if (t > settings.radius_m) continue;
+        const Eigen::Vector3d point = r - 2.0 * h * n + t * s;
+        if (!f.contains(point)) continue;
+        const FresnelCoefficients fc = fresnel_coefficients(eta[k], ns);
+        Pending p;
+        p.satellite = i;
+        p.path.type = PathType::kReflected;
+        p.path.reflections = 1;
+        p.path.excess_delay_m = 2.0 * h * ns;
+        p.path.rhcp_amplitude = 1.0;
+        p.path.lhcp_amplitude = 0.0;
+        reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fc);
+        if (p.path.power_linear() < min_power) continue;
+        p.path.arrival_direction = (point - r) / t;
+        p.path.point_m = point;
+        p.path.material = f.material;
+        p.path.object = object_names_[f.object];
+        p.path.delay_gradient_origin = 2.0 * ns * n;
+        p.path.delay_gradient_direction = 2.0 * h * n;
+        p.first_leg_m = t;
+        p.legs.push_back(Leg{point + kSurfaceOffset_m * n, s, kInf});
+        first_legs.push_back(p.path.arrival_direction);
+        pending.push_back(std::move(p));
+      }
+    }
+    // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A
+    // taken in B gives the point on B, the line from there to the first image the point on A.
+    if (settings.max_reflection_order >= 2) {
+      for (std::size_t ka = 0; ka < near->facets.size(); ++ka) {
+        const Facet& fa = facets_[near->facets[ka]];
+        const Eigen::Vector3d& na = facing[ka];
+        if (height[ka] < 1e-6) continue;
+        const Eigen::Vector3d image_a = r - 2.0 * height[ka] * na;
+        for (std::size_t kb = 0; kb < near->facets.size(); ++kb) {
+          if (kb == ka) continue;
+          const Facet& fb = facets_[near->facets[kb]];
+          const double hb = fb.normal.dot(image_a) - fb.offset_m;
+          if (std::abs(hb) < 1e-6) continue;
+          const Eigen::Vector3d nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);  // side of image_a
+          const double nbs = nb.dot(s);
+          if (nbs <= 1e-6) continue;
+          const Eigen::Vector3d image_ab = image_a - 2.0 * std::abs(hb) * nb;
+          const Eigen::Vector3d p2 = image_ab + (std::abs(hb) / nbs) * s;
+          const Eigen::Vector3d to_image = image_a - p2;
+          const double denom = na.dot(to_image);
+          if (std::abs(denom) < 1e-12) continue;
+          const double lambda = (fa.offset_m * (na.dot(fa.normal) > 0 ? 1.0 : -1.0) - na.dot(p2)) / denom;
+          if (lambda <= 0.0 || lambda >= 1.0) continue;
+          const Eigen::Vector3d p1 = p2 + lambda * to_image;
+          // Both bounces on the facing sides: p2 on the receiver's side of A, p1 on B's lit side.
+          if (na.dot(p2) - na.dot(p1) <= 0.0 || nb.dot(p1 - p2) <= 0.0) continue;
+          const double d1 = (p1 - r).norm(), d12 = (p2 - p1).norm();
+          if (d1 > settings.radius_m || d12 < 1e-3 || (p2 - r).norm() > settings.radius_m) continue;
+          if (!fa.contains(p1) || !fb.contains(p2)) continue;
+          const Eigen::Vector3d u12 = (p2 - p1) / d12;
+          Pending p;
+          p.satellite = i;
+          p.path.type = PathType::kReflected;
+          p.path.reflections = 2;
+          p.path.excess_delay_m = d1 + d12 - s.dot(p2 - r);
+          p.path.rhcp_amplitude = 1.0;
+          p.path.lhcp_amplitude = 0.0;
+          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(eta[kb], nbs));
+          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(eta[ka], std::abs(na.dot(u12))));
+          if (p.path.power_linear() < min_power) continue;
+          p.path.arrival_direction = (p1 - r) / d1;
+          p.path.point_m = p1;
+          p.path.second_point_m = p2;
+          p.path.material = fa.material;
+          p.path.object = object_names_[fa.object];
+          // excess = -s . (image_ab - r), image_ab = M r + b with M the two Householder reflections.
+          const Eigen::Matrix3d m = (Eigen::Matrix3d::Identity() - 2.0 * nb * nb.transpose()) *
+                                    (Eigen::Matrix3d::Identity() - 2.0 * na * na.transpose());
+          p.path.delay_gradient_origin = s - m.transpose() * s;
+          p.path.delay_gradient_direction = -(image_ab - r);
+          p.first_leg_m = d1;
+          p.legs.push_back(Leg{p1 + kSurfaceOffset_m * na, u12, d12});
+          p.legs.push_back(Leg{p2 + kSurfaceOffset_m * nb, s, kInf});
+          first_legs.push_back(p.path.arrival_direction);
+          pending.push_back(std::move(p));
+        }
+      }
+    }
+    // Knife-edge diffraction: the point of the edge where the incident and diffracted rays make
+    // equal angles with it (Keller's cone) is the stationary path over the edge.
+    if (settings.diffraction && !near->edges.empty()) {
+      const bool blocked = out[i].direct.blocked;
+      std::vector<Pending> diffracted;
+      double strongest_los_loss_db = 0.0, strongest_los_v = -kInf;
+      for (const std::size_t e : near->edges) {
+        const DiffractionEdge& edge = edges_[e];
+        Eigen::Vector3d axis = edge.end_m - edge.start_m;
+        const double length = axis.norm();
+        axis /= length;
+        const double c = s.dot(axis);
+        if (1.0 - c * c < 1e-9) continue;
+        const Eigen::Vector3d w = edge.start_m - r;
+        const double along = w.dot(axis);
+        const double rho = (w - along * axis).norm();
+        const double u = c * rho / std::sqrt(1.0 - c * c) - along;
+        if (u <= 1e-3 || u >= length - 1e-3) continue;
+        const Eigen::Vector3d q = edge.start_m + u * axis;
+        const double d2 = (q - r).norm();
+        if (d2 < 1e-3) continue;
+        const Eigen::Vector3d toward = (q - r) / d2;
+        if (toward.dot(s) <= 0.0) continue;
+        const double excess = d2 - s.dot(q - r);
+        const double v_magnitude = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+        if (!blocked) {
+          // Line of sight grazing an edge: the knife-edge loss applies to the direct signal.
+          const double v = -v_magnitude;
+          if (v > -0.78 && v > strongest_los_v) {
+            strongest_los_v = v;
+            strongest_los_loss_db = knife_edge_loss_db(v);
+          }
+          continue;
+        }
+        const double loss_db = knife_edge_loss_db(v_magnitude);
+        if (-loss_db < settings.min_relative_power_db) continue;
+        Pending p;
+        p.satellite = i;
+        p.path.type = PathType::kDiffracted;
+        p.path.excess_delay_m = excess;
+        p.path.diffraction_v = v_magnitude;
+        p.path.diffraction_loss_db = loss_db;
+        // Keller's diffraction coefficient carries exp(-j pi/4) in the shadow.
+        p.path.rhcp_amplitude = std::polar(std::pow(10.0, -loss_db / 20.0), -std::numbers::pi / 4.0);
+        p.path.lhcp_amplitude = 0.0;
+        p.path.arrival_direction = toward;
+        p.path.point_m = q;
+        p.path.material = edge.material;
+        p.path.object = object_names_[edge.object];
+        p.path.delay_gradient_origin = s - toward;
+        p.path.delay_gradient_direction = -(q - r);
+        p.first_leg_m = d2;
+        p.legs.push_back(Leg{q + kEdgeOffset_m * edge.outward, s, kInf});
+        diffracted.push_back(std::move(p));
+      }
+      if (!blocked && strongest_los_v > -0.78 && !out[i].paths.empty()) {
+        SignalPath& d = out[i].paths.front();
+        d.diffraction_v = strongest_los_v;
+        d.diffraction_loss_db = strongest_los_loss_db;
+        d.rhcp_amplitude *= std::pow(10.0, -strongest_los_loss_db / 20.0);
+      }
+      std::sort(diffracted.begin(), diffracted.end(),
+                [](const Pending& a, const Pending& b) { return a.path.diffraction_loss_db < b.path.diffraction_loss_db; });
+      // A few more than kept, as some fail their leg checks.
+      if (diffracted.size() > 4 * kMaxDiffractedPaths) diffracted.resize(4 * kMaxDiffractedPaths);
+      for (Pending& p : diffracted) {
+        first_legs.push_back(p.path.arrival_direction);
+        pending.push_back(std::move(p));
+      }
+    }
+  }
+  if (pending.empty()) return out;
+
+  // All first legs start at the receiver: one batch. The others one ray each.
+  const std::vector<RayOutcome> first = scene_->trace(r, first_legs);
+  std::vector<std::size_t> diffracted_kept(directions.size(), 0);
+  std::vector<Eigen::Vector3d> one(1);
+  for (std::size_t k = 0; k < pending.size(); ++k) {
+    Pending& p = pending[k];
+    const RayOutcome& o = first[k];
+    if (o.blocked && o.blocking_distance_m < p.first_leg_m - leg_tolerance_m(p.first_leg_m)) continue;
+    if (p.path.type == PathType::kDiffracted && diffracted_kept[p.satellite] >= kMaxDiffractedPaths) continue;
+    double vegetation_db = o.vegetation_attenuation_db;
+    bool clear = true;
+    for (const Leg& leg : p.legs) {
+      one[0] = leg.direction;
+      const RayOutcome lo = scene_->trace(leg.origin_m, one).front();
+      if (lo.blocked && (std::isinf(leg.length_m) || lo.blocking_distance_m < leg.length_m - leg_tolerance_m(leg.length_m))) {
+        clear = false;
+        break;
+      }
+      vegetation_db += lo.vegetation_attenuation_db;
+    }
+    if (!clear) continue;
+    const double factor = std::pow(10.0, -vegetation_db / 20.0);
+    p.path.rhcp_amplitude *= factor;
+    p.path.lhcp_amplitude *= factor;
+    p.path.vegetation_attenuation_db = vegetation_db;
+    if (p.path.power_linear() < min_power) continue;
+    // Facets split at a shared triangle edge can both claim the same point.
+    auto& list = out[p.satellite].paths;
+    const bool duplicate = std::any_of(list.begin(), list.end(), [&](const SignalPath& q) {
+      return q.type == p.path.type && q.reflections == p.path.reflections && (q.point_m - p.path.point_m).norm() < 1e-3;
+    });
+    if (duplicate) continue;
+    if (p.path.type == PathType::kDiffracted) ++diffracted_kept[p.satellite];
+    list.push_back(std::move(p.path));
+  }
+  for (PathSet& set : out) {
+    const auto begin = set.paths.begin() + ((!set.paths.empty() && set.paths.front().type == PathType::kDirect) ? 1 : 0);
+    std::stable_sort(begin, set.paths.end(),
+                     [](const SignalPath& a, const SignalPath& b) { return a.power_linear() > b.power_linear(); });
+  }
+  return out;
+}
+
+}  // namespace skytrace::world

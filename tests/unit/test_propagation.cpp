@@ -1,0 +1,344 @@
+// Path finding for multipath: reflections against image geometry worked out by hand (ground plane,
+// street canyon of canyon.sdf, second order), knife-edge diffraction against ITU-R P.526 and the
+// exact Fresnel integral, Fresnel coefficients against their limits, EmbreeScene against
+// BruteForceScene as the ray caster.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "skytrace/world/loaders.hpp"
+#include "skytrace/world/propagation.hpp"
+#include "skytrace/world/scene.hpp"
+
+namespace skytrace::world {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kL1WavelengthM = 299792458.0 / 1575.42e6;
+
+WorldObject placed(const std::string& name, TriangleMesh mesh, const Eigen::Vector3d& position_m, MaterialClass material,
+                   ObjectKind kind = ObjectKind::kBuilding) {
+  WorldObject o;
+  o.name = name;
+  o.kind = kind;
+  o.material = Material{material, 0.0};
+  o.mesh = std::move(mesh);
+  o.pose = Eigen::Isometry3d(Eigen::Translation3d(position_m));
+  return o;
+}
+
+WorldObject ground_plane(double size_m = 600.0) {
+  return placed("ground", make_plane(Eigen::Vector3d::UnitZ(), {size_m, size_m}), Eigen::Vector3d::Zero(),
+                MaterialClass::kGround, ObjectKind::kGround);
+}
+
+// The contract canyon (../shared/contract/worlds/canyon.sdf): north wall's south face 9.5 m north
+// of the origin, 30 m high; south wall's north face 19.5 m south, 40 m high; both 200 m long.
+WorldModel canyon(bool with_ground = true) {
+  WorldModel w;
+  if (with_ground) w.objects.push_back(ground_plane());
+  w.objects.push_back(placed("north", make_box({200, 1, 30}), {0, 10, 15}, MaterialClass::kConcrete));
+  w.objects.push_back(placed("south", make_box({200, 1, 40}), {0, -20, 20}, MaterialClass::kConcrete));
+  return w;
+}
+
+std::unique_ptr<PropagationScene> propagation(const WorldModel& world, bool brute_force = false) {
+  std::shared_ptr<const PathQuery> scene;
+  if (brute_force) {
+    auto b = BruteForceScene::build(world);
+    EXPECT_TRUE(b.ok());
+    scene = std::make_shared<BruteForceScene>(std::move(*b));
+  } else {
+    auto e = EmbreeScene::build(world);
+    EXPECT_TRUE(e.ok());
+    scene = std::shared_ptr<const PathQuery>(std::move(*e));
+  }
+  auto p = PropagationScene::build(world, scene);
+  EXPECT_TRUE(p.ok()) << (p.ok() ? "" : p.error().message);
+  return std::move(*p);
+}
+
+const SignalPath* find_path(const PathSet& set, PathType type, int reflections = 0) {
+  for (const SignalPath& p : set.paths) {
+    if (p.type == type && (type != PathType::kReflected || p.reflections == reflections)) return &p;
+  }
+  return nullptr;
+}
+
+TEST(KnifeEdge, LossAtGrazingIsSixDecibels) {
+  // ITU-R P.526: the field at grazing (v = 0) is half the free-space field, 6.02 dB.
+  EXPECT_NEAR(knife_edge_loss_db(0.0), 20.0 * std::log10(2.0), 0.02);
+  EXPECT_EQ(knife_edge_loss_db(-0.78), 0.0);
+  EXPECT_EQ(knife_edge_loss_db(-3.0), 0.0);
+  // Large v: P.526's asymptote 13 + 20 log10(v).
+  EXPECT_NEAR(knife_edge_loss_db(10.0), 13.0 + 20.0 * std::log10(10.0), 0.2);
+}
+
+// Exact knife-edge field |F(v)| = |(1 + j)/2 * integral from v to infinity of exp(-j pi t^2 / 2) dt|.
+double exact_knife_edge_loss_db(double v) {
+  const double upper = 60.0;
+  const int steps = 600000;
+  const double h = (upper - v) / steps;
+  std::complex<double> sum = 0.0;
+  for (int i = 0; i <= steps; ++i) {
+    const double t = v + h * i;
+    const double weight = (i == 0 || i == steps) ? 1.0 : (i % 2 == 1 ? 4.0 : 2.0);
+    sum += weight * std::polar(1.0, -std::numbers::pi * t * t / 2.0);
+  }
+  std::complex<double> integral = sum * h / 3.0;
+  // Tail beyond `upper`: integration by parts, exp(-j pi u^2/2) / (j pi u).
+  integral += std::polar(1.0, -std::numbers::pi * upper * upper / 2.0) / std::complex<double>(0.0, std::numbers::pi * upper);
+  const std::complex<double> field = std::complex<double>(0.5, 0.5) * integral;
+  return -20.0 * std::log10(std::abs(field));
+}
+
+TEST(KnifeEdge, ApproximationFollowsTheFresnelIntegral) {
+  // P.526's J(v) approximates the exact knife-edge loss; the ripple of the lit side (v < 0) is
+  // smoothed out, so the comparison starts at v = -0.5.
+  for (const double v : {-0.5, -0.2, 0.0, 0.5, 1.0, 2.0, 4.0, 8.0}) {
+    EXPECT_NEAR(knife_edge_loss_db(v), exact_knife_edge_loss_db(v), 0.6) << "v = " << v;
+  }
+}
+
+TEST(Fresnel, LimitsOfTheCircularCoefficients) {
+  // Perfect conductor: RHCP turns entirely LHCP at every angle.
+  const auto metal = complex_permittivity(MaterialClass::kMetal, 1575.42e6);
+  for (const double cos_i : {1.0, 0.7, 0.2}) {
+    const FresnelCoefficients f = fresnel_coefficients(metal, cos_i);
+    EXPECT_LT(std::abs(f.co), 1e-3);
+    EXPECT_NEAR(std::abs(f.cross), 1.0, 1e-3);
+  }
+  // Grazing incidence on any dielectric: the wave is reflected whole with its handedness (-1).
+  const auto concrete = complex_permittivity(MaterialClass::kConcrete, 1575.42e6);
+  const FresnelCoefficients grazing = fresnel_coefficients(concrete, 1e-9);
+  EXPECT_NEAR(grazing.co.real(), -1.0, 1e-6);
+  EXPECT_LT(std::abs(grazing.cross), 1e-6);
+  // Normal incidence: only cross-polar, |(1 - sqrt(eta)) / (1 + sqrt(eta))|.
+  const FresnelCoefficients normal = fresnel_coefficients(concrete, 1.0);
+  EXPECT_LT(std::abs(normal.co), 1e-12);
+  EXPECT_NEAR(std::abs(normal.cross), std::abs((1.0 - std::sqrt(concrete)) / (1.0 + std::sqrt(concrete))), 1e-12);
+  // Glass (nearly lossless): the parallel coefficient vanishes at Brewster's angle atan(sqrt(eps')).
+  const auto glass = complex_permittivity(MaterialClass::kGlass, 1575.42e6);
+  const double brewster = std::atan(std::sqrt(glass.real()));
+  EXPECT_LT(std::abs(fresnel_coefficients(glass, std::cos(brewster)).tm), 0.01);
+  EXPECT_GT(std::abs(fresnel_coefficients(glass, std::cos(brewster)).te), 0.5);
+}
+
+TEST(Fresnel, MaterialTablesOfP2040) {
+  // ITU-R P.2040-1 Table 3 at 1 GHz: concrete 5.31 / 0.0326 S/m, brick 3.75 / 0.038, wood 1.99 / 0.0047,
+  // glass 6.27 / 0.0043, medium dry ground 15 / 0.035.
+  const struct {
+    MaterialClass m;
+    double eps, sigma;
+  } rows[] = {{MaterialClass::kConcrete, 5.31, 0.0326}, {MaterialClass::kBrick, 3.75, 0.038},
+              {MaterialClass::kWood, 1.99, 0.0047},     {MaterialClass::kGlass, 6.27, 0.0043},
+              {MaterialClass::kGround, 15.0, 0.035}};
+  for (const auto& row : rows) {
+    const ElectricalProperties e = electrical_properties(row.m, 1e9);
+    EXPECT_NEAR(e.relative_permittivity, row.eps, 1e-9);
+    EXPECT_NEAR(e.conductivity_s_per_m, row.sigma, 1e-9);
+  }
+  // eps'' = 17.98 sigma / f_GHz.
+  EXPECT_NEAR(complex_permittivity(MaterialClass::kConcrete, 1e9).imag(), -17.98 * 0.0326, 1e-9);
+}
+
+TEST(Propagation, FacetsAndEdgesOfTheCanyon) {
+  const auto scene = propagation(canyon());
+  // Two boxes of 6 faces and the ground plane; the ground has no diffracting edges.
+  EXPECT_EQ(scene->facets().size(), 13u);
+  EXPECT_EQ(scene->edges().size(), 24u);
+  double ground_area = 0.0;
+  for (const Facet& f : scene->facets()) {
+    if (f.material == MaterialClass::kGround) ground_area = f.area_m2;
+  }
+  EXPECT_NEAR(ground_area, 600.0 * 600.0, 1e-6);
+}
+
+TEST(Propagation, GroundReflectionDelayIsTwoHeightsSineElevation) {
+  WorldModel world;
+  world.objects.push_back(ground_plane());
+  const auto scene = propagation(world);
+  const double h = 1.5;
+  const Eigen::Vector3d rx(3.0, -2.0, h);
+  PathSearchSettings settings;
+  for (const double el : {5.0, 15.0, 30.0, 60.0, 85.0}) {
+    for (const double az : {0.0, 123.0, 250.0}) {
+      const Eigen::Vector3d s = enu_direction(az, el);
+      const auto sets = scene->paths(rx, {s}, settings);
+      ASSERT_EQ(sets.size(), 1u);
+      ASSERT_EQ(sets[0].paths.size(), 2u) << el;
+      EXPECT_EQ(sets[0].paths[0].type, PathType::kDirect);
+      const SignalPath* g = find_path(sets[0], PathType::kReflected, 1);
+      ASSERT_NE(g, nullptr);
+      EXPECT_NEAR(g->excess_delay_m, 2.0 * h * std::sin(el * kDeg), 1e-9);
+      // The specular point: h / tan(el) ahead of the antenna towards the satellite's azimuth.
+      const Eigen::Vector3d expected = rx + Eigen::Vector3d(std::sin(az * kDeg), std::cos(az * kDeg), 0.0) * h / std::tan(el * kDeg) -
+                                       Eigen::Vector3d(0, 0, h);
+      EXPECT_NEAR((g->point_m - expected).norm(), 0.0, 1e-9);
+      EXPECT_NEAR(g->arrival_direction.z(), -std::sin(el * kDeg), 1e-9);
+      EXPECT_EQ(g->material, MaterialClass::kGround);
+      // Amplitudes are the Fresnel coefficients of medium dry ground at the grazing angle.
+      const FresnelCoefficients f = fresnel_coefficients(complex_permittivity(MaterialClass::kGround, 1575.42e6), std::sin(el * kDeg));
+      EXPECT_NEAR(std::abs(g->rhcp_amplitude - f.co), 0.0, 1e-12);
+      EXPECT_NEAR(std::abs(g->lhcp_amplitude - f.cross), 0.0, 1e-12);
+    }
+  }
+  // Low satellites reflect co-polar (RHCP) off the ground, high ones mostly cross-polar.
+  const auto low = scene->paths(rx, {enu_direction(0, 5)}, settings)[0].paths[1];
+  const auto high = scene->paths(rx, {enu_direction(0, 80)}, settings)[0].paths[1];
+  EXPECT_GT(std::abs(low.rhcp_amplitude), std::abs(low.lhcp_amplitude));
+  EXPECT_LT(std::abs(high.rhcp_amplitude), std::abs(high.lhcp_amplitude));
+}
+
+TEST(Propagation, CanyonNlosOffTheOppositeWall) {
+  for (const bool brute : {false, true}) {
+    const auto scene = propagation(canyon(), brute);
+    const Eigen::Vector3d rx(0.0, 0.0, 1.5);
+    PathSearchSettings settings;
+    settings.diffraction = false;
+    for (const double az : {0.0, 20.0, 340.0, 180.0, 160.0}) {
+      // Low enough to be hidden by the near wall, high enough for the reflection to clear it.
+      const bool north = std::cos(az * kDeg) > 0.0;
+      const double el = north ? 40.0 : 55.0;
+      const auto sets = scene->paths(rx, {enu_direction(az, el)}, settings);
+      const PathSet& set = sets[0];
+      EXPECT_TRUE(set.direct.blocked) << az;
+      EXPECT_EQ(find_path(set, PathType::kDirect), nullptr);
+      const SignalPath* wall = find_path(set, PathType::kReflected, 1);
+      ASSERT_NE(wall, nullptr) << az;
+      // Northern satellites reflect off the south wall (19.5 m), southern ones off the north wall (9.5 m).
+      const double d = north ? 19.5 : 9.5;
+      EXPECT_NEAR(wall->excess_delay_m, 2.0 * d * std::cos(el * kDeg) * std::abs(std::cos(az * kDeg)), 1e-6)
+          << az << (brute ? " brute" : " embree");
+      EXPECT_EQ(wall->object, north ? "south" : "north");
+      EXPECT_NEAR(wall->point_m.y(), north ? -19.5 : 9.5, 1e-6);
+      // The ground reflection of a blocked satellite is blocked too.
+      for (const SignalPath& p : set.paths) EXPECT_NE(p.material, MaterialClass::kGround);
+    }
+  }
+}
+
+TEST(Propagation, SecondOrderReflectionInTheCanyon) {
+  const auto scene = propagation(canyon(false));
+  const Eigen::Vector3d rx(0.0, 0.0, 1.5);
+  PathSearchSettings settings;
+  settings.diffraction = false;
+  settings.max_reflection_order = 2;
+  const double el = 30.0;
+  const auto sets = scene->paths(rx, {enu_direction(0.0, el)}, settings);
+  const SignalPath* twice = find_path(sets[0], PathType::kReflected, 2);
+  ASSERT_NE(twice, nullptr);
+  // Images: receiver in the north face (y = 9.5) at y = 19, that in the south face (y = -19.5) at
+  // y = -58; the excess is the image's offset along the satellite direction, 58 cos(el).
+  EXPECT_NEAR(twice->excess_delay_m, 58.0 * std::cos(el * kDeg), 1e-6);
+  EXPECT_NEAR(twice->point_m.y(), 9.5, 1e-6);
+  EXPECT_NEAR(twice->second_point_m.y(), -19.5, 1e-6);
+  EXPECT_EQ(twice->object, "north");
+  // RHCP -> LHCP -> RHCP: two reflections near normal incidence return mostly co-polar.
+  EXPECT_GT(std::abs(twice->rhcp_amplitude), std::abs(twice->lhcp_amplitude));
+  // Without the second order only the single bounce remains.
+  settings.max_reflection_order = 1;
+  EXPECT_EQ(find_path(scene->paths(rx, {enu_direction(0.0, el)}, settings)[0], PathType::kReflected, 2), nullptr);
+}
+
+TEST(Propagation, ReflectionPointMustLieOnTheFacet) {
+  // A 4 m wide wall 10 m east: satellites to the east-north-east reflect only while the specular
+  // point stays within the wall's 4 m.
+  WorldModel world;
+  world.objects.push_back(placed("wall", make_box({1, 4, 10}), {10.5, 0, 5}, MaterialClass::kBrick));
+  const auto scene = propagation(world);
+  const Eigen::Vector3d rx(0.0, 0.0, 1.5);
+  PathSearchSettings settings;
+  settings.diffraction = false;
+  // The satellite is west so the east wall's west face is lit; specular point y = 10 tan(az offset).
+  for (const double az : {270.0, 280.0, 290.0}) {
+    const auto sets = scene->paths(rx, {enu_direction(az, 20.0)}, settings);
+    const double y = 10.0 * std::tan((270.0 - az) * kDeg);
+    const SignalPath* r = find_path(sets[0], PathType::kReflected, 1);
+    if (std::abs(y) <= 2.0) {
+      ASSERT_NE(r, nullptr) << az;
+      EXPECT_NEAR(r->point_m.y(), -y, 1e-6);
+    } else {
+      EXPECT_EQ(r, nullptr) << az;
+    }
+  }
+}
+
+TEST(Propagation, DelayGradientsMatchFiniteDifferences) {
+  const auto scene = propagation(canyon());
+  const Eigen::Vector3d rx(1.0, 2.0, 1.5);
+  PathSearchSettings settings;
+  settings.max_reflection_order = 2;
+  const Eigen::Vector3d s = enu_direction(10.0, 40.0);
+  const auto base = scene->paths(rx, {s}, settings)[0];
+  ASSERT_GE(base.paths.size(), 2u);
+  const double step = 1e-4;
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d dr = Eigen::Vector3d::Unit(axis) * step;
+    const auto moved = scene->paths(rx + dr, {s}, settings)[0];
+    const Eigen::Vector3d ds = (s + Eigen::Vector3d::Unit(axis) * step).normalized() - s;
+    const auto turned = scene->paths(rx, {(s + Eigen::Vector3d::Unit(axis) * step).normalized()}, settings)[0];
+    ASSERT_EQ(moved.paths.size(), base.paths.size());
+    ASSERT_EQ(turned.paths.size(), base.paths.size());
+    for (std::size_t k = 0; k < base.paths.size(); ++k) {
+      const SignalPath& p = base.paths[k];
+      EXPECT_NEAR(moved.paths[k].excess_delay_m - p.excess_delay_m, p.delay_gradient_origin.dot(dr), 1e-7) << k;
+      EXPECT_NEAR(turned.paths[k].excess_delay_m - p.excess_delay_m, p.delay_gradient_direction.dot(ds), 1e-6) << k;
+    }
+  }
+}
+
+TEST(Propagation, DiffractionOverTheRoofEdge) {
+  const auto scene = propagation(canyon(false));
+  const Eigen::Vector3d rx(0.0, 0.0, 1.5);
+  PathSearchSettings settings;
+  settings.max_reflection_order = 0;
+  // Roof edge of the north wall's south face: y = 9.5, z = 30, seen at atan(28.5 / 9.5) = 71.57 deg.
+  const Eigen::Vector3d edge_point(0.0, 9.5, 30.0);
+  const double edge_el = std::atan2(28.5, 9.5) / kDeg;
+  for (const double el : {edge_el - 8.0, edge_el - 3.0, edge_el - 0.5}) {
+    const Eigen::Vector3d s = enu_direction(0.0, el);
+    const auto set = scene->paths(rx, {s}, settings)[0];
+    ASSERT_TRUE(set.direct.blocked);
+    const SignalPath* d = find_path(set, PathType::kDiffracted);
+    ASSERT_NE(d, nullptr) << el;
+    EXPECT_NEAR((d->point_m - edge_point).norm(), 0.0, 1e-6);
+    // P.526 in its small-angle form: v = h sqrt(2 / (lambda d)), h the edge's clearance above the
+    // direct ray, d the distance along it (the satellite at infinity).
+    const Eigen::Vector3d to_edge = edge_point - rx;
+    const double along = s.dot(to_edge);
+    const double h = (to_edge - along * s).norm();
+    const double v = h * std::sqrt(2.0 / (kL1WavelengthM * along));
+    EXPECT_NEAR(d->diffraction_v, v, 0.01 * v) << el;
+    EXPECT_NEAR(d->diffraction_loss_db, knife_edge_loss_db(v), 0.1);
+    EXPECT_NEAR(d->relative_power_db(), -knife_edge_loss_db(d->diffraction_v), 1e-9);
+    EXPECT_NEAR(d->excess_delay_m, to_edge.norm() - along, 1e-9);
+  }
+  // Line of sight just clearing the edge (1 cm): about 6 dB lost; well clear: nothing.
+  const double grazing_el = std::atan2(28.5 + 0.01 / std::cos(edge_el * kDeg), 9.5) / kDeg;
+  const auto grazing = scene->paths(rx, {enu_direction(0.0, grazing_el)}, settings)[0];
+  ASSERT_FALSE(grazing.direct.blocked);
+  ASSERT_EQ(grazing.paths.front().type, PathType::kDirect);
+  EXPECT_NEAR(grazing.paths.front().diffraction_loss_db, 6.0, 0.1);
+  EXPECT_NEAR(grazing.paths.front().relative_power_db(), -grazing.paths.front().diffraction_loss_db, 1e-9);
+  const auto clear = scene->paths(rx, {enu_direction(0.0, 80.0)}, settings)[0];
+  EXPECT_EQ(clear.paths.front().diffraction_loss_db, 0.0);
+  EXPECT_NEAR(clear.paths.front().relative_power_db(), 0.0, 1e-12);
+}
+
+TEST(Propagation, DefaultPathQueryGivesTheDirectPathOnly) {
+  const WorldModel world = canyon();
+  auto embree = EmbreeScene::build(world);
+  ASSERT_TRUE(embree.ok());
+  const PathQuery& plain = **embree;
+  const auto sets = plain.paths({0, 0, 1.5}, {enu_direction(0, 30), enu_direction(90, 30)}, PathSearchSettings{});
+  ASSERT_EQ(sets.size(), 2u);
+  EXPECT_TRUE(sets[0].paths.empty());
+  ASSERT_EQ(sets[1].paths.size(), 1u);
+  EXPECT_EQ(sets[1].paths[0].type, PathType::kDirect);
+}
+
+}  // namespace
+}  // namespace skytrace::world
