@@ -24,6 +24,7 @@
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/setup.hpp"
+#include "skytrace/sim/streams.hpp"
 #include "skytrace/sim/trajectory.hpp"
 #include "skytrace/sim/world_setup.hpp"
 
@@ -157,6 +158,7 @@ struct ReceiverRun {
   std::unique_ptr<RinexRecordMaker> records;
   io::RinexObsWriter writer;
   std::string file_name;
+  std::unique_ptr<RunStreams> streams;  // obs.rtcm3 / fix.nmea when output.rtcm3 / output.nmea
 };
 
 constexpr const char* kTruthHeader =
@@ -264,6 +266,9 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (auto st = rx.writer.open(staging->file(rx.file_name), rx.header); !st) {
       return st.error();
     }
+    if (s.output.rtcm3 || s.output.nmea) {
+      rx.streams = std::make_unique<RunStreams>(ephemerides, *rx.settings, rx.marker_m, s.output.rtcm3, s.output.nmea);
+    }
   }
 
   std::ofstream truth;
@@ -282,6 +287,9 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     ReceiverRun& rx = receivers[receiver_index];
     const io::ObservationEpoch record = rx.records->record(epoch);
     if (auto st = rx.writer.write_epoch(record); !st) return st.error();
+    if (rx.streams) {
+      if (auto st = rx.streams->add(epoch); !st) return st.error();
+    }
     for (const auto& sat : epoch.satellites) {
       if (sat.status != receiver::SatelliteStatus::kTracked) continue;
       ++summary.satellite_epochs;
@@ -371,6 +379,10 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   }
   for (ReceiverRun& rx : receivers) {
     if (auto st = rx.writer.finish(); !st) return st.error();
+    if (rx.streams) {
+      const std::string suffix = receivers.size() == 1 ? "" : "_" + rx.settings->name;
+      if (auto st = rx.streams->write(staging->file(""), suffix); !st) return st.error();
+    }
   }
   if (options.write_truth) {
     truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));

@@ -1,5 +1,10 @@
 #include "skytrace/sim/streams.hpp"
 
+#include <algorithm>
+#include <set>
+#include <tuple>
+
+#include "skytrace/core/text_file.hpp"
 #include "skytrace/sim/setup.hpp"
 
 namespace skytrace::sim {
@@ -34,6 +39,78 @@ io::RtcmStation rtcm_station(const Eigen::Vector3d& marker_m, const ReceiverSett
   station.arp_ecef_m = antenna_point(marker_m, receiver);
   station.antenna_height_m = receiver.antenna_height_m;
   return station;
+}
+
+RecordsInUse records_in_use(const orbits::BroadcastEphemerides& ephemerides,
+                            const receiver::EpochObservations& epoch) {
+  std::set<const orbits::KeplerEphemeris*> kepler;
+  std::set<const orbits::GlonassEphemeris*> glonass;
+  for (const auto& sat : epoch.satellites) {
+    if (sat.status != receiver::SatelliteStatus::kTracked) continue;
+    if (sat.satellite.system == GnssSystem::kGlonass) {
+      if (const auto* g = ephemerides.find_glonass(sat.satellite, epoch.true_time)) glonass.insert(g);
+      continue;
+    }
+    for (const auto& m : sat.signals) {
+      const auto* e = ephemerides.find_kepler(sat.satellite, epoch.true_time, orbits::preferred_message(m.signal));
+      if (e == nullptr) e = ephemerides.find_kepler(sat.satellite, epoch.true_time);
+      if (e != nullptr) kepler.insert(e);
+    }
+  }
+  RecordsInUse out;
+  out.kepler.assign(kepler.begin(), kepler.end());
+  out.glonass.assign(glonass.begin(), glonass.end());
+  // Transmission order independent of addresses: by satellite, then reference time.
+  std::sort(out.kepler.begin(), out.kepler.end(), [](const auto* a, const auto* b) {
+    return std::tie(a->satellite, a->toe, a->message) < std::tie(b->satellite, b->toe, b->message);
+  });
+  std::sort(out.glonass.begin(), out.glonass.end(),
+            [](const auto* a, const auto* b) { return std::tie(a->satellite, a->toe) < std::tie(b->satellite, b->toe); });
+  return out;
+}
+
+positioning::SolverSettings default_solver_settings(const ReceiverSettings& receiver,
+                                                    const orbits::BroadcastEphemerides& ephemerides) {
+  positioning::SolverSettings settings;
+  settings.elevation_mask_deg = std::max(receiver.elevation_mask_deg, 5.0);
+  settings.ionosphere_klobuchar = ephemerides.data().ionosphere.gps.has_value();
+  settings.troposphere_saastamoinen = true;
+  return settings;
+}
+
+RunStreams::RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
+                       const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea)
+    : ephemerides_(ephemerides) {
+  if (rtcm3) rtcm_.emplace(io::Rtcm3StreamSettings{}, rtcm_station(marker_m, receiver));
+  if (nmea) {
+    solver_.emplace(ephemerides, default_solver_settings(receiver, ephemerides), ephemerides.data().ionosphere.gps);
+  }
+}
+
+Status RunStreams::add(const receiver::EpochObservations& epoch) {
+  if (rtcm_) {
+    const RecordsInUse records = records_in_use(ephemerides_, epoch);
+    auto bytes = rtcm_->epoch(to_rtcm_epoch(epoch), records.kepler, records.glonass);
+    if (!bytes) return bytes.error();
+    rtcm_bytes_.insert(rtcm_bytes_.end(), bytes->begin(), bytes->end());
+  }
+  if (solver_) {
+    auto fix = solver_->solve(to_measurements(epoch));
+    if (!fix) return fix.error();
+    for (const auto& sentence : io::nmea_epoch(*fix)) nmea_text_ += sentence;
+  }
+  return Ok{};
+}
+
+Status RunStreams::write(const std::filesystem::path& dir, const std::string& suffix) const {
+  if (rtcm_) {
+    const std::string_view bytes(reinterpret_cast<const char*>(rtcm_bytes_.data()), rtcm_bytes_.size());
+    if (auto st = write_file_atomically(dir / ("obs" + suffix + ".rtcm3"), bytes); !st) return st;
+  }
+  if (solver_) {
+    if (auto st = write_file_atomically(dir / ("fix" + suffix + ".nmea"), nmea_text_); !st) return st;
+  }
+  return Ok{};
 }
 
 }  // namespace skytrace::sim

@@ -4,9 +4,17 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
+#include "skytrace/io/nmea.hpp"
 #include "skytrace/io/rtcm3.hpp"
+#include "skytrace/orbits/broadcast.hpp"
+#include "skytrace/positioning/spp.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/scenario.hpp"
 
@@ -19,5 +27,40 @@ namespace skytrace::sim {
 // offsets) and the antenna height, for message 1006.
 [[nodiscard]] io::RtcmStation rtcm_station(const Eigen::Vector3d& marker_m, const ReceiverSettings& receiver,
                                            int station_id = 0);
+
+// The ephemeris records a receiver decodes for the satellites it tracks at an epoch: per signal the
+// record of the signal's message (Galileo F/NAV for E5a, I/NAV for E1/E5b), else any valid one.
+struct RecordsInUse {
+  std::vector<const orbits::KeplerEphemeris*> kepler;
+  std::vector<const orbits::GlonassEphemeris*> glonass;
+};
+[[nodiscard]] RecordsInUse records_in_use(const orbits::BroadcastEphemerides& ephemerides,
+                                          const receiver::EpochObservations& epoch);
+
+// The navigation engine's settings for a receiver of a scenario: its elevation mask (at least 5
+// degrees), Klobuchar when the navigation data has GPS coefficients, Saastamoinen.
+[[nodiscard]] positioning::SolverSettings default_solver_settings(const ReceiverSettings& receiver,
+                                                                  const orbits::BroadcastEphemerides& ephemerides);
+
+// The stream outputs of one receiver of `skytrace run`: the RTCM 3 stream a reference receiver
+// would send (obs.rtcm3) and the NMEA sentences of the position engine's fixes (fix.nmea), built
+// epoch by epoch and written at the end.
+class RunStreams {
+ public:
+  RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
+             const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea);
+  [[nodiscard]] Status add(const receiver::EpochObservations& epoch);
+  // Writes the files asked for (atomically) into `dir`; `suffix` goes before the extension.
+  [[nodiscard]] Status write(const std::filesystem::path& dir, const std::string& suffix = "") const;
+  [[nodiscard]] const std::vector<std::uint8_t>& rtcm3_bytes() const { return rtcm_bytes_; }
+  [[nodiscard]] const std::string& nmea_text() const { return nmea_text_; }
+
+ private:
+  const orbits::BroadcastEphemerides& ephemerides_;
+  std::optional<io::Rtcm3Stream> rtcm_;
+  std::optional<positioning::SinglePointSolver> solver_;
+  std::vector<std::uint8_t> rtcm_bytes_;
+  std::string nmea_text_;
+};
 
 }  // namespace skytrace::sim
