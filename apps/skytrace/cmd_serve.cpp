@@ -1,0 +1,437 @@
+// `skytrace serve SCENARIO`: a virtual receiver in real time. Streams NMEA 0183 and RTCM 3 over TCP
+// (any number of clients) and NMEA over a pseudo-terminal, so gpsd, nmea_navsat_driver or RTKLIB's
+// str2str connect as to hardware. The antenna follows the scenario, or poses sent as UDP datagrams.
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "skytrace/core/frames.hpp"
+#include "skytrace/io/nmea.hpp"
+#include "skytrace/io/rtcm3.hpp"
+#include "skytrace/sim/live.hpp"
+#include "skytrace/sim/scenario.hpp"
+#include "skytrace/sim/streams.hpp"
+
+namespace skytrace::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int /*signal*/) { g_stop = true; }
+
+struct ServeArgs {
+  std::string scenario;
+  std::string nmea_tcp, rtcm_tcp, pty, pose_udp;
+  double rate_hz = 1.0;
+  double duration_s = 0.0;
+  std::vector<std::string> overrides;
+};
+
+Error io_error(const std::string& what) { return make_error(ErrorCode::kIo, what + ": " + std::strerror(errno)); }
+
+// A bound socket of HOST:PORT (port 0: any free port).
+Result<int> bind_socket(const std::string& endpoint, int type, const char* option) {
+  const size_t colon = endpoint.rfind(':');
+  if (colon == std::string::npos || colon + 1 == endpoint.size()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{} '{}': expected HOST:PORT", option, endpoint));
+  }
+  std::string host = endpoint.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  const std::string port = endpoint.substr(colon + 1);
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = type;
+  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+  addrinfo* found = nullptr;
+  if (const int rc = getaddrinfo(host.empty() ? nullptr : host.c_str(), port.c_str(), &hints, &found); rc != 0) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{} '{}': {}", option, endpoint, gai_strerror(rc)));
+  }
+  std::unique_ptr<addrinfo, decltype(&freeaddrinfo)> guard(found, freeaddrinfo);
+  const int fd = socket(found->ai_family, found->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, found->ai_protocol);
+  if (fd < 0) return io_error(fmt::format("{} {}: socket", option, endpoint));
+  const int yes = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  if (bind(fd, found->ai_addr, found->ai_addrlen) != 0 || (type == SOCK_STREAM && listen(fd, 16) != 0)) {
+    auto error = io_error(fmt::format("{} {}: cannot bind", option, endpoint));
+    close(fd);
+    return error;
+  }
+  return fd;
+}
+
+int bound_port(int fd) {
+  sockaddr_storage address{};
+  socklen_t length = sizeof address;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  if (address.ss_family == AF_INET6) return ntohs(reinterpret_cast<sockaddr_in6*>(&address)->sin6_port);
+  return ntohs(reinterpret_cast<sockaddr_in*>(&address)->sin_port);
+}
+
+// A TCP server that sends the same bytes to every connected client. A client that does not keep up
+// (more than 1 MiB waiting) is dropped, as a receiver's port would overrun.
+class TcpBroadcaster {
+ public:
+  explicit TcpBroadcaster(int listen_fd) : listen_fd_(listen_fd) {}
+  ~TcpBroadcaster() {
+    for (const auto& c : clients_) close(c.fd);
+    close(listen_fd_);
+  }
+  TcpBroadcaster(const TcpBroadcaster&) = delete;
+  TcpBroadcaster& operator=(const TcpBroadcaster&) = delete;
+
+  [[nodiscard]] int port() const { return bound_port(listen_fd_); }
+  void add_poll_fds(std::vector<pollfd>& fds) const {
+    fds.push_back({listen_fd_, POLLIN, 0});
+    for (const auto& c : clients_) {
+      fds.push_back({c.fd, static_cast<short>(POLLIN | (c.pending.empty() ? 0 : POLLOUT)), 0});
+    }
+  }
+  // Accepts new clients, discards what clients send, flushes pending bytes, drops closed ones.
+  void service() {
+    for (;;) {
+      const int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd < 0) break;
+      clients_.push_back({fd, {}});
+    }
+    for (auto& c : clients_) {
+      char discard[512];
+      for (;;) {
+        const ssize_t n = recv(c.fd, discard, sizeof discard, MSG_DONTWAIT);
+        if (n > 0) continue;
+        if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) c.dead = true;
+        break;
+      }
+      flush(c);
+    }
+    drop_dead();
+  }
+  void broadcast(std::string_view bytes) {
+    for (auto& c : clients_) {
+      if (c.pending.size() + bytes.size() > (size_t{1} << 20)) {
+        c.dead = true;
+        continue;
+      }
+      c.pending.append(bytes);
+      flush(c);
+    }
+    drop_dead();
+  }
+  [[nodiscard]] size_t client_count() const { return clients_.size(); }
+
+ private:
+  struct Client {
+    int fd;
+    std::string pending;
+    bool dead = false;
+  };
+  static void flush(Client& c) {
+    while (!c.pending.empty() && !c.dead) {
+      const ssize_t n = send(c.fd, c.pending.data(), c.pending.size(), MSG_DONTWAIT | MSG_NOSIGNAL);
+      if (n > 0) {
+        c.pending.erase(0, static_cast<size_t>(n));
+      } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+        break;
+      } else if (n < 0 && errno == EINTR) {
+        continue;
+      } else {
+        c.dead = true;
+      }
+    }
+  }
+  void drop_dead() {
+    for (auto it = clients_.begin(); it != clients_.end();) {
+      if (it->dead) {
+        close(it->fd);
+        it = clients_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  int listen_fd_;
+  std::vector<Client> clients_;
+};
+
+// A pseudo-terminal in raw mode whose slave is reached through a symbolic link, like a serial port.
+class PseudoTerminal {
+ public:
+  static Result<std::unique_ptr<PseudoTerminal>> open(const std::filesystem::path& link) {
+    std::error_code ec;
+    if (std::filesystem::is_symlink(link, ec)) {
+      std::filesystem::remove(link, ec);  // left behind by an earlier run
+    } else if (std::filesystem::exists(link, ec)) {
+      return make_error(ErrorCode::kInvalidArgument, link.string() + ": --pty path exists and is not a symbolic link");
+    }
+    const int master = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (master < 0) return io_error("posix_openpt");
+    auto pty = std::unique_ptr<PseudoTerminal>(new PseudoTerminal(master));
+    if (grantpt(master) != 0 || unlockpt(master) != 0) return io_error("grantpt/unlockpt");
+    const char* name = ptsname(master);
+    if (name == nullptr) return io_error("ptsname");
+    pty->slave_name_ = name;
+    // Keeping the slave open lets writes succeed while no reader is attached; raw mode keeps CR LF.
+    pty->slave_ = ::open(name, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (pty->slave_ < 0) return io_error(std::string("open ") + name);
+    termios tio{};
+    if (tcgetattr(pty->slave_, &tio) == 0) {
+      cfmakeraw(&tio);
+      cfsetispeed(&tio, B115200);
+      cfsetospeed(&tio, B115200);
+      tcsetattr(pty->slave_, TCSANOW, &tio);
+    }
+    std::filesystem::create_symlink(name, link, ec);
+    if (ec) return make_error(ErrorCode::kIo, link.string() + ": cannot create the link to " + name + " (" + ec.message() + ")");
+    pty->link_ = link;
+    return pty;
+  }
+  ~PseudoTerminal() {
+    if (!link_.empty()) {
+      std::error_code ignored;
+      std::filesystem::remove(link_, ignored);
+    }
+    if (slave_ >= 0) close(slave_);
+    close(master_);
+  }
+  PseudoTerminal(const PseudoTerminal&) = delete;
+  PseudoTerminal& operator=(const PseudoTerminal&) = delete;
+
+  [[nodiscard]] const std::string& slave_name() const { return slave_name_; }
+  // Writes what fits; with nobody reading, stale sentences are discarded rather than queued.
+  void write_bytes(std::string_view bytes) {
+    while (!bytes.empty()) {
+      const ssize_t n = ::write(master_, bytes.data(), bytes.size());
+      if (n > 0) {
+        bytes.remove_prefix(static_cast<size_t>(n));
+      } else if (n < 0 && errno == EINTR) {
+        continue;
+      } else {
+        tcflush(slave_, TCIFLUSH);
+        break;
+      }
+    }
+  }
+
+ private:
+  explicit PseudoTerminal(int master) : master_(master) {}
+  int master_;
+  int slave_ = -1;
+  std::string slave_name_;
+  std::filesystem::path link_;
+};
+
+// A pose datagram (one line of text):
+//   ecef X Y Z [VX VY VZ]      metres, m/s in ECEF
+//   world X Y Z [VX VY VZ]     metres in the session's world frame (Gazebo world / local ENU)
+//   llh LAT_DEG LON_DEG H_M    WGS84, ellipsoidal height
+struct PoseDatagram {
+  enum class Frame { kEcef, kWorld } frame = Frame::kEcef;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Vector3d> velocity;
+};
+
+Result<PoseDatagram> parse_pose(std::string_view text) {
+  std::istringstream in{std::string(text)};
+  std::string kind;
+  in >> kind;
+  std::vector<double> values;
+  for (std::string token; in >> token;) {
+    try {
+      size_t used = 0;
+      values.push_back(std::stod(token, &used));
+      if (used != token.size()) throw std::invalid_argument(token);
+    } catch (const std::exception&) {
+      return make_error(ErrorCode::kParse, fmt::format("pose datagram '{}': '{}' is not a number", text, token));
+    }
+  }
+  PoseDatagram pose;
+  if (kind == "llh" && values.size() == 3) {
+    pose.position = geodetic_to_ecef(Geodetic{values[0], values[1], values[2]});
+    return pose;
+  }
+  if ((kind == "ecef" || kind == "world") && (values.size() == 3 || values.size() == 6)) {
+    pose.frame = kind == "ecef" ? PoseDatagram::Frame::kEcef : PoseDatagram::Frame::kWorld;
+    pose.position = Eigen::Vector3d(values[0], values[1], values[2]);
+    if (values.size() == 6) pose.velocity = Eigen::Vector3d(values[3], values[4], values[5]);
+    return pose;
+  }
+  return make_error(ErrorCode::kParse,
+                    fmt::format("pose datagram '{}': expected 'ecef X Y Z [VX VY VZ]', 'world X Y Z [VX VY VZ]' "
+                                "or 'llh LAT LON H'",
+                                text));
+}
+
+int serve(const ServeArgs& args) {
+  if (!(args.rate_hz > 0.0 && args.rate_hz <= 100.0)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--rate-hz {}: expected 0 < R <= 100", args.rate_hz)));
+  }
+  if (args.duration_s < 0.0) {
+    return report_error(make_error(ErrorCode::kInvalidArgument, "--duration-s must not be negative"));
+  }
+  if (args.nmea_tcp.empty() && args.rtcm_tcp.empty() && args.pty.empty()) {
+    return report_error(make_error(ErrorCode::kInvalidArgument, "give at least one of --nmea-tcp, --rtcm-tcp, --pty"));
+  }
+  auto scenario = sim::load_scenario(args.scenario, args.overrides);
+  if (!scenario) return report_error(scenario.error());
+  auto session = sim::LiveSession::create(*scenario);
+  if (!session) return report_error(session.error());
+  sim::LiveSession& live = **session;
+
+  std::unique_ptr<TcpBroadcaster> nmea_tcp, rtcm_tcp;
+  std::unique_ptr<PseudoTerminal> pty;
+  int pose_fd = -1;
+  if (!args.nmea_tcp.empty()) {
+    auto fd = bind_socket(args.nmea_tcp, SOCK_STREAM, "--nmea-tcp");
+    if (!fd) return report_error(fd.error());
+    nmea_tcp = std::make_unique<TcpBroadcaster>(*fd);
+    std::cout << "skytrace serve: NMEA on tcp port " << nmea_tcp->port() << std::endl;
+  }
+  if (!args.rtcm_tcp.empty()) {
+    auto fd = bind_socket(args.rtcm_tcp, SOCK_STREAM, "--rtcm-tcp");
+    if (!fd) return report_error(fd.error());
+    rtcm_tcp = std::make_unique<TcpBroadcaster>(*fd);
+    std::cout << "skytrace serve: RTCM 3 on tcp port " << rtcm_tcp->port() << std::endl;
+  }
+  if (!args.pty.empty()) {
+    auto opened = PseudoTerminal::open(args.pty);
+    if (!opened) return report_error(opened.error());
+    pty = std::move(*opened);
+    std::cout << "skytrace serve: NMEA on " << args.pty << " -> " << pty->slave_name() << std::endl;
+  }
+  if (!args.pose_udp.empty()) {
+    auto fd = bind_socket(args.pose_udp, SOCK_DGRAM, "--pose-udp");
+    if (!fd) return report_error(fd.error());
+    pose_fd = *fd;
+    std::cout << "skytrace serve: poses on udp port " << bound_port(pose_fd) << std::endl;
+  }
+  struct CloseFd {
+    int fd;
+    ~CloseFd() {
+      if (fd >= 0) close(fd);
+    }
+  } pose_guard{pose_fd};
+
+  std::optional<io::Rtcm3Stream> rtcm;
+  if (rtcm_tcp) rtcm.emplace(io::Rtcm3StreamSettings{}, sim::rtcm_station(live.marker_ecef_m(), live.receiver()));
+
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  using Clock = std::chrono::steady_clock;
+  const double period_s = 1.0 / args.rate_hz;
+  const auto wall_start = Clock::now();
+  const GnssTime start = scenario->time.start;
+  const auto tag_at = [&](Clock::time_point t) { return start + std::chrono::duration<double>(t - wall_start).count(); };
+  std::int64_t k = 0;
+  std::int64_t late_epochs = 0;
+  while (!g_stop) {
+    if (args.duration_s > 0.0 && static_cast<double>(k) * period_s > args.duration_s + 1e-9) break;
+    const auto deadline = wall_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(k * period_s));
+    // Serve clients and poses until the epoch is due.
+    for (;;) {
+      std::vector<pollfd> fds;
+      if (nmea_tcp) nmea_tcp->add_poll_fds(fds);
+      if (rtcm_tcp) rtcm_tcp->add_poll_fds(fds);
+      if (pose_fd >= 0) fds.push_back({pose_fd, POLLIN, 0});
+      const auto now = Clock::now();
+      if (now >= deadline || g_stop) break;
+      const auto wait_ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count() + 1;
+      const int ready = poll(fds.data(), fds.size(), static_cast<int>(std::min<long long>(wait_ms, 100)));
+      if (ready < 0 && errno != EINTR) return report_error(io_error("poll"));
+      if (nmea_tcp) nmea_tcp->service();
+      if (rtcm_tcp) rtcm_tcp->service();
+      if (pose_fd >= 0) {
+        char buffer[2048];
+        for (;;) {
+          const ssize_t n = recv(pose_fd, buffer, sizeof buffer, MSG_DONTWAIT);
+          if (n <= 0) break;
+          std::string_view text(buffer, static_cast<size_t>(n));
+          while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.remove_suffix(1);
+          auto pose = parse_pose(text);
+          Status applied = Ok{};
+          if (!pose) {
+            applied = pose.error();
+          } else if (pose->frame == PoseDatagram::Frame::kWorld) {
+            applied = live.set_antenna_pose_world(tag_at(Clock::now()), pose->position, pose->velocity);
+          } else {
+            applied = live.set_antenna_pose_ecef(tag_at(Clock::now()), pose->position, pose->velocity);
+          }
+          if (!applied) std::cerr << "skytrace serve: warning: pose ignored: " << applied.error().message << "\n";
+        }
+      }
+    }
+    if (g_stop) break;
+
+    const GnssTime tag = start + static_cast<double>(k) * period_s;
+    auto epoch = live.step(tag);
+    if (!epoch) return report_error(epoch.error());
+    if (epoch->fix && (nmea_tcp || pty)) {
+      std::string text;
+      for (const auto& sentence : io::nmea_epoch(*epoch->fix)) text += sentence;
+      if (nmea_tcp) nmea_tcp->broadcast(text);
+      if (pty) pty->write_bytes(text);
+    }
+    if (rtcm) {
+      const auto records = sim::records_in_use(*live.resources().ephemerides, epoch->observations);
+      auto bytes = rtcm->epoch(sim::to_rtcm_epoch(epoch->observations), records.kepler, records.glonass);
+      if (!bytes) return report_error(bytes.error());
+      rtcm_tcp->broadcast(std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
+    }
+    ++k;
+    // Behind the wall clock by more than an epoch (a slow world, a suspended process): skip ahead
+    // so that epochs keep their wall-clock times instead of bunching up.
+    const auto behind = std::chrono::duration<double>(Clock::now() - wall_start).count() / period_s;
+    if (behind > static_cast<double>(k) + 1.0) {
+      late_epochs += static_cast<std::int64_t>(std::floor(behind)) - k;
+      k = static_cast<std::int64_t>(std::floor(behind));
+    }
+  }
+  if (late_epochs > 0) std::cerr << "skytrace serve: " << late_epochs << " epochs skipped to keep real time\n";
+  std::cout << "skytrace serve: stopped after " << k << " epochs" << std::endl;
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_serve_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<ServeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "serve", "Virtual receiver in real time: NMEA and RTCM 3 over TCP, NMEA over a pseudo-terminal (docs/streams.md)");
+  cmd->add_option("scenario", args->scenario, "Scenario YAML file (see docs/scenario.md)")->required();
+  cmd->add_option("--nmea-tcp", args->nmea_tcp, "Serve NMEA 0183 on HOST:PORT (port 0: any free port, printed)");
+  cmd->add_option("--rtcm-tcp", args->rtcm_tcp, "Serve RTCM 3 (1006, MSM7, ephemerides) on HOST:PORT");
+  cmd->add_option("--pty", args->pty, "Create a pseudo-terminal carrying NMEA, with a symbolic link at PATH");
+  cmd->add_option("--pose-udp", args->pose_udp,
+                  "Receive antenna poses as UDP text datagrams on HOST:PORT ('ecef X Y Z [VX VY VZ]', "
+                  "'world X Y Z [VX VY VZ]', 'llh LAT LON H')");
+  cmd->add_option("--rate-hz", args->rate_hz, "Epochs per second (default 1)");
+  cmd->add_option("--duration-s", args->duration_s, "Stop after this many seconds (default: until SIGINT/SIGTERM)");
+  cmd->add_option("--set", args->overrides, "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable)");
+  cmd->callback([args, &exit_code]() { exit_code = serve(*args); });
+}
+
+}  // namespace skytrace::cli
