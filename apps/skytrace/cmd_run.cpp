@@ -18,10 +18,11 @@ struct RunArgs {
   std::string out_dir;
   bool no_truth = false;
   bool quiet = false;
+  std::vector<std::string> overrides;
 };
 
 int run(const RunArgs& args) {
-  auto scenario = sim::load_scenario(args.scenario);
+  auto scenario = sim::load_scenario(args.scenario, args.overrides);
   if (!scenario) return report_error(scenario.error());
   sim::RunOptions options;
   options.write_truth = !args.no_truth;
@@ -58,6 +59,9 @@ void register_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", args->out_dir, "Output folder (created if missing)")->required();
   cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
+  cmd->add_option("--set", args->overrides,
+                  "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable), e.g. --set models.ionosphere=none "
+                  "--set ephemeris.precise_orbits=[]");
   cmd->callback([args, &exit_code]() { exit_code = run(*args); });
 }
 

@@ -401,12 +401,58 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
 
 }  // namespace
 
-Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir) {
+namespace {
+
+// Sets `a.b.c=value` in the YAML tree (value parsed as YAML), creating missing mappings.
+Status apply_override(YAML::Node& root, const std::string& assignment) {
+  const auto equals = assignment.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    return make_error(ErrorCode::kInvalidArgument, "--set '" + assignment + "': expected KEY.PATH=VALUE");
+  }
+  const std::string path = assignment.substr(0, equals);
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(equals + 1));
+  } catch (const YAML::Exception& e) {
+    return make_error(ErrorCode::kInvalidArgument, "--set " + path + ": the value is not valid YAML: " + e.msg);
+  }
+  std::vector<std::string> keys;
+  for (size_t start = 0;;) {
+    const auto dot = path.find('.', start);
+    keys.push_back(path.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+    if (keys.back().empty()) return make_error(ErrorCode::kInvalidArgument, "--set " + path + ": empty key in the path");
+    if (dot == std::string::npos) break;
+    start = dot + 1;
+  }
+  YAML::Node node;
+  node.reset(root);
+  std::string walked;  // the key path of `node`
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (node.IsDefined() && !node.IsMap() && !node.IsNull()) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "--set " + path + ": " + (walked.empty() ? "the document" : "'" + walked + "'") + " is not a mapping");
+    }
+    if (i + 1 == keys.size()) break;
+    walked += (walked.empty() ? "" : ".") + keys[i];
+    YAML::Node child = node[keys[i]];
+    node.reset(child);
+  }
+  node[keys.back()] = value;
+  return Ok{};
+}
+
+}  // namespace
+
+Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
+                                const std::vector<std::string>& overrides) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+  for (const std::string& assignment : overrides) {
+    if (auto st = apply_override(root, assignment); !st) return st.error().with_context(name);
   }
   try {
     Scenario s = parse_root(Node(root, "", &name), base_dir);
@@ -418,10 +464,10 @@ Result<Scenario> parse_scenario(const std::string& text, const std::string& name
   }
 }
 
-Result<Scenario> load_scenario(const std::filesystem::path& path) {
+Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
   auto text = read_text_file(path);
   if (!text) return text.error();
-  auto scenario = parse_scenario(*text, path.string(), path.parent_path());
+  auto scenario = parse_scenario(*text, path.string(), path.parent_path(), overrides);
   if (scenario) scenario->source = path;
   return scenario;
 }

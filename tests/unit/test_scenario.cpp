@@ -42,6 +42,32 @@ TEST(Scenario, MinimalWithDefaults) {
   EXPECT_NE(scenario_to_json(s).find("\"signals\""), std::string::npos);
 }
 
+TEST(Scenario, OverridesReplaceAndAddKeys) {
+  const Scenario s =
+      parse_scenario(kMinimal, "s.yaml", "/tmp",
+                     {"models.ionosphere=none", "time.interval_s=10", "receiver.signals=[G1C]", "seed=9"})
+          .value();
+  EXPECT_EQ(s.models.ionosphere, "none");  // a mapping the file did not have
+  EXPECT_DOUBLE_EQ(s.time.interval_s, 10.0);
+  EXPECT_EQ(s.receivers[0].signals.size(), 1u);
+  EXPECT_EQ(s.seed, 9u);
+}
+
+TEST(Scenario, BadOverridesAreNamed) {
+  auto r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"models.ionosphere"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("expected KEY.PATH=VALUE"), std::string::npos) << r.error().message;
+  r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"name.first=x"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("'name' is not a mapping"), std::string::npos) << r.error().message;
+  r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"models.ionospher=none"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("models.ionospher: unknown key"), std::string::npos) << r.error().message;
+  r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"time..x=1"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("empty key"), std::string::npos) << r.error().message;
+}
+
 TEST(Scenario, TimeScaleApplies) {
   const Scenario s = parse(replace(kMinimal, "scale: GPST", "scale: UTC")).value();
   EXPECT_EQ(s.time.start.to_iso8601(TimeScale::kGpst, 0), "2020-06-25T00:00:18");

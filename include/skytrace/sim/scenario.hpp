@@ -128,10 +128,14 @@ struct Scenario {
 };
 
 // Reads a scenario file; relative paths inside are resolved against the file's folder.
-[[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path);
+// `overrides` ("models.ionosphere=none", "ephemeris.precise_orbits=[]": a key path and a YAML value)
+// replace or add keys before the scenario is checked.
+[[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path,
+                                             const std::vector<std::string>& overrides = {});
 // Parses scenario text; `name` is used in messages and `base_dir` resolves relative paths.
 [[nodiscard]] Result<Scenario> parse_scenario(const std::string& text, const std::string& name,
-                                              const std::filesystem::path& base_dir);
+                                              const std::filesystem::path& base_dir,
+                                              const std::vector<std::string>& overrides = {});
 // The effective configuration (defaults filled in) as YAML-compatible JSON text, for summary.json.
 [[nodiscard]] std::string scenario_to_json(const Scenario& scenario);
 
