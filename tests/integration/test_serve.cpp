@@ -1,0 +1,241 @@
+// `skytrace serve` against the programs robots and base stations use: gpsd reads the NMEA stream
+// over TCP and reports 3D fixes at the ESBC antenna; RTKLIB's str2str records the RTCM 3 stream and
+// convbin turns it into RINEX with the satellites and pseudoranges of `skytrace run` at the same
+// epochs; the pseudo-terminal carries NMEA; SIGTERM stops the server cleanly.
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <fcntl.h>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "process.hpp"
+#include "skytrace/core/frames.hpp"
+#include "skytrace/io/rinex_obs.hpp"
+#include "test_support.hpp"
+
+namespace skytrace {
+namespace {
+
+const Eigen::Vector3d kEsbcMarker(3582105.2910, 532589.7313, 5232754.8054);
+
+// A program running in the background, stopped (SIGTERM, then SIGKILL) when destroyed.
+class Background {
+ public:
+  Background(const std::string& command, const std::filesystem::path& log) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      setpgid(0, 0);
+      const std::string line = "exec " + command + " > " + test::shell_quote(log.string()) + " 2>&1";
+      execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+  }
+  ~Background() { stop(); }
+  Background(const Background&) = delete;
+  Background& operator=(const Background&) = delete;
+  // Sends the signal and waits up to 10 s; the exit status (-1 when it had to be killed).
+  int stop(int signal_number = SIGTERM) {
+    if (pid_ <= 0) return status_;
+    kill(pid_, signal_number);
+    for (int i = 0; i < 100; ++i) {
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        return status_;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    kill(-pid_, SIGKILL);
+    kill(pid_, SIGKILL);
+    waitpid(pid_, nullptr, 0);
+    pid_ = -1;
+    return status_ = -1;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int status_ = -1;
+};
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Waits (up to 20 s) for a line of the log starting with `prefix`; returns the rest of the line.
+std::string wait_for_line(const std::filesystem::path& log, const std::string& prefix) {
+  for (int i = 0; i < 200; ++i) {
+    std::istringstream lines(read_file(log));
+    for (std::string line; std::getline(lines, line);) {
+      if (line.rfind(prefix, 0) == 0) return line.substr(prefix.size());
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return {};
+}
+
+int free_tcp_port() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  socklen_t length = sizeof address;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  close(fd);
+  return ntohs(address.sin_port);
+}
+
+class Serve : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    contract_ = test::shared_data_dir().parent_path() / "contract" / "esbc-open-sky.yaml";
+    if (!std::filesystem::exists(contract_) ||
+        !std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx")) {
+      GTEST_SKIP() << "contract scenario or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+    }
+    dir_ = test::make_temp_dir(std::string("serve_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() +
+                               "_" + std::to_string(getpid()));
+  }
+  std::string serve_command(const std::string& options) const {
+    return test::shell_quote(test::skytrace_executable().string()) + " serve " + test::shell_quote(contract_.string()) +
+           " " + options;
+  }
+  std::filesystem::path contract_, dir_;
+};
+
+TEST_F(Serve, GpsdReportsThreeDimensionalFixesAtTheStation) {
+  if (!test::program_available("gpspipe") || !std::filesystem::exists("/usr/sbin/gpsd")) {
+    GTEST_SKIP() << "gpsd and gpspipe (Debian packages gpsd, gpsd-clients) are not installed";
+  }
+  Background server(serve_command("--nmea-tcp 127.0.0.1:0 --rate-hz 2 --duration-s 120"), dir_ / "serve.log");
+  const std::string port = wait_for_line(dir_ / "serve.log", "skytrace serve: NMEA on tcp port ");
+  ASSERT_FALSE(port.empty()) << read_file(dir_ / "serve.log");
+  const int control_port = free_tcp_port();
+  Background gpsd("/usr/sbin/gpsd -N -n -S " + std::to_string(control_port) + " tcp://127.0.0.1:" + port,
+                  dir_ / "gpsd.log");
+  test::ProcessResult pipe;
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    pipe = test::run_command("timeout 40 gpspipe -w -n 30 127.0.0.1:" + std::to_string(control_port));
+    if (pipe.output.find("\"class\":\"TPV\"") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+  const Eigen::Vector3d up = ecef_to_enu_rotation(ecef_to_geodetic(kEsbcMarker)).row(2).transpose();
+  const Eigen::Vector3d antenna = kEsbcMarker + 0.2160 * up;
+  int fixes = 0;
+  std::istringstream lines(pipe.output);
+  for (std::string line; std::getline(lines, line);) {
+    const auto j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || j.value("class", "") != "TPV" || j.value("mode", 0) != 3) continue;
+    ASSERT_TRUE(j.contains("lat") && j.contains("lon") && j.contains("altHAE")) << line;
+    const Geodetic g{j["lat"].get<double>(), j["lon"].get<double>(), j["altHAE"].get<double>()};
+    EXPECT_LT((geodetic_to_ecef(g) - antenna).norm(), 15.0) << line;
+    ++fixes;
+  }
+  EXPECT_GE(fixes, 3) << pipe.output << "\n" << read_file(dir_ / "gpsd.log");
+  gpsd.stop();
+  EXPECT_EQ(server.stop(SIGTERM), 0) << read_file(dir_ / "serve.log");
+  EXPECT_NE(read_file(dir_ / "serve.log").find("skytrace serve: stopped after"), std::string::npos);
+}
+
+TEST_F(Serve, Str2strRecordsRtcmThatConvbinTurnsIntoTheStationsObservations) {
+  if (!test::program_available("str2str") || !test::program_available("convbin")) {
+    GTEST_SKIP() << "str2str and convbin (Debian package rtklib) are not installed";
+  }
+  Background server(serve_command("--rtcm-tcp 127.0.0.1:0 --rate-hz 1 --duration-s 120"), dir_ / "serve.log");
+  const std::string port = wait_for_line(dir_ / "serve.log", "skytrace serve: RTCM 3 on tcp port ");
+  ASSERT_FALSE(port.empty()) << read_file(dir_ / "serve.log");
+  {
+    Background recorder("str2str -in tcpcli://127.0.0.1:" + port + " -out file://" +
+                            test::shell_quote((dir_ / "stream.rtcm3").string()),
+                        dir_ / "str2str.log");
+    // Until a few epochs are in the file (the file grows by about 3 kB per epoch).
+    for (int i = 0; i < 300; ++i) {
+      std::error_code ec;
+      if (std::filesystem::exists(dir_ / "stream.rtcm3") && std::filesystem::file_size(dir_ / "stream.rtcm3", ec) > 15000) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    recorder.stop(SIGINT);
+  }
+  EXPECT_EQ(server.stop(SIGINT), 0) << read_file(dir_ / "serve.log");
+  const auto conv = test::run_command("convbin -r rtcm3 -tr '2020/06/25 00:00:00' -f 5 -od -os " +
+                                      test::shell_quote((dir_ / "stream.rtcm3").string()) + " -o " +
+                                      test::shell_quote((dir_ / "stream.obs").string()) + " 2>&1");
+  ASSERT_EQ(conv.exit_code, 0) << conv.output;
+  const auto served = io::read_rinex_obs(dir_ / "stream.obs");
+  ASSERT_TRUE(served.ok()) << served.error().message;
+  ASSERT_GE(served->epochs.size(), 2U) << read_file(dir_ / "str2str.log");
+
+  // The same receiver simulated by `skytrace run` at 1 s epochs over the first two minutes.
+  const auto run = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                     test::shell_quote(contract_.string()) + " --out " +
+                                     test::shell_quote((dir_ / "run").string()) +
+                                     " --quiet --no-truth --set time.interval_s=1 --set time.duration_s=120");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const auto simulated = io::read_rinex_obs(dir_ / "run/obs.rnx");
+  ASSERT_TRUE(simulated.ok()) << simulated.error().message;
+  const auto c1c = [](const io::ObservationFile& file, const io::SatelliteObservations& sat) -> std::optional<double> {
+    const auto k = file.header.type_index(sat.satellite.system, "C1C");
+    if (!k || *k >= sat.values.size()) return std::nullopt;
+    return sat.values[*k].value;
+  };
+  int compared = 0;
+  for (const auto& epoch : served->epochs) {
+    const io::ObservationEpoch* reference = nullptr;
+    for (const auto& e : simulated->epochs) {
+      if (e.time == epoch.time) reference = &e;
+    }
+    ASSERT_NE(reference, nullptr) << epoch.time.to_iso8601(TimeScale::kGpst) << " is not a whole second of the scenario";
+    std::set<SatelliteId> a, b;
+    for (const auto& s : epoch.satellites) a.insert(s.satellite);
+    for (const auto& s : reference->satellites) b.insert(s.satellite);
+    EXPECT_EQ(a, b) << epoch.time.to_iso8601(TimeScale::kGpst);
+    for (const auto& s : epoch.satellites) {
+      const auto* r = reference->find(s.satellite);
+      if (r == nullptr) continue;
+      const auto pa = c1c(*served, s);
+      const auto pb = c1c(*simulated, *r);
+      if (!pa || !pb) continue;
+      EXPECT_NEAR(*pa, *pb, 0.002) << s.satellite.to_string() << " " << epoch.time.to_iso8601(TimeScale::kGpst);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 20);
+}
+
+TEST_F(Serve, PseudoTerminalCarriesNmeaAndDisappearsOnStop) {
+  const auto link = dir_ / "gnss0";
+  Background server(serve_command("--pty " + test::shell_quote(link.string()) + " --rate-hz 5 --duration-s 120"),
+                    dir_ / "serve.log");
+  ASSERT_FALSE(wait_for_line(dir_ / "serve.log", "skytrace serve: NMEA on ").empty()) << read_file(dir_ / "serve.log");
+  ASSERT_TRUE(std::filesystem::is_symlink(link));
+  const int fd = open(link.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
+  ASSERT_GE(fd, 0);
+  std::string received;
+  for (int i = 0; i < 200 && received.find("GGA,") == std::string::npos; ++i) {
+    char buffer[1024];
+    const ssize_t n = read(fd, buffer, sizeof buffer);
+    if (n > 0) received.append(buffer, static_cast<size_t>(n));
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  close(fd);
+  EXPECT_NE(received.find("$GNGGA,"), std::string::npos) << received;
+  EXPECT_EQ(server.stop(SIGTERM), 0);
+  EXPECT_FALSE(std::filesystem::exists(link));
+}
+
+}  // namespace
+}  // namespace skytrace
