@@ -1,0 +1,122 @@
+// A live receiver (sim::LiveSession) behind an interface of plain C++17 types. ROS 1's generated
+// messages do not compile as C++20 (they use std::allocator<void>::rebind, removed in C++20) while
+// skytrace's headers need C++20, so the ROS node and its tests are C++17 code that reaches the
+// simulator only through this header. Times are seconds after the receiver's start time.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace skytrace::live {
+
+using Vec3 = std::array<double, 3>;
+using Mat3 = std::array<double, 9>;  // row-major
+
+struct SignalView {
+  std::string code;  // RINEX 3 observation code: "1C", "5Q"
+  double carrier_hz = 0.0;
+  double pseudorange_m = 0.0;
+  double carrier_phase_cycles = 0.0;
+  double doppler_hz = 0.0;
+  double cn0_dbhz = 0.0;
+  bool loss_of_lock = false;
+  bool half_cycle_unresolved = false;
+  double lock_time_s = 0.0;
+};
+
+enum class SkyStatus { kTracked, kBelowMask, kNoEphemeris, kNoSignal, kBlocked, kAttenuated };
+
+struct SatelliteView {
+  std::string id;   // "G05"
+  char system = 'G';
+  int prn = 0;      // ranging-code PRN (GLONASS: slot)
+  int glonass_channel = 0;
+  SkyStatus status = SkyStatus::kTracked;
+  std::string detail;  // why it is not tracked (the blocking object, ...)
+  double azimuth_deg = 0.0;
+  double elevation_deg = 0.0;
+  double vegetation_path_m = 0.0;
+  double vegetation_attenuation_db = 0.0;
+  bool used_in_fix = false;
+  Vec3 direction_world{};  // unit vector from the antenna to the satellite, world frame
+  std::vector<SignalView> signals;  // tracked signals
+};
+
+struct FixView {
+  int type = 0;  // 0 none, 2 2D, 3 3D
+  std::string message;
+  double latitude_deg = 0.0;
+  double longitude_deg = 0.0;
+  double height_m = 0.0;  // above the WGS84 ellipsoid
+  Mat3 covariance_enu_m2{};
+  bool velocity_valid = false;
+  Vec3 velocity_enu_mps{};
+  Mat3 velocity_covariance_enu_m2ps2{};
+  int satellites_used = 0;
+  std::string systems_used;  // RINEX letters of the constellations in the solution, e.g. "GREC"
+};
+
+struct EpochView {
+  double time_s = 0.0;  // seconds after the start time
+  int gps_week = 0;     // the receiver time tag in GPST
+  double gps_tow_s = 0.0;
+  std::string time_iso;  // the tag, ISO 8601 GPST
+  bool restarted = false;
+  bool pose_stale = false;
+  Vec3 antenna_world_m{};  // true antenna position, world frame
+  std::vector<SatelliteView> satellites;  // every satellite of the receiver's systems
+  FixView fix;
+  std::vector<std::string> nmea;  // the epoch's NMEA sentences, without CR LF
+};
+
+struct ReceiverOptions {
+  std::string scenario_path;
+  std::string start_time;                // ISO 8601; empty: the scenario's start
+  std::string start_time_scale = "GPST";
+  double pose_timeout_s = 1.0;
+};
+
+class Receiver {
+ public:
+  // nullptr with `error` set (naming the file or option) when the scenario cannot be loaded.
+  [[nodiscard]] static std::unique_ptr<Receiver> create(const ReceiverOptions& options, std::string& error);
+  ~Receiver();
+  Receiver(const Receiver&) = delete;
+  Receiver& operator=(const Receiver&) = delete;
+
+  // The antenna reference point at `time_s`, world frame. Returns an error message, empty when used.
+  // Thread-safe with respect to step().
+  [[nodiscard]] std::string set_antenna_pose_world(double time_s, const Vec3& position_m,
+                                                   const std::optional<Vec3>& velocity_mps = std::nullopt);
+  // A movable model of the world; quaternion w, x, y, z. Returns an error message, empty when used.
+  [[nodiscard]] std::string set_object_pose(const std::string& name, const Vec3& position_m,
+                                            const std::array<double, 4>& rotation_wxyz);
+
+  // The epoch at `time_s` (a time before the previous one restarts tracking). False with `error`.
+  [[nodiscard]] bool step(double time_s, EpochView& out, std::string& error);
+
+  // RINEX observations written as the receiver runs (epochs that do not advance are left out).
+  [[nodiscard]] std::string open_rinex(const std::string& path, double interval_s);
+  [[nodiscard]] bool rinex_open() const;
+  // Writes the last stepped epoch; returns an error message, empty when written.
+  [[nodiscard]] std::string write_rinex_epoch();
+  [[nodiscard]] std::string finish_rinex();
+
+  // Coordinates in the world frame (the Gazebo world's, or east-north-up at the first marker).
+  [[nodiscard]] Vec3 world_from_geodetic(double latitude_deg, double longitude_deg, double height_m) const;
+  [[nodiscard]] Vec3 world_from_ecef(const Vec3& ecef_m) const;
+  // Seconds after the start time of a GPST week and time of week (message time tags).
+  [[nodiscard]] double time_s_of_gps(int gps_week, double gps_tow_s) const;
+  [[nodiscard]] std::string scenario_name() const;
+  [[nodiscard]] double scenario_duration_s() const;
+
+ private:
+  struct Impl;
+  explicit Receiver(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace skytrace::live

@@ -1,0 +1,401 @@
+// skytrace_ros_node: a simulated GNSS receiver on ROS 1 (docs/ros.md). One sim::LiveSession stepped
+// at ~rate_hz on the ROS clock (the Gazebo clock under /use_sim_time), the antenna where the
+// scenario, tf, an odometry or a pose topic puts it; publishes the fix, the velocity, the raw
+// observations, NMEA, the sky and the rays for RViz. Bad input from ROS (NaN poses, missing
+// transforms, stale poses, time jumps) is reported with throttled warnings, never a crash.
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <std_msgs/String.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "live_receiver.hpp"
+#include "ros_messages.hpp"
+
+namespace skytrace::ros_node {
+namespace {
+
+// Exit codes of the skytrace CLI (README "Exit codes").
+constexpr int kExitUsage = 2;
+constexpr int kExitInput = 3;
+constexpr int kExitOutput = 5;
+
+std::atomic<bool> g_stop{false};
+void on_signal(int /*signal*/) { g_stop = true; }
+
+enum class PoseSource { kScenario, kTf, kOdometry, kPose };
+
+struct Config {
+  std::string scenario;
+  PoseSource pose_source = PoseSource::kScenario;
+  std::string world_frame = "world";
+  std::string antenna_frame = "gnss_antenna";
+  std::string frame_id;  // of the fix and velocity; the antenna frame by default
+  std::string pose_topic = "antenna_pose";
+  std::string odom_topic = "odom";
+  Eigen::Vector3d antenna_offset_m = Eigen::Vector3d::Zero();  // in the body frame of pose/odometry
+  double rate_hz = 1.0;
+  std::string start_time;  // ISO 8601 in start_time_scale; empty: the scenario's start
+  std::string start_time_scale = "GPST";
+  double pose_timeout_s = 1.0;
+  double ray_length_m = 100.0;
+  std::vector<std::string> moving_models;  // tf frames of movable world models
+  std::string rinex_out;
+  std::string latency_report;
+};
+
+// Reads and checks the private parameters; an error names the parameter and what was expected.
+std::optional<std::string> read_config(const ros::NodeHandle& pnh, Config& c) {
+  if (!pnh.getParam("scenario", c.scenario) || c.scenario.empty()) {
+    return "~scenario is required: the path of a skytrace scenario file (YAML)";
+  }
+  std::string source = "scenario";
+  pnh.param<std::string>("pose_source", source, source);
+  if (source == "scenario") {
+    c.pose_source = PoseSource::kScenario;
+  } else if (source == "tf") {
+    c.pose_source = PoseSource::kTf;
+  } else if (source == "odometry") {
+    c.pose_source = PoseSource::kOdometry;
+  } else if (source == "pose") {
+    c.pose_source = PoseSource::kPose;
+  } else {
+    return fmt::format("~pose_source '{}': expected scenario, tf, odometry or pose", source);
+  }
+  pnh.param<std::string>("world_frame", c.world_frame, c.world_frame);
+  pnh.param<std::string>("antenna_frame", c.antenna_frame, c.antenna_frame);
+  pnh.param<std::string>("frame_id", c.frame_id, c.antenna_frame);
+  pnh.param<std::string>("pose_topic", c.pose_topic, c.pose_topic);
+  pnh.param<std::string>("odom_topic", c.odom_topic, c.odom_topic);
+  pnh.param("rate_hz", c.rate_hz, c.rate_hz);
+  if (!(c.rate_hz > 0.0 && c.rate_hz <= 100.0)) {
+    return fmt::format("~rate_hz {}: expected a rate in (0, 100] Hz", c.rate_hz);
+  }
+  pnh.param("pose_timeout_s", c.pose_timeout_s, c.pose_timeout_s);
+  if (!(c.pose_timeout_s > 0.0)) return fmt::format("~pose_timeout_s {}: expected a positive duration", c.pose_timeout_s);
+  pnh.param("ray_length_m", c.ray_length_m, c.ray_length_m);
+  if (!(c.ray_length_m > 0.0)) return fmt::format("~ray_length_m {}: expected a positive length", c.ray_length_m);
+  pnh.param<std::string>("start_time", c.start_time, c.start_time);
+  pnh.param<std::string>("start_time_scale", c.start_time_scale, c.start_time_scale);
+  std::vector<double> offset;
+  if (pnh.getParam("antenna_offset_m", offset)) {
+    if (offset.size() != 3) return "~antenna_offset_m: expected [x, y, z] in metres in the robot's body frame";
+    c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
+  }
+  pnh.param("moving_models", c.moving_models, c.moving_models);
+  pnh.param<std::string>("rinex_out", c.rinex_out, c.rinex_out);
+  pnh.param<std::string>("latency_report", c.latency_report, c.latency_report);
+  return std::nullopt;
+}
+
+Eigen::Quaterniond to_eigen(const geometry_msgs::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
+
+class Node {
+ public:
+  Node(Config config, std::unique_ptr<live::Receiver> receiver)
+      : config_(std::move(config)), receiver_(std::move(receiver)), pnh_("~") {
+    period_s_ = 1.0 / config_.rate_hz;
+    fix_pub_ = pnh_.advertise<sensor_msgs::NavSatFix>("fix", 10);
+    velocity_pub_ = pnh_.advertise<geometry_msgs::TwistWithCovarianceStamped>("velocity", 10);
+    observations_pub_ = pnh_.advertise<skytrace_msgs::Observations>("observations", 10);
+    nmea_pub_ = pnh_.advertise<std_msgs::String>("nmea", 100);
+    sky_pub_ = pnh_.advertise<skytrace_msgs::Sky>("sky", 10);
+    rays_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("rays", 10);
+    if (config_.pose_source == PoseSource::kTf || !config_.moving_models.empty()) {
+      tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+      tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh_);
+    }
+    if (config_.pose_source == PoseSource::kPose) {
+      pose_sub_ = nh_.subscribe(config_.pose_topic, 20, &Node::on_pose, this);
+    } else if (config_.pose_source == PoseSource::kOdometry) {
+      pose_sub_ = nh_.subscribe(config_.odom_topic, 20, &Node::on_odometry, this);
+    }
+  }
+
+  [[nodiscard]] bool open_rinex() {
+    if (config_.rinex_out.empty()) return true;
+    if (auto problem = receiver_->open_rinex(config_.rinex_out, period_s_); !problem.empty()) {
+      ROS_FATAL("~rinex_out %s: %s", config_.rinex_out.c_str(), problem.c_str());
+      return false;
+    }
+    return true;
+  }
+
+  void run() {
+    ros::CallbackQueue& queue = *ros::getGlobalCallbackQueue();
+    const double wait_s = std::min(0.01, period_s_ / 4.0);
+    if (!ros::Time::isSimTime()) origin_ = ros::Time::now();  // node start maps to ~start_time
+    while (ros::ok() && !g_stop) {
+      queue.callAvailable(ros::WallDuration(wait_s));
+      const ros::Time now = ros::Time::now();
+      if (now.isZero()) {
+        ROS_WARN_THROTTLE(10.0, "waiting for the clock (/use_sim_time is set and /clock has not started)");
+        continue;
+      }
+      const double elapsed_s = (now - origin_).toSec();
+      if (elapsed_s < 0.0) continue;
+      const auto k = static_cast<std::int64_t>(std::floor(elapsed_s * config_.rate_hz + 1e-6));
+      if (last_k_) {
+        if (k == *last_k_) continue;
+        if (k < *last_k_) {
+          ROS_WARN("time went back %.3f s (simulation reset?): the receiver restarts tracking",
+                   static_cast<double>(*last_k_ - k) * period_s_);
+        } else if (k - *last_k_ > std::max<std::int64_t>(2, static_cast<std::int64_t>(2.0 * config_.rate_hz))) {
+          ROS_WARN("time jumped %.3f s forward: %lld epochs skipped", static_cast<double>(k - *last_k_) * period_s_,
+                   static_cast<long long>(k - *last_k_ - 1));
+        }
+      }
+      last_k_ = k;
+      epoch(k);
+    }
+  }
+
+  void finish() {
+    if (receiver_->rinex_open()) {
+      if (auto problem = receiver_->finish_rinex(); !problem.empty()) {
+        ROS_ERROR("~rinex_out %s: %s", config_.rinex_out.c_str(), problem.c_str());
+      } else {
+        ROS_INFO("RINEX observations written to %s", config_.rinex_out.c_str());
+      }
+    }
+    report_latency();
+  }
+
+ private:
+  // Receiver time (seconds after the start time) of a ROS time (stamps of poses and transforms).
+  [[nodiscard]] double receiver_time_s(const ros::Time& stamp) const { return (stamp - origin_).toSec(); }
+
+  void set_pose(const ros::Time& stamp, const Eigen::Vector3d& position_world_m,
+                const std::optional<Eigen::Vector3d>& velocity_world_mps, const char* source) {
+    if (!position_world_m.allFinite() || (velocity_world_mps && !velocity_world_mps->allFinite())) {
+      ROS_WARN_THROTTLE(5.0, "%s: antenna pose with NaN or infinite values ignored", source);
+      return;
+    }
+    const ros::Time when = stamp.isZero() ? ros::Time::now() : stamp;
+    std::optional<live::Vec3> velocity;
+    if (velocity_world_mps) velocity = live::Vec3{velocity_world_mps->x(), velocity_world_mps->y(), velocity_world_mps->z()};
+    const live::Vec3 position{position_world_m.x(), position_world_m.y(), position_world_m.z()};
+    if (auto problem = receiver_->set_antenna_pose_world(receiver_time_s(when), position, velocity); !problem.empty()) {
+      ROS_WARN_THROTTLE(5.0, "%s: %s", source, problem.c_str());
+    }
+  }
+
+  // The antenna point of a body pose: the body's position plus the lever arm turned by its attitude.
+  [[nodiscard]] std::optional<Eigen::Vector3d> antenna_point(const geometry_msgs::Pose& pose, const char* source) const {
+    Eigen::Vector3d p(pose.position.x, pose.position.y, pose.position.z);
+    if (config_.antenna_offset_m.isZero()) return p;
+    const Eigen::Quaterniond q = to_eigen(pose.orientation);
+    if (!q.coeffs().allFinite() || q.norm() < 1e-6) {
+      ROS_WARN_THROTTLE(5.0, "%s: orientation missing or not finite; ~antenna_offset_m needs it, pose ignored", source);
+      return std::nullopt;
+    }
+    return p + q.normalized() * config_.antenna_offset_m;
+  }
+
+  void check_frame(const std::string& frame_id, const char* source) const {
+    if (!frame_id.empty() && frame_id != config_.world_frame) {
+      ROS_WARN_THROTTLE(10.0, "%s: pose in frame '%s', expected ~world_frame '%s'; used as world coordinates", source,
+                        frame_id.c_str(), config_.world_frame.c_str());
+    }
+  }
+
+  void on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg) {
+    check_frame(msg->header.frame_id, config_.pose_topic.c_str());
+    if (auto p = antenna_point(msg->pose, config_.pose_topic.c_str())) {
+      set_pose(msg->header.stamp, *p, std::nullopt, config_.pose_topic.c_str());
+    }
+  }
+
+  void on_odometry(const nav_msgs::Odometry::ConstPtr& msg) {
+    check_frame(msg->header.frame_id, config_.odom_topic.c_str());
+    auto p = antenna_point(msg->pose.pose, config_.odom_topic.c_str());
+    if (!p) return;
+    // The twist is in the child (body) frame: turned into the world frame by the attitude.
+    const Eigen::Vector3d v_body(msg->twist.twist.linear.x, msg->twist.twist.linear.y, msg->twist.twist.linear.z);
+    const Eigen::Quaterniond q = to_eigen(msg->pose.pose.orientation);
+    std::optional<Eigen::Vector3d> v_world;
+    if (q.coeffs().allFinite() && q.norm() > 1e-6) v_world = q.normalized() * v_body;
+    set_pose(msg->header.stamp, *p, v_world, config_.odom_topic.c_str());
+  }
+
+  // A transform world_frame <- frame, if tf has it and it is usable.
+  std::optional<geometry_msgs::TransformStamped> lookup(const std::string& frame) {
+    try {
+      auto t = tf_buffer_->lookupTransform(config_.world_frame, frame, ros::Time(0));
+      const auto& tr = t.transform.translation;
+      if (!std::isfinite(tr.x) || !std::isfinite(tr.y) || !std::isfinite(tr.z)) {
+        ROS_WARN_THROTTLE(5.0, "tf %s -> %s has NaN or infinite values; ignored", config_.world_frame.c_str(), frame.c_str());
+        return std::nullopt;
+      }
+      return t;
+    } catch (const tf2::TransformException& e) {
+      ROS_WARN_THROTTLE(5.0, "no transform %s -> %s: %s", config_.world_frame.c_str(), frame.c_str(), e.what());
+      return std::nullopt;
+    }
+  }
+
+  void update_from_tf(const ros::Time& epoch_stamp) {
+    if (config_.pose_source == PoseSource::kTf) {
+      if (auto t = lookup(config_.antenna_frame)) {
+        // A static transform (stamp 0) holds at every time.
+        const ros::Time stamp = t->header.stamp.isZero() ? epoch_stamp : t->header.stamp;
+        if ((epoch_stamp - stamp).toSec() > config_.pose_timeout_s) {
+          ROS_WARN_THROTTLE(5.0, "tf %s -> %s is %.1f s old (stale)", config_.world_frame.c_str(),
+                            config_.antenna_frame.c_str(), (epoch_stamp - stamp).toSec());
+        }
+        const auto& tr = t->transform.translation;
+        set_pose(stamp, Eigen::Vector3d(tr.x, tr.y, tr.z), std::nullopt, "tf");
+      }
+    }
+    for (const auto& model : config_.moving_models) {
+      auto t = lookup(model);
+      if (!t) continue;
+      const auto& tr = t->transform.translation;
+      const auto& q = t->transform.rotation;
+      if (auto problem = receiver_->set_object_pose(model, {tr.x, tr.y, tr.z}, {q.w, q.x, q.y, q.z}); !problem.empty()) {
+        ROS_WARN_THROTTLE(10.0, "moving model '%s': %s", model.c_str(), problem.c_str());
+      }
+    }
+  }
+
+  void epoch(std::int64_t k) {
+    const double time_s = static_cast<double>(k) * period_s_;
+    const ros::Time stamp = origin_ + ros::Duration(time_s);
+    if (tf_buffer_) update_from_tf(stamp);
+    const auto started = std::chrono::steady_clock::now();
+    std::string problem;
+    if (!receiver_->step(time_s, epoch_, problem)) {
+      ROS_ERROR_THROTTLE(10.0, "epoch %.3f s after the start time: %s", time_s, problem.c_str());
+      return;
+    }
+    const live::EpochView& e = epoch_;
+    if (e.restarted) ROS_WARN("receiver restarted at %s GPST (time went back)", e.time_iso.c_str());
+    if (e.pose_stale) {
+      ROS_WARN_THROTTLE(5.0, "antenna pose is stale (none for %.1f s): the receiver is held where it was", config_.pose_timeout_s);
+    }
+    std_msgs::Header fix_header;
+    fix_header.stamp = stamp;
+    fix_header.frame_id = config_.frame_id;
+    std_msgs::Header world_header;
+    world_header.stamp = stamp;
+    world_header.frame_id = config_.world_frame;
+
+    fix_pub_.publish(to_navsat_fix(e.fix, fix_header));
+    if (e.fix.type != 0 && e.fix.velocity_valid) velocity_pub_.publish(to_velocity(e.fix, fix_header));
+    observations_pub_.publish(to_observations(e, fix_header));
+    for (const std::string& sentence : e.nmea) {
+      std_msgs::String msg;
+      msg.data = sentence;
+      nmea_pub_.publish(msg);
+    }
+    sky_pub_.publish(to_sky(e, world_header));
+    rays_pub_.publish(to_rays(e, world_header, config_.ray_length_m));
+    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+
+    if (receiver_->rinex_open()) {
+      if (auto written = receiver_->write_rinex_epoch(); !written.empty()) {
+        ROS_WARN_THROTTLE(10.0, "~rinex_out %s: %s", config_.rinex_out.c_str(), written.c_str());
+      }
+    }
+  }
+
+  void report_latency() {
+    if (latencies_s_.empty()) return;
+    std::vector<double> sorted = latencies_s_;
+    std::sort(sorted.begin(), sorted.end());
+    const auto quantile_ms = [&](double q) {
+      const auto index = static_cast<size_t>(std::ceil(q * static_cast<double>(sorted.size()))) - 1;
+      return 1e3 * sorted[std::min(index, sorted.size() - 1)];
+    };
+    double sum_s = 0.0;
+    for (double s : sorted) sum_s += s;
+    const std::string json = fmt::format(
+        "{{\"scenario\": \"{}\", \"rate_hz\": {}, \"epochs\": {}, \"mean_ms\": {:.4f}, \"p50_ms\": {:.4f}, "
+        "\"p90_ms\": {:.4f}, \"p99_ms\": {:.4f}, \"max_ms\": {:.4f}}}\n",
+        config_.scenario, config_.rate_hz, sorted.size(), 1e3 * sum_s / static_cast<double>(sorted.size()),
+        quantile_ms(0.5), quantile_ms(0.9), quantile_ms(0.99), 1e3 * sorted.back());
+    ROS_INFO("per-epoch latency (step and publish): %zu epochs, p50 %.3f ms, p99 %.3f ms, max %.3f ms", sorted.size(),
+             quantile_ms(0.5), quantile_ms(0.99), 1e3 * sorted.back());
+    if (!config_.latency_report.empty()) {
+      std::ofstream out(config_.latency_report);
+      out << json;
+      if (!out) ROS_ERROR("~latency_report %s: cannot write", config_.latency_report.c_str());
+    }
+  }
+
+  Config config_;
+  std::unique_ptr<live::Receiver> receiver_;
+  ros::NodeHandle nh_;
+  ros::NodeHandle pnh_;
+  double period_s_ = 1.0;
+  ros::Time origin_;  // the ROS time of the start time: zero under sim time, else the node's start
+  live::EpochView epoch_;  // reused from epoch to epoch
+  std::optional<std::int64_t> last_k_;
+  ros::Publisher fix_pub_, velocity_pub_, observations_pub_, nmea_pub_, sky_pub_, rays_pub_;
+  ros::Subscriber pose_sub_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::vector<double> latencies_s_;
+};
+
+int run(int argc, char** argv) {
+  ros::init(argc, argv, "skytrace", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  ros::NodeHandle pnh("~");
+  Config config;
+  if (auto problem = read_config(pnh, config)) {
+    ROS_FATAL("%s", problem->c_str());
+    return kExitUsage;
+  }
+  live::ReceiverOptions options;
+  options.scenario_path = config.scenario;
+  options.start_time = config.start_time;
+  options.start_time_scale = config.start_time_scale;
+  options.pose_timeout_s = config.pose_timeout_s;
+  std::string problem;
+  auto receiver = live::Receiver::create(options, problem);
+  if (!receiver) {
+    ROS_FATAL("%s (from ~scenario, ~start_time, ~start_time_scale)", problem.c_str());
+    return kExitInput;
+  }
+  Node node(config, std::move(receiver));
+  if (!node.open_rinex()) return kExitOutput;
+  ROS_INFO("skytrace: scenario %s, %.3g Hz, antenna pose from %s", config.scenario.c_str(), config.rate_hz,
+           config.pose_source == PoseSource::kScenario ? "the scenario"
+           : config.pose_source == PoseSource::kTf     ? "tf"
+           : config.pose_source == PoseSource::kPose   ? config.pose_topic.c_str()
+                                                       : config.odom_topic.c_str());
+  node.run();
+  node.finish();
+  ros::shutdown();
+  return 0;
+}
+
+}  // namespace
+}  // namespace skytrace::ros_node
+
+int main(int argc, char** argv) {
+  try {
+    return skytrace::ros_node::run(argc, argv);
+  } catch (const std::exception& e) {
+    // A last resort: every expected failure is reported above with its parameter.
+    std::fprintf(stderr, "skytrace_ros_node: %s\n", e.what());
+    return 1;
+  }
+}
