@@ -495,8 +495,15 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
   CodeSolution solution;
   const int min_candidates = 4;
   if (static_cast<int>(candidates.size()) < min_candidates) {
-    fix.message = "too few satellites: " + std::to_string(candidates.size()) +
-                  " with a pseudorange and a valid ephemeris, at least 4 needed";
+    // Say what happened to the others, e.g. "(12 observed: 10 no valid broadcast ephemeris)".
+    std::map<std::string, int> notes;
+    for (const SatelliteUse& use : fix.satellites) {
+      if (!use.note.empty()) ++notes[use.note];
+    }
+    std::string detail;
+    for (const auto& [note, count] : notes) detail += (detail.empty() ? ": " : ", ") + std::to_string(count) + " " + note;
+    fix.message = "too few satellites: " + std::to_string(candidates.size()) + " usable, at least 4 needed (" +
+                  std::to_string(fix.satellites.size()) + " observed" + detail + ")";
     return fix;
   }
   // Residual tests: the fix is accepted, or the worst satellite excluded and the fix solved again.
