@@ -11,6 +11,7 @@
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/satellite_catalog.hpp"
 #include "skytrace/receiver/link_budget.hpp"
+#include "skytrace/receiver/multipath.hpp"
 
 namespace skytrace::receiver {
 namespace {
@@ -101,7 +102,54 @@ std::uint64_t signal_key(const Signal& signal) {
 
 double quantize(double value, double step) { return step > 0.0 ? std::round(value / step) * step : value; }
 
+AzimuthElevation local_direction(const Eigen::Vector3d& enu) {
+  AzimuthElevation d;
+  d.elevation_deg = std::atan2(enu.z(), std::hypot(enu.x(), enu.y())) * 180.0 / std::numbers::pi;
+  const double azimuth_deg = std::atan2(enu.x(), enu.y()) * 180.0 / std::numbers::pi;
+  d.azimuth_deg = azimuth_deg < 0.0 ? azimuth_deg + 360.0 : azimuth_deg;
+  return d;
+}
+
+// Multipath: a satellite's paths as its antenna receives them. Arrival directions go from the
+// world frame to the receiver's east-north-up; excess-delay rates come from the paths' delay
+// gradients with the receiver's velocity and the turning of the direction to the satellite.
+std::vector<ReceivedPath> receive_paths(SatelliteObservation& obs, std::vector<SignalPath> paths,
+                                        const AntennaPattern& antenna, const Eigen::Matrix3d& world_to_enu,
+                                        const Eigen::Vector3d& receiver_velocity_world_mps,
+                                        const Eigen::Vector3d& direction_rate_world_per_s) {
+  std::vector<ReceivedPath> received;
+  received.reserve(paths.size());
+  for (const SignalPath& path : paths) {
+    const AzimuthElevation arrival = local_direction(world_to_enu * path.arrival_direction);
+    ReceivedPath r;
+    r.excess_delay_m = path.excess_delay_m;
+    r.excess_delay_rate_mps = path.delay_gradient_origin.dot(receiver_velocity_world_mps) +
+                              path.delay_gradient_direction.dot(direction_rate_world_per_s);
+    r.amplitude = antenna_amplitude(antenna, path, arrival.elevation_deg, arrival.azimuth_deg,
+                                    obs.direction.elevation_deg, obs.direction.azimuth_deg);
+    obs.path_directions.push_back(arrival);
+    obs.path_delay_rates_mps.push_back(r.excess_delay_rate_mps);
+    received.push_back(r);
+  }
+  const bool direct = !paths.empty() && paths.front().type == PathType::kDirect;
+  obs.path_kind = paths.empty() ? PathKind::kNone
+                  : direct      ? (paths.size() == 1 ? PathKind::kLos : PathKind::kMultipath)
+                                : PathKind::kNlos;
+  obs.paths = std::move(paths);
+  return received;
+}
+
 }  // namespace
+
+std::string_view to_string(PathKind kind) {
+  switch (kind) {
+    case PathKind::kNone: return "";
+    case PathKind::kLos: return "los";
+    case PathKind::kMultipath: return "multipath";
+    case PathKind::kNlos: return "nlos";
+  }
+  return "?";
+}
 
 std::string_view to_string(SatelliteStatus status) {
   switch (status) {
@@ -197,6 +245,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     double range_m = 0.0;
     double range_rate_mps = 0.0;
     Eigen::Vector3d line_of_sight = Eigen::Vector3d::Zero();  // ECEF unit vector, receiver to satellite
+    Eigen::Vector3d satellite_velocity_mps = Eigen::Vector3d::Zero();  // frame at reception
   };
   std::vector<Pending> pending;
   pending.reserve(satellites_.size());
@@ -294,18 +343,25 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     }
 
     pending.push_back(Pending{epoch.satellites.size(), std::move(*record), precise_truth, transmit_time, range_m,
-                              range_rate_mps, line_of_sight});
+                              range_rate_mps, line_of_sight, sat_velocity_mps});
     epoch.satellites.push_back(std::move(obs));
   }
 
   // The world: what happens to each signal on its way to the antenna, all satellites in one batch.
   std::vector<RayOutcome> outcomes;
+  std::vector<PathSet> path_sets;  // multipath: every path of every satellite
+  const Eigen::Matrix3d to_world = world_frame_.ecef_to_local_rotation();
   if (world_ != nullptr && !pending.empty()) {
-    const Eigen::Matrix3d to_world = world_frame_.ecef_to_local_rotation();
     std::vector<Eigen::Vector3d> directions;
     directions.reserve(pending.size());
     for (const Pending& p : pending) directions.push_back(to_world * p.line_of_sight);
-    outcomes = world_->trace(world_frame_.from_ecef(rx_m), directions);
+    if (settings_.multipath) {
+      path_sets = world_->paths(world_frame_.from_ecef(rx_m), directions, settings_.path_search);
+      outcomes.reserve(path_sets.size());
+      for (const PathSet& set : path_sets) outcomes.push_back(set.direct);
+    } else {
+      outcomes = world_->trace(world_frame_.from_ecef(rx_m), directions);
+    }
   }
 
   // Channels go to the highest satellites first.
@@ -328,9 +384,12 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const double range_m = p.range_m;
     const double range_rate_mps = p.range_rate_mps;
     double attenuation_db = 0.0;
+    bool direct_blocked = false;
+    std::vector<ReceivedPath> received;  // multipath: the paths through the antenna
     if (!outcomes.empty()) {
       const RayOutcome& outcome = outcomes[pending_index];
-      if (outcome.blocked) {
+      direct_blocked = outcome.blocked;
+      if (outcome.blocked && (path_sets.empty() || path_sets[pending_index].paths.empty())) {
         obs.status = SatelliteStatus::kBlocked;
         obs.detail = outcome.blocking_object;
         arcs_lost(sat);
@@ -339,7 +398,18 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.vegetation_path_m = outcome.vegetation_path_m;
       obs.vegetation_attenuation_db = outcome.vegetation_attenuation_db;
       attenuation_db = outcome.vegetation_attenuation_db;
+      if (!path_sets.empty()) {
+        // The paths' amplitudes carry their vegetation losses; the direct one may be absent (NLOS).
+        attenuation_db = 0.0;
+        const Eigen::Vector3d relative_mps = p.satellite_velocity_mps - rx_v_mps;
+        const Eigen::Vector3d direction_rate =
+            (relative_mps - p.line_of_sight * p.line_of_sight.dot(relative_mps)) / range_m;
+        received = receive_paths(obs, std::move(path_sets[pending_index].paths), settings_.profile.antenna,
+                                 rx_to_enu * to_world.transpose(), to_world * rx_v_mps, to_world * direction_rate);
+        if (direct_blocked) obs.detail = "nlos, direct blocked by " + outcome.blocking_object;
+      }
     }
+    std::vector<MultipathErrors> multipath_of;  // per candidate signal
     // C/N0 of every signal from the link budget. A receiver acquires a satellite on a signal above
     // the acquisition threshold and hands the others over: while one signal of the satellite is
     // (or becomes) tracked, the others acquire down to the tracking threshold.
@@ -349,9 +419,19 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       // A receiver records only what the satellite transmits (GPS L5 only from Block IIF on, no
       // B2I from BeiDou-3, ...); the answer is kept for the GPST day.
       if (signal.system != sat.system || !transmitted(sat, signal, tag)) continue;
+      // Multipath: the loops lock on the composite of the signal's paths.
+      MultipathErrors multipath;
+      if (!received.empty()) {
+        const SignalInfo* info = signal_info_.at(signal);
+        multipath = multipath_errors(CorrelationFunction::of(info->modulation), kC / info->chip_rate_hz,
+                                     kC / info->carrier_frequency_hz(obs.glonass_channel),
+                                     profile.correlator_spacing_chips, received);
+      }
+      multipath_of.push_back(multipath);
       const double cn0_dbhz = link_budget(profile, tracked_.at(signal), obs.satellite_position_m, rx_m,
                                           obs.direction.elevation_deg, obs.direction.azimuth_deg, attenuation_db)
-                                  .cn0_dbhz();
+                                  .cn0_dbhz() +
+                              multipath.power_db;
       candidates_.emplace_back(&signal, cn0_dbhz);
       const Arc& arc = arcs_[std::make_pair(sat, signal)];
       if (cn0_dbhz >= profile.acquisition_threshold_dbhz || (arc.active && last_tag_ && arc.last_tag == *last_tag_)) {
@@ -361,7 +441,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const double acquisition_threshold_dbhz =
         satellite_acquirable ? profile.tracking_threshold_dbhz : profile.acquisition_threshold_dbhz;
     std::string not_tracked_because;
+    std::size_t candidate_index = 0;
     for (const auto& [signal_pointer, cn0_dbhz] : candidates_) {
+      const MultipathErrors& multipath = multipath_of[candidate_index++];
       const Signal& signal = *signal_pointer;
       const SignalInfo* info = signal_info_.at(signal);
       const auto key = std::make_pair(sat, signal);
@@ -485,20 +567,29 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       arc.last_tag = tag;
       m.ambiguity_cycles = arc.ambiguity_cycles;
       m.lock_time_s = tag - arc.lock_start;
+      m.code_multipath_m = multipath.code_m;
+      m.phase_multipath_m = multipath.phase_m;
+      m.range_rate_multipath_mps = multipath.range_rate_mps;
+      m.multipath_power_db = multipath.power_db;
       m.half_cycle_unresolved = data && m.lock_time_s < profile.half_cycle_resolution_s;
 
       const double satellite_clock_total_m = m.satellite_clock_m + obs.relativistic_m;
       m.pseudorange_m = range_m + rx_clock_m - (satellite_clock_total_m - m.group_delay_m) + m.ionosphere_code_m +
-                        obs.troposphere_m + m.code_noise_m;
-      const double phase_range_m =
-          range_m + rx_clock_m - satellite_clock_total_m - m.ionosphere_code_m + obs.troposphere_m + m.phase_noise_m;
+                        obs.troposphere_m + m.code_noise_m + m.code_multipath_m;
+      const double phase_range_m = range_m + rx_clock_m - satellite_clock_total_m - m.ionosphere_code_m +
+                                   obs.troposphere_m + m.phase_noise_m + m.phase_multipath_m;
       m.carrier_phase_cycles = phase_range_m / wavelength_m + static_cast<double>(m.ambiguity_cycles);
       const double satellite_clock_rate_mps = kC * (clock.clock_drift_s_per_s + clock.relativistic_drift_s_per_s);
-      const double phase_range_rate_mps = range_rate_mps + rx_clock_rate_mps - satellite_clock_rate_mps + m.doppler_noise_mps;
+      const double phase_range_rate_mps = range_rate_mps + rx_clock_rate_mps - satellite_clock_rate_mps +
+                                          m.doppler_noise_mps + m.range_rate_multipath_mps;
       m.doppler_hz = -phase_range_rate_mps / wavelength_m;
       obs.signals.push_back(m);
     }
-    if (obs.signals.empty()) {
+    if (obs.signals.empty() && direct_blocked) {
+      obs.status = SatelliteStatus::kBlocked;  // its reflected and diffracted paths are too weak
+      obs.detail = outcomes[pending_index].blocking_object + " (indirect paths too weak)";
+      arcs_lost(sat);
+    } else if (obs.signals.empty()) {
       const bool attenuated = attenuation_db > 0.0 && not_tracked_because.starts_with("below");
       obs.status = attenuated ? SatelliteStatus::kAttenuated : SatelliteStatus::kNoSignal;
       obs.detail = attenuated ? not_tracked_because + " after vegetation"

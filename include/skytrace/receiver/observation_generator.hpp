@@ -48,6 +48,10 @@ struct GeneratorSettings {
   bool ideal_clock = true;
   std::uint64_t seed = 1;
   int receiver_index = 0;  // keys the random streams of several receivers apart
+  // Multipath (models.multipath): reflected and diffracted paths from the world (PathQuery::paths)
+  // turned into code, phase, Doppler and C/N0 errors (receiver/multipath.hpp).
+  bool multipath = false;
+  PathSearchSettings path_search;
 };
 
 enum class SatelliteStatus {
@@ -79,7 +83,18 @@ struct SignalMeasurement {
   double phase_noise_m = 0.0;
   double doppler_noise_mps = 0.0;
   std::int64_t ambiguity_cycles = 0;
+  // Multipath errors over the direct path (models.multipath): code (DLL), carrier phase (range
+  // units), range rate, and the prompt power relative to the unobstructed direct signal.
+  double code_multipath_m = 0.0;
+  double phase_multipath_m = 0.0;
+  double range_rate_multipath_mps = 0.0;
+  double multipath_power_db = 0.0;
 };
+
+// How a satellite's signals arrive (models.multipath): only the direct path, the direct path and
+// others (reflections, diffraction), or no direct path at all.
+enum class PathKind { kNone, kLos, kMultipath, kNlos };
+[[nodiscard]] std::string_view to_string(PathKind kind);
 
 struct SatelliteObservation {
   SatelliteId satellite;
@@ -97,6 +112,12 @@ struct SatelliteObservation {
   double vegetation_attenuation_db = 0.0;
   Eigen::Vector3d satellite_position_m = Eigen::Vector3d::Zero();  // at transmission, frame at reception
   std::vector<SignalMeasurement> signals;
+  // Multipath: the paths (world frame, amplitudes before the antenna), each path's arrival
+  // direction at the antenna (local east-north-up) and its excess-delay rate.
+  PathKind path_kind = PathKind::kNone;
+  std::vector<SignalPath> paths;
+  std::vector<AzimuthElevation> path_directions;
+  std::vector<double> path_delay_rates_mps;
 };
 
 struct EpochObservations {
