@@ -208,9 +208,10 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
     for (const auto& [key, value] : losses->entries()) {
       auto signal = Signal::parse(key);
       if (!signal) value.fail(signal.error().message);
-      const TrackedSignal* tracked = p.tracked(*signal);
-      if (tracked == nullptr || p.all_signals) value.fail("signal " + key + " is not among the profile's signals");
-      const_cast<TrackedSignal*>(tracked)->extra_loss_db = value.as_double_in(-10.0, 40.0);
+      const auto tracked = std::find_if(p.signals.begin(), p.signals.end(),
+                                        [&](const TrackedSignal& t) { return t.signal == *signal; });
+      if (tracked == p.signals.end()) value.fail("signal " + key + " is not among the profile's signals");
+      tracked->extra_loss_db = value.as_double_in(-10.0, 40.0);
     }
   }
   p.channel_count = root.required("channels").as_int_in(0, 100000);

@@ -390,7 +390,11 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (!truth) return make_error(ErrorCode::kIo, staging->file("truth.csv").string() + ": write failed");
   }
   const orbits::NavigationData used = used_navigation(ephemerides.data(), receivers);
-  if (auto st = write_file_atomically(staging->file("nav.rnx"), orbits::format_rinex3_nav(used)); !st) return st.error();
+  orbits::RinexNavWriteOptions nav_options;
+  nav_options.creation_date = rinex_creation_date(s);
+  if (auto st = write_file_atomically(staging->file("nav.rnx"), orbits::format_rinex3_nav(used, nav_options)); !st) {
+    return st.error();
+  }
 
   {
     io::ReportMeta meta;

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <ctime>
 #include <set>
 
 #include "skytrace/atmosphere/ionex.hpp"
@@ -190,6 +192,7 @@ io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverS
   h.version = s.output.rinex_version == "4.00" ? 4.00 : 3.04;
   h.program = "skytrace 0.1.0";
   h.run_by = "skytrace";
+  h.date = rinex_creation_date(s);
   h.comments.push_back("Simulated by skytrace from scenario " + s.name);
   h.comments.push_back("Profile " + rx.profile + ", seed " + std::to_string(s.seed));
   h.marker_name = rx.name;
@@ -219,6 +222,23 @@ io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverS
     for (const char* code : {"C1C", "C1P", "C2C", "C2P"}) h.glonass_code_phase_biases.push_back({code, 0.0});
   }
   return h;
+}
+
+std::string rinex_creation_date(const Scenario& s) {
+  if (const char* epoch = std::getenv("SOURCE_DATE_EPOCH"); epoch != nullptr && *epoch != '\0') {
+    char* end = nullptr;
+    const long long seconds = std::strtoll(epoch, &end, 10);
+    if (*end == '\0' && seconds >= 0) {
+      const std::time_t t = static_cast<std::time_t>(seconds);
+      std::tm utc{};
+      gmtime_r(&t, &utc);
+      return fmt::format("{:04d}{:02d}{:02d} {:02d}{:02d}{:02d} UTC", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday,
+                         utc.tm_hour, utc.tm_min, utc.tm_sec);
+    }
+  }
+  const CalendarTime c = s.time.start.to_calendar(TimeScale::kUtc);
+  return fmt::format("{:04d}{:02d}{:02d} {:02d}{:02d}{:02d} UTC", c.year, c.month, c.day, c.hour, c.minute,
+                     static_cast<int>(std::floor(c.second)));
 }
 
 int signal_strength_indicator(double cn0_dbhz) {

@@ -59,6 +59,11 @@ struct ScenarioResources {
                                                             const Eigen::Vector3d& marker_m,
                                                             const orbits::BroadcastEphemerides& ephemerides);
 
+// The creation date written into RINEX headers ("YYYYMMDD HHMMSS UTC"): SOURCE_DATE_EPOCH (seconds
+// since 1970, the reproducible-builds convention) when set, else the scenario's start time, so
+// that the same scenario and seed give byte-identical files.
+[[nodiscard]] std::string rinex_creation_date(const Scenario& scenario);
+
 // RINEX signal strength indicator (1-9) of a C/N0 (RINEX 3.04 5.7).
 [[nodiscard]] int signal_strength_indicator(double cn0_dbhz);
 

@@ -1,0 +1,291 @@
+// Tracking state of the observation generator: acquisition time and thresholds with hysteresis,
+// loss of lock and new ambiguities, half-cycle flags, lock time, channel limits, cycle slips at
+// low C/N0, reproducible streams, and the link-budget C/N0.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "skytrace/orbits/nominal.hpp"
+#include "skytrace/receiver/link_budget.hpp"
+#include "skytrace/receiver/observation_generator.hpp"
+
+namespace skytrace::receiver {
+namespace {
+
+class StaticPoint final : public KinematicsSource {
+ public:
+  explicit StaticPoint(Eigen::Vector3d p) : p_(std::move(p)) {}
+  Result<Kinematics> at(const GnssTime&) const override { return Kinematics{p_, Eigen::Vector3d::Zero()}; }
+
+ private:
+  Eigen::Vector3d p_;
+};
+
+// Open sky, everything blocked, or everything behind a given vegetation loss.
+class SwitchWorld final : public PathQuery {
+ public:
+  bool blocked = false;
+  double attenuation_db = 0.0;
+  std::vector<RayOutcome> trace(const Eigen::Vector3d&, const std::vector<Eigen::Vector3d>& directions) const override {
+    std::vector<RayOutcome> out(directions.size());
+    for (auto& o : out) {
+      o.blocked = blocked;
+      if (blocked) o.blocking_object = "box";
+      o.vegetation_attenuation_db = attenuation_db;
+      o.vegetation_path_m = attenuation_db > 0.0 ? 5.0 : 0.0;
+    }
+    return out;
+  }
+};
+
+constexpr const char* kProfile = R"(name: test
+signals: [G1C, E1C]
+channels: CHANNELS
+elevation_mask_deg: 10
+antenna:
+  elevation_deg: [0, 90]
+  rhcp_gain_dbic: [0, 0]
+  lhcp_gain_dbic: [-20, -20]
+front_end:
+  system_noise_temperature_k: 290
+  implementation_loss_db: 1.5
+tracking:
+  dll_bandwidth_hz: 0.25
+  pll_bandwidth_hz: 15
+  fll_bandwidth_hz: 0.1
+  correlator_spacing_chips: 0.1
+  integration_time_s: 0.01
+  acquisition_threshold_dbhz: 40
+  tracking_threshold_dbhz: 20
+  acquisition_time_s: 3
+  half_cycle_resolution_s: 6
+  cn0_resolution_dbhz: 0.25
+oscillator:
+  preset: ocxo
+  initial_bias_s: 0
+  initial_drift_s_per_s: 0
+  steering: steered
+)";
+
+ReceiverProfile profile_with_channels(int channels) {
+  std::string text = kProfile;
+  text.replace(text.find("CHANNELS"), 8, std::to_string(channels));
+  return parse_profile(text, "test.yaml").value();
+}
+
+const GnssTime kStart = GnssTime::parse_iso8601("2020-06-25T00:00:00", TimeScale::kGpst).value();
+const Geodetic kSite{55.49, 8.46, 60.0};
+
+const orbits::BroadcastEphemerides& ephemerides() {
+  static const orbits::BroadcastEphemerides e(orbits::make_nominal_constellation(kStart, 3600.0).value());
+  return e;
+}
+
+ObservationGenerator make_generator(const ReceiverProfile& profile, bool noise, std::vector<Signal> signals = {}) {
+  GeneratorSettings settings;
+  settings.signals = signals.empty() ? std::vector<Signal>{Signal::parse("G1C").value(), Signal::parse("E1C").value()} : signals;
+  settings.elevation_mask_deg = 0.0;  // the profile's 10 degrees apply
+  settings.profile = profile;
+  settings.noise = noise;
+  settings.seed = 42;
+  return ObservationGenerator(settings, ephemerides(), std::make_shared<StaticPoint>(geodetic_to_ecef(kSite)));
+}
+
+const SignalMeasurement* find(const EpochObservations& e, const std::string& sat, const char* signal) {
+  for (const auto& s : e.satellites) {
+    if (s.satellite.to_string() != sat) continue;
+    for (const auto& m : s.signals) {
+      if (m.signal == Signal::parse(signal).value()) return &m;
+    }
+  }
+  return nullptr;
+}
+
+// The highest GPS satellite at the start.
+std::string highest_gps(const EpochObservations& e) {
+  std::string best;
+  double best_el = -90.0;
+  for (const auto& s : e.satellites) {
+    if (s.satellite.system == GnssSystem::kGps && s.status == SatelliteStatus::kTracked &&
+        s.direction.elevation_deg > best_el) {
+      best_el = s.direction.elevation_deg;
+      best = s.satellite.to_string();
+    }
+  }
+  return best;
+}
+
+TEST(TrackingState, AcquisitionLockTimeHalfCyclesAndLossOfLock) {
+  auto generator = make_generator(profile_with_channels(0), false);
+  SwitchWorld world;
+  generator.set_world(&world, LocalFrame{kSite, 0.0});
+  std::vector<EpochObservations> epochs;
+  for (int i = 0; i < 20; ++i) {
+    world.blocked = i == 10;
+    epochs.push_back(generator.observe(kStart + static_cast<double>(i)).value());
+  }
+  const std::string sat = highest_gps(epochs[0]);
+  ASSERT_FALSE(sat.empty());
+  std::string galileo;
+  for (const auto& s : epochs[0].satellites) {
+    if (s.satellite.system == GnssSystem::kGalileo && s.status == SatelliteStatus::kTracked) galileo = s.satellite.to_string();
+  }
+  ASSERT_FALSE(galileo.empty());
+  // Tracked from the first epoch (the receiver ran before the scenario): a new arc.
+  const SignalMeasurement* first = find(epochs[0], sat, "G1C");
+  ASSERT_NE(first, nullptr);
+  EXPECT_TRUE(first->loss_of_lock);
+  for (int i = 1; i < 10; ++i) {
+    const SignalMeasurement* m = find(epochs[i], sat, "G1C");
+    ASSERT_NE(m, nullptr) << i;
+    EXPECT_FALSE(m->loss_of_lock) << i;
+    EXPECT_DOUBLE_EQ(m->lock_time_s, i);
+    EXPECT_EQ(m->ambiguity_cycles, first->ambiguity_cycles);
+    // C/A carries data: its half cycle is resolved 6 s after acquisition. E1C is a pilot.
+    EXPECT_EQ(m->half_cycle_unresolved, i < 6) << i;
+    EXPECT_FALSE(find(epochs[i], galileo, "E1C")->half_cycle_unresolved);
+  }
+  // Blocked at 10; seen again from 11 on, it rose halfway (10.5 s): acquired 3 s later, at 14.
+  EXPECT_EQ(find(epochs[10], sat, "G1C"), nullptr);
+  for (int i = 11; i < 14; ++i) {
+    EXPECT_EQ(find(epochs[i], sat, "G1C"), nullptr) << i;
+    for (const auto& s : epochs[i].satellites) {
+      if (s.satellite.to_string() == sat) EXPECT_EQ(s.detail, "acquiring");
+    }
+  }
+  const SignalMeasurement* again = find(epochs[14], sat, "G1C");
+  ASSERT_NE(again, nullptr);
+  EXPECT_TRUE(again->loss_of_lock);
+  EXPECT_TRUE(again->half_cycle_unresolved);
+  EXPECT_DOUBLE_EQ(again->lock_time_s, 0.0);
+  EXPECT_NE(again->ambiguity_cycles, first->ambiguity_cycles);
+  EXPECT_DOUBLE_EQ(find(epochs[19], sat, "G1C")->lock_time_s, 5.0);
+}
+
+TEST(TrackingState, TracksDownToTheTrackingThresholdButAcquiresOnlyAboveTheAcquisitionThreshold) {
+  auto generator = make_generator(profile_with_channels(0), false);
+  SwitchWorld world;
+  generator.set_world(&world, LocalFrame{kSite, 0.0});
+  const auto open = generator.observe(kStart).value();
+  const std::string sat = highest_gps(open);
+  // 12 dB of foliage: every signal between the thresholds (20 and 40 dB-Hz).
+  world.attenuation_db = 12.0;
+  const auto shaded = generator.observe(kStart + 1.0).value();
+  const SignalMeasurement* m = find(shaded, sat, "G1C");
+  ASSERT_NE(m, nullptr) << "a tracked signal keeps tracking below the acquisition threshold";
+  EXPECT_NEAR(m->cn0_dbhz, find(open, sat, "G1C")->cn0_dbhz - 12.0, 0.26);
+  EXPECT_LT(m->cn0_dbhz, 40.0);
+  EXPECT_GT(m->cn0_dbhz, 20.0);
+  // Lost once: not acquired again while it stays between the thresholds.
+  world.blocked = true;
+  (void)generator.observe(kStart + 2.0).value();
+  world.blocked = false;
+  for (int i = 3; i < 10; ++i) {
+    const auto e = generator.observe(kStart + static_cast<double>(i)).value();
+    EXPECT_EQ(find(e, sat, "G1C"), nullptr) << i;
+    for (const auto& s : e.satellites) {
+      if (s.satellite.to_string() == sat) {
+        EXPECT_EQ(s.status, SatelliteStatus::kAttenuated);
+        EXPECT_EQ(s.detail, "below the acquisition threshold after vegetation");
+      }
+    }
+  }
+  // Foliage gone at 10 (taken as 9.5, halfway from the last epoch): acquired 3 s later, at 13.
+  world.attenuation_db = 0.0;
+  EXPECT_EQ(find(generator.observe(kStart + 10.0).value(), sat, "G1C"), nullptr);
+  EXPECT_EQ(find(generator.observe(kStart + 12.0).value(), sat, "G1C"), nullptr);
+  EXPECT_NE(find(generator.observe(kStart + 13.0).value(), sat, "G1C"), nullptr);
+}
+
+TEST(TrackingState, ChannelsGoToTheHighestSatellites) {
+  auto generator = make_generator(profile_with_channels(3), false);
+  const auto e = generator.observe(kStart).value();
+  int signals = 0;
+  double lowest_tracked_deg = 90.0, highest_untracked_deg = -90.0;
+  for (const auto& s : e.satellites) {
+    signals += static_cast<int>(s.signals.size());
+    if (s.status == SatelliteStatus::kTracked) lowest_tracked_deg = std::min(lowest_tracked_deg, s.direction.elevation_deg);
+    if (s.status == SatelliteStatus::kNoSignal && s.detail == "no free channel") {
+      highest_untracked_deg = std::max(highest_untracked_deg, s.direction.elevation_deg);
+    }
+  }
+  EXPECT_EQ(signals, 3);
+  EXPECT_GT(highest_untracked_deg, 10.0);  // satellites above the mask went without a channel
+  EXPECT_GT(lowest_tracked_deg, highest_untracked_deg);
+}
+
+TEST(TrackingState, CycleSlipsAtLowCn0OnlyAndReproducible) {
+  const ReceiverProfile profile = profile_with_channels(0);
+  auto count_slips = [&](double attenuation_db, std::vector<std::int64_t>* jumps) {
+    auto generator = make_generator(profile, true);
+    SwitchWorld world;
+    world.attenuation_db = 0.0;
+    generator.set_world(&world, LocalFrame{kSite, 0.0});
+    std::map<std::string, std::int64_t> last_ambiguity;
+    int slips = 0;
+    for (int i = 0; i < 300; ++i) {
+      world.attenuation_db = i == 0 ? 0.0 : attenuation_db;  // acquired in the open, then shaded
+      const auto e = generator.observe(kStart + static_cast<double>(i)).value();
+      for (const auto& s : e.satellites) {
+        for (const auto& m : s.signals) {
+          const std::string key = s.satellite.to_string() + m.signal.to_string();
+          const auto previous = last_ambiguity.find(key);
+          if (i > 0 && m.loss_of_lock && previous != last_ambiguity.end() && m.ambiguity_cycles != previous->second) {
+            ++slips;
+            if (jumps != nullptr) jumps->push_back(m.ambiguity_cycles - previous->second);
+          }
+          last_ambiguity[key] = m.ambiguity_cycles;
+        }
+      }
+    }
+    return slips;
+  };
+  EXPECT_EQ(count_slips(0.0, nullptr), 0);  // about 45 dB-Hz: mean time to slip is astronomical
+  std::vector<std::int64_t> jumps, again;
+  const int slips = count_slips(23.0, &jumps);  // about 23-26 dB-Hz
+  EXPECT_GT(slips, 5);
+  for (std::int64_t jump : jumps) {
+    EXPECT_GE(std::llabs(jump), 1);
+    EXPECT_LE(std::llabs(jump), 5);
+  }
+  EXPECT_EQ(count_slips(23.0, &again), slips);
+  EXPECT_EQ(again, jumps);
+}
+
+TEST(TrackingState, SignalsTheProfileCannotTrackAreLeftOut) {
+  auto generator = make_generator(profile_with_channels(0), false,
+                                  {Signal::parse("G1C").value(), Signal::parse("G2W").value(), Signal::parse("E1C").value()});
+  ASSERT_EQ(generator.untrackable_signals().size(), 1u);
+  EXPECT_EQ(generator.untrackable_signals()[0].to_string(), "G2W");
+  const auto e = generator.observe(kStart).value();
+  for (const auto& s : e.satellites) {
+    for (const auto& m : s.signals) EXPECT_NE(m.signal.to_string(), "G2W");
+  }
+}
+
+TEST(TrackingState, Cn0IsTheLinkBudget) {
+  const ReceiverProfile profile = profile_with_channels(0);
+  auto generator = make_generator(profile, false);
+  const auto e = generator.observe(kStart).value();
+  const Eigen::Vector3d receiver_m = geodetic_to_ecef(kSite);
+  int checked = 0;
+  for (const auto& s : e.satellites) {
+    for (const auto& m : s.signals) {
+      const double expected = link_budget(profile, *profile.tracked(m.signal), s.satellite_position_m, receiver_m,
+                                          s.direction.elevation_deg, s.direction.azimuth_deg, 0.0)
+                                  .cn0_dbhz();
+      EXPECT_NEAR(m.cn0_dbhz, expected, 0.125 + 1e-9);
+      EXPECT_DOUBLE_EQ(m.cn0_dbhz / 0.25, std::round(m.cn0_dbhz / 0.25));
+      // With a flat 0 dBic antenna the budget barely depends on elevation: ICD minimum + 3 dB +
+      // 203.98 - 1.5 within the 2 dB of the satellite beam and range.
+      const double minimum = signal_power_spec(m.signal)->minimum_dbw;
+      EXPECT_NEAR(m.cn0_dbhz, minimum + 3.0 + 203.975 - 1.5, 2.5);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10);
+}
+
+}  // namespace
+}  // namespace skytrace::receiver
