@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   register_orbits_command(app, exit_code);
   register_fetch_command(app, exit_code);
   register_compare_command(app, exit_code);
+  register_gz_command(app, exit_code);
   register_serve_command(app, exit_code);
   register_position_command(app, exit_code);
   try {
