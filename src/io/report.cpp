@@ -60,12 +60,14 @@ ClassStyle class_style(TrackClass track_class) {
     case TrackClass::kVegetationLost: return {"#8c510a", "lost in vegetation"};
     case TrackClass::kBlocked: return {"#d7191c", "blocked"};
     case TrackClass::kOther: return {"#9e9e9e", "other (mask, no ephemeris, ...)"};
+    case TrackClass::kMultipath: return {"#2c7bb6", "multipath (direct + reflected)"};
+    case TrackClass::kNlos: return {"#7b3294", "NLOS (reflected / diffracted only)"};
   }
   return {"#000000", "?"};
 }
-constexpr std::array<TrackClass, 5> kAllClasses = {TrackClass::kLineOfSight, TrackClass::kVegetation,
-                                                   TrackClass::kVegetationLost, TrackClass::kBlocked,
-                                                   TrackClass::kOther};
+constexpr std::array<TrackClass, 7> kAllClasses = {TrackClass::kLineOfSight, TrackClass::kMultipath, TrackClass::kNlos,
+                                                   TrackClass::kVegetation,   TrackClass::kVegetationLost,
+                                                   TrackClass::kBlocked,      TrackClass::kOther};
 
 struct Point2 {
   double x = 0.0;
@@ -404,6 +406,8 @@ footer { margin-top: 2em; color: #888; font-size: 0.85em; }
 
 TrackClass classify(const ReportSample& sample) {
   if (sample.status == "tracked") {
+    if (sample.path_kind == "nlos") return TrackClass::kNlos;
+    if (sample.path_kind == "multipath") return TrackClass::kMultipath;
     return sample.vegetation_attenuation_db > 0.0 ? TrackClass::kVegetation : TrackClass::kLineOfSight;
   }
   if (sample.status == "blocked") return TrackClass::kBlocked;

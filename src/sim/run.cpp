@@ -9,6 +9,7 @@
 #include <mutex>
 #include <thread>
 #include <cmath>
+#include <complex>
 #include <fstream>
 #include <random>
 #include <set>
@@ -27,6 +28,7 @@
 #include "skytrace/sim/streams.hpp"
 #include "skytrace/sim/trajectory.hpp"
 #include "skytrace/sim/world_setup.hpp"
+#include "skytrace/world/loaders.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -165,7 +167,47 @@ constexpr const char* kTruthHeader =
     "time_gpst,receiver,sat,signal,status,az_deg,el_deg,range_m,range_rate_mps,sat_clock_m,relativistic_m,"
     "group_delay_m,iono_m,tropo_m,rx_clock_m,code_noise_m,phase_noise_m,doppler_noise_mps,ambiguity_cycles,"
     "pseudorange_m,carrier_phase_cycles,doppler_hz,cn0_dbhz,rx_x_m,rx_y_m,rx_z_m,rx_vx_mps,rx_vy_mps,rx_vz_mps,"
-    "rx_clock_drift_mps,vegetation_attenuation_db,detail\n";
+    "rx_clock_drift_mps,vegetation_attenuation_db,detail,path_type,code_multipath_m,phase_multipath_m,"
+    "multipath_power_db\n";
+
+// paths.csv (models.multipath): every path of every satellite-epoch with any path.
+constexpr const char* kPathsHeader =
+    "time_gpst,receiver,sat,path,type,reflections,excess_delay_m,relative_power_db,rhcp_power_db,lhcp_power_db,"
+    "arrival_az_deg,arrival_el_deg,excess_delay_rate_mps,point_x_m,point_y_m,point_z_m,second_x_m,second_y_m,"
+    "second_z_m,object,material,diffraction_v,diffraction_loss_db,vegetation_db\n";
+
+std::string_view path_type_name(PathType type) {
+  switch (type) {
+    case PathType::kDirect: return "direct";
+    case PathType::kReflected: return "reflected";
+    case PathType::kDiffracted: return "diffracted";
+  }
+  return "?";
+}
+
+double power_db(std::complex<double> amplitude) { return 10.0 * std::log10(std::max(std::norm(amplitude), 1e-30)); }
+
+std::string csv_text(const std::string& text);
+
+void append_paths(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
+  const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
+  for (const auto& sat : epoch.satellites) {
+    for (size_t k = 0; k < sat.paths.size(); ++k) {
+      const SignalPath& p = sat.paths[k];
+      const bool second = p.reflections >= 2;
+      fmt::format_to(std::back_inserter(out),
+                     "{},{},{},{},{},{},{:.4f},{:.2f},{:.2f},{:.2f},{:.4f},{:.4f},{:.5f},{:.3f},{:.3f},{:.3f},{},{},{},{},{},{:.3f},{:.2f},{:.2f}\n",
+                     time, receiver_name, sat.satellite.to_string(), k, path_type_name(p.type), p.reflections,
+                     p.excess_delay_m, p.relative_power_db(), power_db(p.rhcp_amplitude), power_db(p.lhcp_amplitude),
+                     sat.path_directions[k].azimuth_deg, sat.path_directions[k].elevation_deg,
+                     sat.path_delay_rates_mps[k], p.point_m.x(), p.point_m.y(), p.point_m.z(),
+                     second ? fmt::format("{:.3f}", p.second_point_m.x()) : "", second ? fmt::format("{:.3f}", p.second_point_m.y()) : "",
+                     second ? fmt::format("{:.3f}", p.second_point_m.z()) : "", csv_text(p.object),
+                     p.type == PathType::kDirect ? "" : world::material_class_name(p.material), p.diffraction_v, p.diffraction_loss_db,
+                     p.vegetation_attenuation_db);
+    }
+  }
+}
 
 // A CSV cell: quoted when it holds a comma or a quote.
 std::string csv_text(const std::string& text) {
@@ -203,9 +245,9 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
                                              sat.status == receiver::SatelliteStatus::kNoSignal
                                          ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
                                          : std::string(",");
-      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{}\n", time, receiver_name, sat_name,
+      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,\n", time, receiver_name, sat_name,
                      status, geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part,
-                     sat.vegetation_attenuation_db, csv_text(sat.detail));
+                     sat.vegetation_attenuation_db, csv_text(sat.detail), receiver::to_string(sat.path_kind));
       continue;
     }
     for (const auto& m : sat.signals) {
@@ -215,6 +257,9 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
                      m.ionosphere_code_m, sat.troposphere_m, rx_clock, m.code_noise_m, m.phase_noise_m,
                      m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
                      m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);
+      out.pop_back();  // the row's newline: the multipath cells follow
+      fmt::format_to(std::back_inserter(out), ",{},{:.4f},{:.4f},{:.2f}\n", receiver::to_string(sat.path_kind),
+                     m.code_multipath_m, m.phase_multipath_m, m.multipath_power_db);
     }
   }
 }
@@ -278,6 +323,14 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (!truth) return make_error(ErrorCode::kIo, staging->file("truth.csv").string() + ": cannot create");
     truth_buffer = kTruthHeader;
   }
+  std::ofstream paths_file;
+  std::string paths_buffer;
+  const bool write_paths = options.write_truth && s.models.multipath;
+  if (write_paths) {
+    paths_file.open(staging->file("paths.csv"), std::ios::binary);
+    if (!paths_file) return make_error(ErrorCode::kIo, staging->file("paths.csv").string() + ": cannot create");
+    paths_buffer = kPathsHeader;
+  }
 
   RunSummary summary;
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
@@ -298,6 +351,13 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     }
     if (options.write_truth) {
       append_truth(truth_buffer, epoch, rx.settings->name);
+      if (write_paths) {
+        append_paths(paths_buffer, epoch, rx.settings->name);
+        if (paths_buffer.size() > (1u << 20)) {
+          paths_file.write(paths_buffer.data(), static_cast<std::streamsize>(paths_buffer.size()));
+          paths_buffer.clear();
+        }
+      }
       if (truth_buffer.size() > (1u << 20)) {
         truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
         truth_buffer.clear();
@@ -314,6 +374,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         sample.status = std::string(receiver::to_string(sat.status));
         if (!sat.signals.empty()) sample.cn0_dbhz = sat.signals.front().cn0_dbhz;
         sample.vegetation_attenuation_db = sat.vegetation_attenuation_db;
+        sample.path_kind = std::string(receiver::to_string(sat.path_kind));
         report.add(sample);
       }
     }
@@ -388,6 +449,11 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
     truth.close();
     if (!truth) return make_error(ErrorCode::kIo, staging->file("truth.csv").string() + ": write failed");
+  }
+  if (write_paths) {
+    paths_file.write(paths_buffer.data(), static_cast<std::streamsize>(paths_buffer.size()));
+    paths_file.close();
+    if (!paths_file) return make_error(ErrorCode::kIo, staging->file("paths.csv").string() + ": write failed");
   }
   const orbits::NavigationData used = used_navigation(ephemerides.data(), receivers);
   orbits::RinexNavWriteOptions nav_options;

@@ -180,6 +180,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.ideal_clock = s.models.receiver_clock == "ideal";
   g.seed = s.seed;
   g.receiver_index = static_cast<int>(index);
+  g.multipath = s.models.multipath;
   auto generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), *resources.ephemerides,
                                                                     std::move(kinematics), resources.precise.get());
   if (resources.world) generator->set_world(resources.world->scene.get(), resources.world->frame);

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "skytrace/world/loaders.hpp"
+#include "skytrace/world/propagation.hpp"
 #include "skytrace/world/scene.hpp"
 
 namespace skytrace::sim {
@@ -40,6 +41,12 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     return shared_scene->set_object_pose(name, pose);
   };
   loaded.scene = std::move(shared_scene);
+  if (s.models.multipath) {
+    // Reflections and diffraction off the static objects; the Embree scene still casts every ray.
+    auto propagation = world::PropagationScene::build(*model, loaded.scene);
+    if (!propagation) return propagation.error().with_context(s.world.sdf->string());
+    loaded.scene = std::shared_ptr<const PathQuery>(std::move(*propagation));
+  }
   return std::optional<LoadedWorld>(std::move(loaded));
 }
 

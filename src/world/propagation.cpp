@@ -526,7 +526,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           continue;
         }
         const double loss_db = knife_edge_loss_db(v_magnitude);
-        if (-loss_db < settings.min_relative_power_db) continue;
+        if (-loss_db < settings.min_relative_power_db || loss_db > settings.max_diffraction_loss_db) continue;
         Pending p;
         p.satellite = i;
         p.path.type = PathType::kDiffracted;

@@ -79,6 +79,9 @@ struct PathSearchSettings {
   double radius_m = 150.0;
   int max_reflection_order = 1;  // 0: none, 1: single bounce, 2: also double bounce
   bool diffraction = true;       // knife-edge diffraction over building edges
+  // Diffraction is for satellites just below an edge: the knife-edge model holds for small angles
+  // into the shadow (25 dB: about 14 deg behind an edge 30 m away at L1).
+  double max_diffraction_loss_db = 25.0;
   // Carrier frequency for the reflection coefficients and the diffraction parameter.
   double frequency_hz = 1575.42e6;
   // Paths weaker than this (relative to the unobstructed direct signal) are dropped.

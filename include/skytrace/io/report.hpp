@@ -38,6 +38,9 @@ struct ReportSample {
   std::string status;
   double cn0_dbhz = std::numeric_limits<double>::quiet_NaN();  // first signal's C/N0 when tracked
   double vegetation_attenuation_db = 0.0;
+  // models.multipath: "los", "multipath" (direct plus reflected or diffracted paths), "nlos"
+  // (received only off reflections or diffraction); empty without the model.
+  std::string path_kind;
 };
 
 struct ReportMeta {
@@ -60,6 +63,8 @@ enum class TrackClass : std::uint8_t {
   kVegetationLost,  // "attenuated": vegetation dropped every signal (brown)
   kBlocked,         // "blocked" (red)
   kOther,           // below the mask, no ephemeris, ... (grey)
+  kMultipath,       // tracked with reflected or diffracted paths beside the direct one (blue)
+  kNlos,            // tracked without a direct path, off reflections or diffraction (purple)
 };
 [[nodiscard]] TrackClass classify(const ReportSample& sample);
 
