@@ -333,8 +333,12 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       epoch.satellites.push_back(std::move(obs));
       continue;
     }
-    if (settings_.troposphere_saastamoinen) {
+    if (settings_.troposphere == atmosphere::TroposphereModel::kSaastamoinen) {
       obs.troposphere_m = atmosphere::saastamoinen_delay_m(rx_geodetic, obs.direction.elevation_deg).value_or(0.0);
+    } else if (settings_.troposphere == atmosphere::TroposphereModel::kUnb3m) {
+      const double day_of_year = epoch.true_time.day_of_year(TimeScale::kGpst);
+      const auto delay = atmosphere::unb3m_delay(rx_geodetic, obs.direction.elevation_deg, day_of_year);
+      obs.troposphere_m = delay ? delay->slant_m() : 0.0;
     }
     if (settings_.ionosphere) {
       auto delay = settings_.ionosphere->delay_l1_m(epoch.true_time, rx_geodetic, obs.direction);

@@ -366,7 +366,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (s.models.ionosphere == "ionex" && !s.models.ionex_file) {
       models->fail("models.ionosphere is ionex: give the map in models.ionex_file");
     }
-    if (auto c = models->child("troposphere")) s.models.troposphere = c->as_choice({"none", "saastamoinen"});
+    if (auto c = models->child("troposphere")) s.models.troposphere = c->as_choice({"none", "saastamoinen", "unb3m"});
     if (auto c = models->child("receiver_clock")) {
       s.models.receiver_clock = c->as_choice({"ideal", "profile", "tcxo", "ocxo"});
     }

@@ -175,7 +175,9 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.elevation_mask_deg = rx.elevation_mask_deg;
   g.profile = *profile;
   g.ionosphere = resources.ionosphere;
-  g.troposphere_saastamoinen = s.models.troposphere == "saastamoinen";
+  g.troposphere = s.models.troposphere == "saastamoinen" ? atmosphere::TroposphereModel::kSaastamoinen
+                 : s.models.troposphere == "unb3m"      ? atmosphere::TroposphereModel::kUnb3m
+                                                        : atmosphere::TroposphereModel::kNone;
   g.noise = s.models.noise;
   g.ideal_clock = s.models.receiver_clock == "ideal";
   g.seed = s.seed;

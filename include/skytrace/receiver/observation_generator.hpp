@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "skytrace/atmosphere/ionosphere.hpp"
+#include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/core/path_query.hpp"
 #include "skytrace/core/random.hpp"
@@ -43,7 +44,7 @@ struct GeneratorSettings {
   ReceiverProfile profile;
   // The ionosphere the signals cross (nullptr: none); Klobuchar or an IONEX map.
   std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;
-  bool troposphere_saastamoinen = true;
+  atmosphere::TroposphereModel troposphere = atmosphere::TroposphereModel::kSaastamoinen;
   bool noise = false;
   bool ideal_clock = true;
   std::uint64_t seed = 1;

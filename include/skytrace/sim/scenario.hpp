@@ -62,7 +62,7 @@ struct EphemerisSettings {
 struct ModelSettings {
   std::string ionosphere = "klobuchar";      // none | klobuchar | ionex
   std::optional<std::filesystem::path> ionex_file;  // the IONEX map for `ionex`
-  std::string troposphere = "saastamoinen";  // none | saastamoinen
+  std::string troposphere = "saastamoinen";  // none | saastamoinen | unb3m
   std::string receiver_clock = "ideal";      // ideal | profile | tcxo | ocxo
   bool noise = false;
   bool multipath = false;
