@@ -385,11 +385,17 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     return Ok{};
   };
   auto epoch_tag = [&](std::int64_t k) { return s.time.start + static_cast<double>(k) * s.time.interval_s; };
+  // The models of world.moving go where their trajectories say before an epoch's rays are traced.
+  auto move_models = [&](std::int64_t k) -> Status {
+    if (!resources->world || resources->world->moving.empty()) return Ok{};
+    return move_models_to(*resources->world, epoch_tag(k));
+  };
 
   if (!options.write_truth) {
     // Without truth.csv, writing costs a fraction of computing: one thread does both (measured
     // faster than handing epochs between threads, docs/performance.md).
     for (std::int64_t k = 0; k < epoch_count; ++k) {
+      if (auto st = move_models(k); !st) return st.error();
       for (size_t i = 0; i < receivers.size(); ++i) {
         auto epoch = receivers[i].generator->observe(epoch_tag(k));
         if (!epoch) return epoch.error();
@@ -406,6 +412,11 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     std::thread producer([&] {
       EpochBatch batch;
       for (std::int64_t k = 0; k < epoch_count && !queue.cancelled(); ++k) {
+        if (auto st = move_models(k); !st) {
+          producer_error = st.error();
+          queue.close();
+          return;
+        }
         for (size_t i = 0; i < receivers.size(); ++i) {
           auto epoch = receivers[i].generator->observe(epoch_tag(k));
           if (!epoch) {

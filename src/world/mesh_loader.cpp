@@ -265,7 +265,7 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
   WorldModel world;
   world.name = path.stem().string();
   world.geo_origin = origin;
-  const std::string file_name = path.filename().string();
+  const std::string file_name = options.name.empty() ? path.filename().string() : options.name;
   world.model_poses[file_name] = options.pose;
 
   // Group parts into objects: one per node, or one for the whole file.

@@ -770,6 +770,9 @@ class SdfWalker {
     }
   }
 
+  // The first mesh that exists but could not be read (see SdfLoadOptions::unreadable_mesh_is_error).
+  [[nodiscard]] const std::optional<std::string>& unreadable_mesh() const { return unreadable_mesh_; }
+
   [[nodiscard]] std::string search_note() const {
     std::string note = " (searched: ";
     if (resolver_.dirs().empty()) return note + "no model paths)";
@@ -923,7 +926,12 @@ class SdfWalker {
       entry->mesh = read_selected(*resolved, mesh.Submesh(), mesh.CenterSubmesh());
     }
     if (!entry->mesh.ok()) {
-      warn(where(mesh.Element()) + ": " + object_name + " skipped: " + entry->mesh.error().message);
+      const std::string what = where(mesh.Element()) + ": " + object_name;
+      if (options_.unreadable_mesh_is_error) {
+        if (!unreadable_mesh_) unreadable_mesh_ = what + ": " + entry->mesh.error().message;
+      } else {
+        warn(what + " skipped: " + entry->mesh.error().message);
+      }
       return std::nullopt;
     }
     const auto s = mesh.Scale();
@@ -1256,6 +1264,7 @@ class SdfWalker {
   std::map<std::string, std::pair<std::string, int>>
       missing_meshes_;  // uri -> (first place, count)
   std::set<std::size_t> unclassified_;
+  std::optional<std::string> unreadable_mesh_;
 };
 
 }  // namespace
@@ -1512,6 +1521,9 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
                              (dirs.empty() ? std::string("no model paths") : dirs));
   }
   walker.finish();
+  if (walker.unreadable_mesh()) {
+    return make_error(ErrorCode::kParse, replace_string_source(*walker.unreadable_mesh(), path));
+  }
   if (!world.geo_origin && !options.geo_origin) {
     world.warnings.push_back(path.string() +
                              ": no <spherical_coordinates>: the world is not tied to the Earth");

@@ -957,7 +957,14 @@ TEST(WorldMesh, SdfMeshesWithScaleSubmeshAndFailures) {
                        "<mesh><uri>model://garden/meshes/ghost.dae</uri></mesh>") +
           static_model("broken", "0 0 0 0 0 0",
                        "<mesh><uri>model://garden/meshes/broken.dae</uri></mesh>")));
-  const auto world = load_sdf_world(path, isolated_options(dir / "models")).value();
+  // By default a mesh that exists but cannot be read stops the load, naming it and its place.
+  const auto refused = load_sdf_world(path, isolated_options(dir / "models"));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("broken/link/collision"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("broken.dae"), std::string::npos) << refused.error().message;
+  auto lenient = isolated_options(dir / "models");
+  lenient.unreadable_mesh_is_error = false;
+  const auto world = load_sdf_world(path, lenient).value();
   const auto* scaled = find_object(world, "scaled/link/collision");
   ASSERT_NE(scaled, nullptr) << all_warnings(world);
   EXPECT_EQ(scaled->mesh.triangles.size(), 6U);

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -14,6 +15,7 @@
 #include "skytrace/core/error.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/core/path_query.hpp"
+#include "skytrace/sim/moving_models.hpp"
 #include "skytrace/sim/scenario.hpp"
 
 namespace skytrace::sim {
@@ -24,15 +26,31 @@ struct LoadedWorld {
   std::shared_ptr<const PathQuery> scene;
   std::size_t objects = 0, buildings = 0, trees = 0, triangles = 0;
   std::vector<std::string> warnings;    // what the loader skipped
-  // Moves a movable (non-static) model of the scene; not concurrently with tracing.
+  // Moves a movable (non-static) object of the scene; not concurrently with tracing.
   std::function<Status(const std::string& name, const Eigen::Isometry3d& pose_world)> move_object;
+
+  // Movable models (non-static SDF models, models listed in world.moving): their objects with
+  // their poses in the model frame, so that a model moves as one rigid body.
+  struct ModelPart {
+    std::string object;
+    Eigen::Isometry3d pose_in_model = Eigen::Isometry3d::Identity();
+  };
+  std::map<std::string, std::vector<ModelPart>> movable_models;
+  // world.moving: each model with its trajectory (moved by move_models_to).
+  std::vector<std::pair<std::string, ModelTrajectory>> moving;
 };
 
-// Moves a movable model of the world (e.g. another robot) to a pose in the world frame between epochs.
+// Moves a movable model (its frame: the model's <pose>, or a mesh's placement) or a single movable
+// object (by its object name) to a pose in the world frame, between epochs.
 [[nodiscard]] Status set_object_pose(LoadedWorld& world, const std::string& name, const Eigen::Isometry3d& pose_world);
 
-// Loads world.sdf when the scenario has one (nullopt otherwise). Errors name the file; a world
-// without <spherical_coordinates> needs world.latitude_deg and world.longitude_deg.
+// Puts every model of world.moving where its trajectory says at `time` (an epoch's time tag).
+[[nodiscard]] Status move_models_to(LoadedWorld& world, const GnssTime& time);
+
+// Loads the scenario's world (nullopt without one): world.sdf, world.osm and world.meshes in one
+// world frame, with world.materials rules and world.moving trajectories. The frame is the scenario's
+// origin keys, else the SDF's <spherical_coordinates>, else the OSM extract's centre. Errors name the
+// file (and line) or the key.
 [[nodiscard]] Result<std::optional<LoadedWorld>> load_world(const Scenario& scenario);
 
 // Refuses a receiver position inside a closed opaque object (nearly every ray from it leaves

@@ -162,6 +162,8 @@ struct MeshLoadOptions {
   double vegetation_attenuation_db_per_m = kDefaultVegetationAttenuationDbPerM;
   // One object per node (names "file/node"), or the whole file as one object (name "file").
   bool split_by_node = true;
+  // Replaces the file name in object names (and in WorldModel::model_poses) when not empty.
+  std::string name;
 };
 
 // A world made of one mesh file placed at a geographic origin.
@@ -204,6 +206,11 @@ struct SdfLoadOptions {
   // this tall and cover at least this much ground (bounding box).
   double building_min_height_m = 3.0;
   double building_min_footprint_m2 = 20.0;
+  // A mesh file that exists but cannot be read (corrupt, a format assimp does not know) is an error
+  // naming it: the world would otherwise lack an obstacle it was meant to have. false skips its
+  // geometries with a warning. A mesh or model that is not found is always skipped with a warning,
+  // as Gazebo does.
+  bool unreadable_mesh_is_error = true;
 };
 
 // Loads a world (or a single model) from an SDF file. Nested models, links, collision (or visual)
