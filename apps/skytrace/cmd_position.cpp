@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/io/compare.hpp"
+#include "skytrace/io/fix_csv.hpp"
 #include "skytrace/io/rinex_measurements.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
@@ -31,55 +32,6 @@ struct PositionArgs {
   bool no_ionosphere = false;
   bool no_troposphere = false;
 };
-
-constexpr const char* kHeader =
-    "time_gpst,week,tow_s,fix,satellites_used,latitude_deg,longitude_deg,height_m,x_m,y_m,z_m,"
-    "sigma_east_m,sigma_north_m,sigma_up_m,velocity_east_mps,velocity_north_mps,velocity_up_mps,"
-    "clock_bias_m,clock_drift_mps,gdop,pdop,hdop,vdop,tdop,system_clocks_m,rejected,message\n";
-
-// A CSV field that may hold commas or quotes.
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"") == std::string::npos) return text;
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string csv_row(const positioning::PositionFix& fix) {
-  const WeekTow week_tow = fix.receiver_time.to_week_tow(TimeScale::kGpst);
-  std::string row = fmt::format("{},{},{:.3f},{},{},", fix.receiver_time.to_iso8601(TimeScale::kGpst, 3), week_tow.week,
-                                week_tow.tow_s, positioning::to_string(fix.type), fix.satellites_used);
-  std::string rejected;
-  for (const auto& use : fix.satellites) {
-    if (use.rejected) rejected += (rejected.empty() ? "" : " ") + use.satellite.to_string();
-  }
-  if (fix.type == positioning::FixType::kNone) {
-    return row + std::string(20, ',') + csv_field(rejected) + "," + csv_field(fix.message) + "\n";
-  }
-  const auto& p = fix.position;
-  const auto& x = fix.position_ecef_m;
-  const auto& c = fix.covariance_enu_m2;
-  row += fmt::format("{:.9f},{:.9f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},", p.latitude_deg, p.longitude_deg,
-                     p.height_m, x.x(), x.y(), x.z(), std::sqrt(c(0, 0)), std::sqrt(c(1, 1)), std::sqrt(c(2, 2)));
-  if (fix.velocity_valid) {
-    row += fmt::format("{:.5f},{:.5f},{:.5f},", fix.velocity_enu_mps.x(), fix.velocity_enu_mps.y(),
-                       fix.velocity_enu_mps.z());
-  } else {
-    row += ",,,";
-  }
-  const double clock_m = fix.clock_bias_m.empty() ? 0.0 : fix.clock_bias_m.begin()->second;
-  row += fmt::format("{:.4f},", clock_m);
-  row += fix.velocity_valid ? fmt::format("{:.5f},", fix.clock_drift_mps) : std::string(",");
-  row += fmt::format("{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},", fix.gdop, fix.pdop, fix.hdop, fix.vdop, fix.tdop);
-  std::string clocks;
-  for (const auto& [system, bias_m] : fix.clock_bias_m) {
-    clocks += fmt::format("{}{}={:.4f}", clocks.empty() ? "" : " ", system_letter(system), bias_m);
-  }
-  return row + clocks + "," + csv_field(rejected) + "," + csv_field(fix.message) + "\n";
-}
 
 int run_position(const PositionArgs& args) {
   positioning::SolverSettings settings;
@@ -123,7 +75,7 @@ int run_position(const PositionArgs& args) {
   const io::MeasurementExtractor extractor(observations->header);
   positioning::SinglePointSolver solver(ephemerides, settings, klobuchar);
 
-  std::string csv = kHeader;
+  std::string csv = io::fix_csv_header();
   size_t epochs = 0, fixes = 0;
   std::string first_failure;
   for (const io::ObservationEpoch& epoch : observations->epochs) {
@@ -136,7 +88,7 @@ int run_position(const PositionArgs& args) {
     } else if (first_failure.empty()) {
       first_failure = fix->receiver_time.to_iso8601(TimeScale::kGpst) + ": " + fix->message;
     }
-    csv += csv_row(*fix);
+    csv += io::fix_csv_row(*fix);
   }
   if (epochs == 0) return report_error(make_error(ErrorCode::kNotFound, args.obs_path + ": no observation epoch"));
   if (fixes == 0) {

@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "skytrace/core/constants.hpp"
+#include "skytrace/sim/streams.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -86,11 +87,7 @@ struct LiveSession::Impl {
 
   [[nodiscard]] positioning::SolverSettings solver_settings() const {
     if (options.solver) return *options.solver;
-    positioning::SolverSettings settings;
-    settings.elevation_mask_deg = std::max(scenario.receivers[options.receiver_index].elevation_mask_deg, 5.0);
-    settings.ionosphere_klobuchar = resources.ephemerides->data().ionosphere.gps.has_value();
-    settings.troposphere_saastamoinen = true;
-    return settings;
+    return default_solver_settings(scenario.receivers[options.receiver_index], *resources.ephemerides);
   }
   Status restart() {
     auto generator_made = make_generator(scenario, resources, options.receiver_index, pose);

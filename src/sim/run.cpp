@@ -311,8 +311,9 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (auto st = rx.writer.open(staging->file(rx.file_name), rx.header); !st) {
       return st.error();
     }
-    if (s.output.rtcm3 || s.output.nmea) {
-      rx.streams = std::make_unique<RunStreams>(ephemerides, *rx.settings, rx.marker_m, s.output.rtcm3, s.output.nmea);
+    if (s.output.rtcm3 || s.output.nmea || s.output.fix) {
+      rx.streams = std::make_unique<RunStreams>(ephemerides, *rx.settings, rx.marker_m, s.output.rtcm3, s.output.nmea,
+                                                s.output.fix);
     }
   }
 

@@ -1,5 +1,7 @@
 #include "skytrace/sim/streams.hpp"
 
+#include "skytrace/io/fix_csv.hpp"
+
 #include <algorithm>
 #include <set>
 #include <tuple>
@@ -79,10 +81,11 @@ positioning::SolverSettings default_solver_settings(const ReceiverSettings& rece
 }
 
 RunStreams::RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
-                       const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea)
-    : ephemerides_(ephemerides) {
+                       const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv)
+    : ephemerides_(ephemerides), nmea_(nmea), fix_csv_(fix_csv) {
   if (rtcm3) rtcm_.emplace(io::Rtcm3StreamSettings{}, rtcm_station(marker_m, receiver));
-  if (nmea) {
+  if (fix_csv) fix_text_ = io::fix_csv_header();
+  if (nmea || fix_csv) {
     solver_.emplace(ephemerides, default_solver_settings(receiver, ephemerides), ephemerides.data().ionosphere.gps);
   }
 }
@@ -97,7 +100,10 @@ Status RunStreams::add(const receiver::EpochObservations& epoch) {
   if (solver_) {
     auto fix = solver_->solve(to_measurements(epoch));
     if (!fix) return fix.error();
-    for (const auto& sentence : io::nmea_epoch(*fix)) nmea_text_ += sentence;
+    if (nmea_) {
+      for (const auto& sentence : io::nmea_epoch(*fix)) nmea_text_ += sentence;
+    }
+    if (fix_csv_) fix_text_ += io::fix_csv_row(*fix);
   }
   return Ok{};
 }
@@ -107,8 +113,11 @@ Status RunStreams::write(const std::filesystem::path& dir, const std::string& su
     const std::string_view bytes(reinterpret_cast<const char*>(rtcm_bytes_.data()), rtcm_bytes_.size());
     if (auto st = write_file_atomically(dir / ("obs" + suffix + ".rtcm3"), bytes); !st) return st;
   }
-  if (solver_) {
+  if (nmea_) {
     if (auto st = write_file_atomically(dir / ("fix" + suffix + ".nmea"), nmea_text_); !st) return st;
+  }
+  if (fix_csv_) {
+    if (auto st = write_file_atomically(dir / ("fix" + suffix + ".csv"), fix_text_); !st) return st;
   }
   return Ok{};
 }

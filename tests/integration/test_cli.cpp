@@ -59,13 +59,13 @@ TEST_F(Cli, HelpAndVersion) {
 TEST_F(Cli, GoodScenarioWritesAllOutputs) {
   const auto r = run(write_scenario(dir_, "", ""));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* name : {"obs.rnx", "nav.rnx", "truth.csv", "summary.json", "report.html", "skyplot.svg"}) {
+  for (const char* name : {"obs.rnx", "nav.rnx", "truth.csv", "fix.csv", "summary.json", "report.html", "skyplot.svg"}) {
     EXPECT_TRUE(std::filesystem::exists(dir_ / "out" / name)) << name;
   }
   // Nothing else (no staging folder) is left behind.
   size_t entries = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir_ / "out")) ++entries;
-  EXPECT_EQ(entries, 6u);
+  EXPECT_EQ(entries, 7u);
 }
 
 TEST_F(Cli, TimeOutsideTheNavigationData) {

@@ -43,12 +43,12 @@ struct RecordsInUse {
                                                                   const orbits::BroadcastEphemerides& ephemerides);
 
 // The stream outputs of one receiver of `skytrace run`: the RTCM 3 stream a reference receiver
-// would send (obs.rtcm3) and the NMEA sentences of the position engine's fixes (fix.nmea), built
-// epoch by epoch and written at the end.
+// would send (obs.rtcm3), and the position engine's fixes as NMEA sentences (fix.nmea) and as CSV
+// (fix.csv), built epoch by epoch and written at the end.
 class RunStreams {
  public:
   RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
-             const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea);
+             const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv = false);
   [[nodiscard]] Status add(const receiver::EpochObservations& epoch);
   // Writes the files asked for (atomically) into `dir`; `suffix` goes before the extension.
   [[nodiscard]] Status write(const std::filesystem::path& dir, const std::string& suffix = "") const;
@@ -61,6 +61,9 @@ class RunStreams {
   std::optional<positioning::SinglePointSolver> solver_;
   std::vector<std::uint8_t> rtcm_bytes_;
   std::string nmea_text_;
+  bool nmea_ = false;
+  bool fix_csv_ = false;
+  std::string fix_text_;
 };
 
 }  // namespace skytrace::sim
