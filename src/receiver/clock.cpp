@@ -16,9 +16,12 @@ ReceiverClock::ReceiverClock(const OscillatorSettings& oscillator, bool ideal, s
 void ReceiverClock::advance(double dt_s) {
   if (ideal_ || dt_s <= 0.0) return;
   // Discrete two-state model (Brown & Hwang): white frequency noise drives the bias, random-walk
-  // frequency noise the drift; q_bias = h0/2 dt, q_drift = 2 pi^2 h-2 dt (cross terms neglected).
-  const double q_bias = oscillator_.h0 / 2.0 * dt_s + 2.0 * std::numbers::pi * std::numbers::pi *
-                                                          oscillator_.h_minus2 * dt_s * dt_s * dt_s / 3.0;
+  // frequency noise the drift; q_bias = h0/2 dt + 2 h-1 dt^2 + 2/3 pi^2 h-2 dt^3, q_drift =
+  // 2 pi^2 h-2 dt (cross terms neglected). Flicker frequency noise has no finite-state model; the
+  // standard approximation (Van Dierendonck et al. 1984) lumps it into the bias as 2 h-1 dt^2,
+  // which gives it its Allan variance at the step dt.
+  const double q_bias = oscillator_.h0 / 2.0 * dt_s + 2.0 * oscillator_.h_minus1 * dt_s * dt_s +
+                        2.0 * std::numbers::pi * std::numbers::pi * oscillator_.h_minus2 * dt_s * dt_s * dt_s / 3.0;
   const double q_drift = 2.0 * std::numbers::pi * std::numbers::pi * oscillator_.h_minus2 * dt_s;
   state_.bias_s += state_.drift_s_per_s * dt_s + std::sqrt(q_bias) * random_.gaussian();
   state_.drift_s_per_s += std::sqrt(q_drift) * random_.gaussian();

@@ -145,6 +145,16 @@ double received_power_dbw(const SignalPowerSpec& spec, double range_m, double or
          satellite_antenna_gain_db(reference_angle_deg, orbit_radius_m);
 }
 
+bool is_semicodeless(const Signal& signal) {
+  return signal.system == GnssSystem::kGps && (signal.band == '1' || signal.band == '2') &&
+         (signal.attribute == 'W' || signal.attribute == 'D');
+}
+
+double squaring_loss_db(double cn0_dbhz, double predetection_time_s) {
+  const double snr = 2.0 * std::pow(10.0, cn0_dbhz / 10.0) * predetection_time_s;
+  return 10.0 * std::log10(1.0 + 1.0 / snr);
+}
+
 double noise_density_dbw_per_hz(double system_noise_temperature_k) {
   return kBoltzmann_dbw_per_k_hz + 10.0 * std::log10(system_noise_temperature_k);
 }
@@ -166,6 +176,13 @@ LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& sign
   b.implementation_loss_db = profile.implementation_loss_db + signal.extra_loss_db;
   b.noise_density_dbw_per_hz = noise_density_dbw_per_hz(profile.system_noise_temperature_k);
   b.attenuation_db = attenuation_db;
+  if (is_semicodeless(signal.signal)) {
+    // The loss acts on the P(Y) signal as it reaches the correlators; the signal's extra loss is
+    // then what the receiver's reporting adds or removes.
+    const double before_squaring_dbhz = b.received_power_dbw + b.antenna_gain_dbic - profile.implementation_loss_db -
+                                        b.attenuation_db - b.noise_density_dbw_per_hz;
+    b.squaring_loss_db = squaring_loss_db(before_squaring_dbhz, kWBitDuration_s);
+  }
   return b;
 }
 

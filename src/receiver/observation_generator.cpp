@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <numbers>
 
@@ -537,9 +538,21 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         }
         streams = &it->second;
         const TrackingNoise sigma = tracking_noise(profile, *info, m.carrier_hz, cn0_dbhz);
-        m.code_noise_m = sigma.code_m * streams->noise.gaussian();
-        m.phase_noise_m = sigma.phase_m * streams->noise.gaussian();
-        m.doppler_noise_mps = sigma.doppler_mps * streams->noise.gaussian();
+        // Loop outputs, correlated over each loop's time constant (profile.hpp); a new arc starts afresh.
+        LoopNoiseState& loops = streams->loops;
+        const double now_s = tag.gpst_seconds_approx();
+        const double dt_s = loops.started && was_tracked ? now_s - loops.last_s : std::numeric_limits<double>::infinity();
+        loops.code = gauss_markov_step(loops.code, dt_s, loop_time_constant_s(profile.dll_bandwidth_hz),
+                                       streams->noise.gaussian());
+        loops.phase = gauss_markov_step(loops.phase, dt_s, loop_time_constant_s(profile.pll_bandwidth_hz),
+                                        streams->noise.gaussian());
+        loops.doppler = gauss_markov_step(loops.doppler, dt_s, loop_time_constant_s(profile.fll_bandwidth_hz),
+                                          streams->noise.gaussian());
+        loops.started = true;
+        loops.last_s = now_s;
+        m.code_noise_m = sigma.code_m * loops.code;
+        m.phase_noise_m = sigma.phase_m * loops.phase;
+        m.doppler_noise_mps = sigma.doppler_mps * loops.doppler;
       }
 
       // Carrier-phase arcs: a signal tracked at the previous epoch continues its arc unless the

@@ -423,6 +423,16 @@ TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& s
   return noise;
 }
 
+double loop_time_constant_s(double bandwidth_hz) {
+  return bandwidth_hz > 0.0 ? 1.0 / (4.0 * bandwidth_hz) : std::numeric_limits<double>::infinity();
+}
+
+double gauss_markov_step(double previous, double dt_s, double tau_s, double white) {
+  if (!std::isfinite(dt_s) || dt_s <= 0.0 || !(tau_s > 0.0) || !std::isfinite(tau_s)) return white;
+  const double a = std::exp(-dt_s / tau_s);
+  return a * previous + std::sqrt(1.0 - a * a) * white;
+}
+
 double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz) {
   if (profile.pll_bandwidth_hz <= 0.0) return 0.0;
   const double cn0_hz = std::pow(10.0, cn0_dbhz / 10.0);

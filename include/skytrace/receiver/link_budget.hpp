@@ -52,6 +52,16 @@ inline constexpr double kSatelliteLimbBoost_db = 2.0;
 // Noise density (dBW/Hz) of a system noise temperature.
 [[nodiscard]] double noise_density_dbw_per_hz(double system_noise_temperature_k);
 
+// Semi-codeless tracking of the encrypted P(Y) code (GPS L1/L2, RINEX attributes W and D): the
+// unknown W-code bits, 20 P-code chips (about 2 us) each, are estimated over one bit and wiped
+// off, which squares the noise. The post-correlation C/N0 loses the squaring loss
+// 10 log10(1 + 1 / (2 C/N0 T_w)) (Woo 2000, Navigation 47(2); Kaplan & Hegarty 2017, ch. 8): a few
+// dB for strong signals, growing dB for dB below about 50 dB-Hz.
+inline constexpr double kWBitDuration_s = 20.0 / 10.23e6;
+[[nodiscard]] bool is_semicodeless(const Signal& signal);
+// Squaring loss (dB, >= 0) at a pre-squaring C/N0 for a predetection time (s).
+[[nodiscard]] double squaring_loss_db(double cn0_dbhz, double predetection_time_s);
+
 // The terms of one signal's budget (dB).
 struct LinkBudget {
   double received_power_dbw = 0.0;
@@ -59,8 +69,10 @@ struct LinkBudget {
   double implementation_loss_db = 0.0;  // profile's loss plus the signal's extra loss
   double noise_density_dbw_per_hz = 0.0;
   double attenuation_db = 0.0;          // vegetation, ...
+  double squaring_loss_db = 0.0;        // semi-codeless tracking only
   [[nodiscard]] double cn0_dbhz() const {
-    return received_power_dbw + antenna_gain_dbic - implementation_loss_db - attenuation_db - noise_density_dbw_per_hz;
+    return received_power_dbw + antenna_gain_dbic - implementation_loss_db - attenuation_db - squaring_loss_db -
+           noise_density_dbw_per_hz;
   }
 };
 

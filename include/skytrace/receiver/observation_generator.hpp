@@ -170,6 +170,9 @@ class ObservationGenerator {
   struct SignalStreams {
     RandomStream noise;
     RandomStream slips;
+    // Unit-variance loop outputs of the code, phase and Doppler noise (first-order Gauss-Markov,
+    // profile.hpp), and the receiver time they were last drawn at.
+    LoopNoiseState loops;
     SignalStreams(std::uint64_t noise_key, std::uint64_t slip_key) : noise(noise_key), slips(slip_key) {}
   };
 

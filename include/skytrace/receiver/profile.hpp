@@ -110,6 +110,23 @@ struct TrackingNoise {
 [[nodiscard]] TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& signal,
                                            double carrier_hz, double cn0_dbhz);
 
+// Tracking-loop outputs are not white: a loop of noise bandwidth B_L smooths its discriminator
+// noise over its time constant, for a first-order loop 1 / (4 B_L) (B_L = K / 4, K the loop gain;
+// Kaplan & Hegarty 2017, ch. 8). The noise is drawn as a first-order Gauss-Markov process with that
+// correlation time and the thermal-noise 1-sigma: epochs far apart (30 s) stay independent, 10 Hz
+// outputs of a 0.25 Hz DLL are correlated as a real receiver's are.
+[[nodiscard]] double loop_time_constant_s(double bandwidth_hz);  // infinity for 0 Hz (no loop)
+// One unit-variance step: a x + sqrt(1 - a^2) w with a = exp(-dt / tau); w alone when dt is not
+// finite (a new arc) or tau is 0. `white` is a standard normal draw.
+[[nodiscard]] double gauss_markov_step(double previous, double dt_s, double tau_s, double white);
+struct LoopNoiseState {
+  double code = 0.0;
+  double phase = 0.0;
+  double doppler = 0.0;
+  bool started = false;
+  double last_s = 0.0;  // receiver time of the last draw (GPST seconds)
+};
+
 // PLL thermal phase jitter (rad, 1 sigma) of the profile at a C/N0.
 [[nodiscard]] double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz);
 
