@@ -129,6 +129,8 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
     if (!is_reflecting(object)) continue;
     const std::size_t object_index = out->object_names_.size();
     out->object_names_.push_back(object.name);
+    out->object_index_.emplace(object.name, object_index);
+    out->object_edges_.emplace_back();
     std::vector<Eigen::Vector3d> vertices;
     vertices.reserve(object.mesh.vertices_m.size());
     for (const auto& v : object.mesh.vertices_m) vertices.push_back(object.pose * v.cast<double>());
@@ -218,6 +220,8 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
         f.min_m = f.min_m.cwiseMin(corner);
         f.max_m = f.max_m.cwiseMax(corner);
       }
+      f.centre_m = 0.5 * (f.min_m + f.max_m);
+      f.radius_m = 0.5 * (f.max_m - f.min_m).norm();
       out->facets_.push_back(std::move(f));
     }
 
@@ -232,6 +236,8 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       edge.end_m = p1;
       edge.object = object_index;
       edge.material = object.material.material_class;
+      edge.midpoint_m = 0.5 * (p0 + p1);
+      edge.half_length_m = 0.5 * (p1 - p0).norm();
       if (use.count == 1) {
         // Boundary of an open surface: outward in the triangle's plane, away from its third vertex.
         const Eigen::Vector3d n = triangle_normals[use.triangle[0]];
@@ -251,21 +257,60 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       } else {
         continue;  // non-manifold
       }
+      out->object_edges_[object_index].push_back(out->edges_.size());
       out->edges_.push_back(edge);
     }
   }
 
-  // Grid over x, y of everything that can take part.
+  // Each object's edges in Morton order of their midpoints, in clusters of 16.
+  out->object_clusters_.resize(out->object_edges_.size());
+  for (std::size_t o = 0; o < out->object_edges_.size(); ++o) {
+    auto& list = out->object_edges_[o];
+    if (list.empty()) continue;
+    Eigen::Vector3d lo3 = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi3 = -lo3;
+    for (const std::size_t e : list) {
+      lo3 = lo3.cwiseMin(out->edges_[e].midpoint_m);
+      hi3 = hi3.cwiseMax(out->edges_[e].midpoint_m);
+    }
+    const Eigen::Vector3d span3 = (hi3 - lo3).cwiseMax(1e-9);
+    auto morton = [&](std::size_t e) {
+      std::uint64_t code = 0;
+      const Eigen::Vector3d q = ((out->edges_[e].midpoint_m - lo3).cwiseQuotient(span3) * 1023.0).cwiseMax(0.0);
+      const std::array<std::uint64_t, 3> c{static_cast<std::uint64_t>(q.x()), static_cast<std::uint64_t>(q.y()),
+                                           static_cast<std::uint64_t>(q.z())};
+      for (int bit = 9; bit >= 0; --bit) {
+        for (std::size_t axis = 0; axis < 3; ++axis) code = (code << 1) | ((c[axis] >> bit) & 1U);
+      }
+      return code;
+    };
+    std::vector<std::pair<std::uint64_t, std::size_t>> keyed;
+    for (const std::size_t e : list) keyed.emplace_back(morton(e), e);
+    std::sort(keyed.begin(), keyed.end());
+    for (std::size_t k = 0; k < keyed.size(); ++k) list[k] = keyed[k].second;
+    constexpr std::size_t kClusterSize = 16;
+    for (std::size_t begin = 0; begin < list.size(); begin += kClusterSize) {
+      EdgeCluster cluster;
+      cluster.begin = begin;
+      cluster.end = std::min(list.size(), begin + kClusterSize);
+      Eigen::Vector3d clo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), chi = -clo;
+      for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+        const DiffractionEdge& e = out->edges_[list[k]];
+        clo = clo.cwiseMin(e.start_m).cwiseMin(e.end_m);
+        chi = chi.cwiseMax(e.start_m).cwiseMax(e.end_m);
+      }
+      cluster.centre_m = 0.5 * (clo + chi);
+      cluster.radius_m = 0.5 * (chi - clo).norm();
+      out->object_clusters_[o].push_back(cluster);
+    }
+  }
+
+  // Grid over x, y of the facets.
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const Facet& f : out->facets_) {
     lo = lo.cwiseMin(f.min_m.head<2>());
     hi = hi.cwiseMax(f.max_m.head<2>());
   }
-  for (const DiffractionEdge& e : out->edges_) {
-    lo = lo.cwiseMin(e.start_m.head<2>().cwiseMin(e.end_m.head<2>()));
-    hi = hi.cwiseMax(e.start_m.head<2>().cwiseMax(e.end_m.head<2>()));
-  }
-  if (out->facets_.empty() && out->edges_.empty()) return out;
+  if (out->facets_.empty()) return out;
   const Eigen::Vector2d span = hi - lo;
   out->cell_m_ = std::max({20.0, span.x() / 1000.0, span.y() / 1000.0});
   out->grid_min_ = lo;
@@ -273,7 +318,6 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
   out->grid_ny_ = static_cast<int>(std::floor(span.y() / out->cell_m_)) + 1;
   const auto cells = static_cast<std::size_t>(out->grid_nx_) * static_cast<std::size_t>(out->grid_ny_);
   out->facet_cells_.resize(cells);
-  out->edge_cells_.resize(cells);
   auto insert = [&](std::vector<std::vector<std::size_t>>& grid, std::size_t index, const Eigen::Vector2d& a,
                     const Eigen::Vector2d& b) {
     const int x0 = static_cast<int>((a.x() - lo.x()) / out->cell_m_), x1 = static_cast<int>((b.x() - lo.x()) / out->cell_m_);
@@ -286,10 +330,6 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
   };
   for (std::size_t i = 0; i < out->facets_.size(); ++i) {
     insert(out->facet_cells_, i, out->facets_[i].min_m.head<2>(), out->facets_[i].max_m.head<2>());
-  }
-  for (std::size_t i = 0; i < out->edges_.size(); ++i) {
-    const DiffractionEdge& e = out->edges_[i];
-    insert(out->edge_cells_, i, e.start_m.head<2>().cwiseMin(e.end_m.head<2>()), e.start_m.head<2>().cwiseMax(e.end_m.head<2>()));
   }
   return out;
 }
@@ -304,7 +344,7 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   {
     const std::lock_guard lock(cache_mutex_);
     if (cache_ && cache_->origin_m == origin_m && cache_->radius_m == settings.radius_m &&
-        cache_->min_area_m2 == settings.min_facet_area_m2) {
+        cache_->min_area_m2 == settings.min_facet_area_m2 && cache_->frequency_hz == settings.frequency_hz) {
       return cache_;
     }
   }
@@ -312,35 +352,36 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   c->origin_m = origin_m;
   c->radius_m = settings.radius_m;
   c->min_area_m2 = settings.min_facet_area_m2;
+  c->frequency_hz = settings.frequency_hz;
   if (grid_nx_ > 0) {
     const double r = settings.radius_m;
     const int x0 = std::max(0, static_cast<int>(std::floor((origin_m.x() - r - grid_min_.x()) / cell_m_)));
     const int x1 = std::min(grid_nx_ - 1, static_cast<int>(std::floor((origin_m.x() + r - grid_min_.x()) / cell_m_)));
     const int y0 = std::max(0, static_cast<int>(std::floor((origin_m.y() - r - grid_min_.y()) / cell_m_)));
     const int y1 = std::min(grid_ny_ - 1, static_cast<int>(std::floor((origin_m.y() + r - grid_min_.y()) / cell_m_)));
+    std::vector<std::size_t> found;
     for (int x = x0; x <= x1; ++x) {
       for (int y = y0; y <= y1; ++y) {
         const auto cell = static_cast<std::size_t>(y) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(x);
-        c->facets.insert(c->facets.end(), facet_cells_[cell].begin(), facet_cells_[cell].end());
-        c->edges.insert(c->edges.end(), edge_cells_[cell].begin(), edge_cells_[cell].end());
+        found.insert(found.end(), facet_cells_[cell].begin(), facet_cells_[cell].end());
       }
     }
-    for (auto* list : {&c->facets, &c->edges}) {
-      std::sort(list->begin(), list->end());
-      list->erase(std::unique(list->begin(), list->end()), list->end());
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    std::vector<std::complex<double>> eta_of(static_cast<std::size_t>(MaterialClass::kUnknown) + 1);
+    for (std::size_t m = 0; m < eta_of.size(); ++m) {
+      eta_of[m] = complex_permittivity(static_cast<MaterialClass>(m), settings.frequency_hz);
     }
-    // Exact tests: the facet's box within the radius; an edge's nearest point within it.
-    std::erase_if(c->facets, [&](std::size_t i) {
+    for (const std::size_t i : found) {
+      // The facet's box within the radius, large enough to reflect coherently.
       const Facet& f = facets_[i];
       const Eigen::Vector3d nearest = origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m);
-      return f.area_m2 < settings.min_facet_area_m2 || (nearest - origin_m).norm() > r;
-    });
-    std::erase_if(c->edges, [&](std::size_t i) {
-      const DiffractionEdge& e = edges_[i];
-      const Eigen::Vector3d d = e.end_m - e.start_m;
-      const double u = std::clamp((origin_m - e.start_m).dot(d) / d.squaredNorm(), 0.0, 1.0);
-      return (e.start_m + u * d - origin_m).norm() > r;
-    });
+      if (f.area_m2 < settings.min_facet_area_m2 || (nearest - origin_m).norm() > r) continue;
+      const double h = f.normal.dot(origin_m) - f.offset_m;
+      if (std::abs(h) < 1e-6) continue;  // in the plane: no reflection
+      c->facets.push_back(NearFacet{i, h >= 0.0 ? f.normal : Eigen::Vector3d(-f.normal), std::abs(h),
+                                    eta_of[static_cast<std::size_t>(f.material)]});
+    }
   }
   const std::lock_guard lock(cache_mutex_);
   cache_ = c;
@@ -350,10 +391,31 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
 std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                              const PathSearchSettings& settings) const {
   const Eigen::Vector3d& r = origin_m;
-  std::vector<PathSet> out(directions.size());
-  std::vector<RayOutcome> direct = scene_->trace(r, directions);
-  for (std::size_t i = 0; i < directions.size(); ++i) {
-    out[i].direct = std::move(direct[i]);
+  const std::size_t n_sat = directions.size();
+  const double kInf = std::numeric_limits<double>::infinity();
+  std::vector<PathSet> out(n_sat);
+
+  // One batch from the receiver: the direct rays, then (for diffraction) the probe rays around
+  // each direction that find the objects whose edges pass close to it.
+  constexpr std::array<double, 1> kProbeAngles_rad = {3.5 * std::numbers::pi / 180.0};
+  constexpr std::size_t kProbes = 4 * kProbeAngles_rad.size();
+  std::vector<Eigen::Vector3d> batch(directions);
+  if (settings.diffraction && !edges_.empty()) {
+    batch.reserve(n_sat * (1 + kProbes));
+    for (const Eigen::Vector3d& s : directions) {
+      const Eigen::Vector3d side = std::abs(s.z()) < 0.999 ? Eigen::Vector3d(s.cross(Eigen::Vector3d::UnitZ()).normalized())
+                                                           : Eigen::Vector3d::UnitX();
+      const Eigen::Vector3d up = side.cross(s);
+      for (const double angle : kProbeAngles_rad) {
+        for (const Eigen::Vector3d& u : {side, Eigen::Vector3d(-side), up, Eigen::Vector3d(-up)}) {
+          batch.push_back(std::cos(angle) * s + std::sin(angle) * u);
+        }
+      }
+    }
+  }
+  std::vector<RayOutcome> first_batch = scene_->trace(r, batch);
+  for (std::size_t i = 0; i < n_sat; ++i) {
+    out[i].direct = std::move(first_batch[i]);
     if (!out[i].direct.blocked) {
       SignalPath p;
       p.rhcp_amplitude = std::pow(10.0, -out[i].direct.vegetation_attenuation_db / 20.0);
@@ -379,56 +441,51 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   };
   std::vector<Pending> pending;
   std::vector<Eigen::Vector3d> first_legs;
-  const double kInf = std::numeric_limits<double>::infinity();
 
-  // Circular reflection coefficients per facet are recomputed per angle; the permittivity per facet.
-  std::vector<std::complex<double>> eta(near->facets.size());
-  for (std::size_t k = 0; k < near->facets.size(); ++k) {
-    eta[k] = complex_permittivity(facets_[near->facets[k]].material, settings.frequency_hz);
-  }
-  // Side of each candidate facet the receiver is on (reflections happen on that side).
-  std::vector<Eigen::Vector3d> facing(near->facets.size());
-  std::vector<double> height(near->facets.size());
-  for (std::size_t k = 0; k < near->facets.size(); ++k) {
-    const Facet& f = facets_[near->facets[k]];
-    const double h = f.normal.dot(r) - f.offset_m;
-    facing[k] = h >= 0.0 ? f.normal : Eigen::Vector3d(-f.normal);
-    height[k] = std::abs(h);
-  }
+  // Knife-edge candidates of one satellite before they become paths.
+  struct EdgeHit {
+    std::size_t edge = 0;
+    Eigen::Vector3d point_m;
+    double excess_m = 0.0, v = 0.0, loss_db = 0.0;
+  };
+  std::vector<EdgeHit> hits;
+  std::vector<std::size_t> objects;
+  // Largest excess over an edge still worth a path (blocked) or a loss (in view), from J(v).
+  double v_max = 0.0;
+  while (v_max < 100.0 && knife_edge_loss_db(v_max) < std::min(settings.max_diffraction_loss_db, -settings.min_relative_power_db)) v_max += 0.05;
+  const double blocked_excess_max_m = v_max * v_max * wavelength_m / 4.0;
+  const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
 
-  for (std::size_t i = 0; i < directions.size(); ++i) {
+  for (std::size_t i = 0; i < n_sat; ++i) {
     const Eigen::Vector3d& s = directions[i];
     // First order: the image of the receiver in the facet's plane, the line from it towards the
     // satellite meets the plane at the reflection point.
     if (settings.max_reflection_order >= 1) {
-      for (std::size_t k = 0; k < near->facets.size(); ++k) {
-        const Facet& f = facets_[near->facets[k]];
-        const Eigen::Vector3d& n = facing[k];
-        const double h = height[k];
-        const double ns = n.dot(s);
-        if (h < 1e-6 || ns <= 1e-6) continue;
-        const double t = h / ns;  // receiver to reflection point
+      for (const NearFacet& nf : near->facets) {
+        const double ns = nf.normal.dot(s);
+        if (ns <= 1e-6) continue;
+        const double t = nf.height_m / ns;  // receiver to reflection point
         if (t > settings.radius_m) continue;
-        const Eigen::Vector3d point = r - 2.0 * h * n + t * s;
-        if (!f.contains(point)) continue;
-        const FresnelCoefficients fc = fresnel_coefficients(eta[k], ns);
+        const Facet& f = facets_[nf.index];
+        const Eigen::Vector3d point = r - 2.0 * nf.height_m * nf.normal + t * s;
+        if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
         Pending p;
         p.satellite = i;
         p.path.type = PathType::kReflected;
         p.path.reflections = 1;
-        p.path.excess_delay_m = 2.0 * h * ns;
+        p.path.excess_delay_m = 2.0 * nf.height_m * ns;
         p.path.rhcp_amplitude = 1.0;
         p.path.lhcp_amplitude = 0.0;
-        reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fc);
+        reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(nf.eta, ns));
         if (p.path.power_linear() < min_power) continue;
         p.path.arrival_direction = (point - r) / t;
         p.path.point_m = point;
         p.path.material = f.material;
         p.path.object = object_names_[f.object];
-        p.path.delay_gradient_origin = 2.0 * ns * n;
-        p.path.delay_gradient_direction = 2.0 * h * n;
+        p.path.delay_gradient_origin = 2.0 * ns * nf.normal;
+        p.path.delay_gradient_direction = 2.0 * nf.height_m * nf.normal;
         p.first_leg_m = t;
-        p.legs.push_back(Leg{point + kSurfaceOffset_m * n, s, kInf});
+        p.legs.push_back(Leg{point + kSurfaceOffset_m * nf.normal, s, kInf});
         first_legs.push_back(p.path.arrival_direction);
         pending.push_back(std::move(p));
       }
@@ -436,14 +493,14 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A
     // taken in B gives the point on B, the line from there to the first image the point on A.
     if (settings.max_reflection_order >= 2) {
-      for (std::size_t ka = 0; ka < near->facets.size(); ++ka) {
-        const Facet& fa = facets_[near->facets[ka]];
-        const Eigen::Vector3d& na = facing[ka];
-        if (height[ka] < 1e-6) continue;
-        const Eigen::Vector3d image_a = r - 2.0 * height[ka] * na;
-        for (std::size_t kb = 0; kb < near->facets.size(); ++kb) {
-          if (kb == ka) continue;
-          const Facet& fb = facets_[near->facets[kb]];
+      for (const NearFacet& a : near->facets) {
+        const Facet& fa = facets_[a.index];
+        const Eigen::Vector3d& na = a.normal;
+        const double ca = na.dot(r) - a.height_m;  // plane of A: na . x = ca
+        const Eigen::Vector3d image_a = r - 2.0 * a.height_m * na;
+        for (const NearFacet& b : near->facets) {
+          if (b.index == a.index) continue;
+          const Facet& fb = facets_[b.index];
           const double hb = fb.normal.dot(image_a) - fb.offset_m;
           if (std::abs(hb) < 1e-6) continue;
           const Eigen::Vector3d nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);  // side of image_a
@@ -451,14 +508,15 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (nbs <= 1e-6) continue;
           const Eigen::Vector3d image_ab = image_a - 2.0 * std::abs(hb) * nb;
           const Eigen::Vector3d p2 = image_ab + (std::abs(hb) / nbs) * s;
+          if ((p2 - fb.centre_m).squaredNorm() > fb.radius_m * fb.radius_m) continue;
           const Eigen::Vector3d to_image = image_a - p2;
           const double denom = na.dot(to_image);
           if (std::abs(denom) < 1e-12) continue;
-          const double lambda = (fa.offset_m * (na.dot(fa.normal) > 0 ? 1.0 : -1.0) - na.dot(p2)) / denom;
+          const double lambda = (ca - na.dot(p2)) / denom;
           if (lambda <= 0.0 || lambda >= 1.0) continue;
           const Eigen::Vector3d p1 = p2 + lambda * to_image;
           // Both bounces on the facing sides: p2 on the receiver's side of A, p1 on B's lit side.
-          if (na.dot(p2) - na.dot(p1) <= 0.0 || nb.dot(p1 - p2) <= 0.0) continue;
+          if (na.dot(p2) - ca <= 0.0 || nb.dot(p1 - p2) <= 0.0) continue;
           const double d1 = (p1 - r).norm(), d12 = (p2 - p1).norm();
           if (d1 > settings.radius_m || d12 < 1e-3 || (p2 - r).norm() > settings.radius_m) continue;
           if (!fa.contains(p1) || !fb.contains(p2)) continue;
@@ -470,8 +528,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           p.path.excess_delay_m = d1 + d12 - s.dot(p2 - r);
           p.path.rhcp_amplitude = 1.0;
           p.path.lhcp_amplitude = 0.0;
-          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(eta[kb], nbs));
-          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(eta[ka], std::abs(na.dot(u12))));
+          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(b.eta, nbs));
+          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(a.eta, std::abs(na.dot(u12))));
           if (p.path.power_linear() < min_power) continue;
           p.path.arrival_direction = (p1 - r) / d1;
           p.path.point_m = p1;
@@ -493,71 +551,97 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     }
     // Knife-edge diffraction: the point of the edge where the incident and diffracted rays make
     // equal angles with it (Keller's cone) is the stationary path over the edge.
-    if (settings.diffraction && !near->edges.empty()) {
+    if (settings.diffraction && !edges_.empty()) {
       const bool blocked = out[i].direct.blocked;
-      std::vector<Pending> diffracted;
-      double strongest_los_loss_db = 0.0, strongest_los_v = -kInf;
-      for (const std::size_t e : near->edges) {
-        const DiffractionEdge& edge = edges_[e];
-        Eigen::Vector3d axis = edge.end_m - edge.start_m;
-        const double length = axis.norm();
-        axis /= length;
-        const double c = s.dot(axis);
-        if (1.0 - c * c < 1e-9) continue;
-        const Eigen::Vector3d w = edge.start_m - r;
-        const double along = w.dot(axis);
-        const double rho = (w - along * axis).norm();
-        const double u = c * rho / std::sqrt(1.0 - c * c) - along;
-        if (u <= 1e-3 || u >= length - 1e-3) continue;
-        const Eigen::Vector3d q = edge.start_m + u * axis;
-        const double d2 = (q - r).norm();
-        if (d2 < 1e-3) continue;
-        const Eigen::Vector3d toward = (q - r) / d2;
-        if (toward.dot(s) <= 0.0) continue;
-        const double excess = d2 - s.dot(q - r);
-        const double v_magnitude = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
-        if (!blocked) {
-          // Line of sight grazing an edge: the knife-edge loss applies to the direct signal.
-          const double v = -v_magnitude;
-          if (v > -0.78 && v > strongest_los_v) {
-            strongest_los_v = v;
-            strongest_los_loss_db = knife_edge_loss_db(v);
-          }
-          continue;
+      objects.clear();
+      auto add_object = [&](const RayOutcome& o) {
+        if (!o.blocked || o.blocking_distance_m > settings.radius_m) return;
+        const auto it = object_index_.find(o.blocking_object);
+        if (it != object_index_.end() && std::find(objects.begin(), objects.end(), it->second) == objects.end()) {
+          objects.push_back(it->second);
         }
-        const double loss_db = knife_edge_loss_db(v_magnitude);
-        if (-loss_db < settings.min_relative_power_db || loss_db > settings.max_diffraction_loss_db) continue;
+      };
+      if (blocked) {
+        add_object(out[i].direct);
+      } else {
+        for (std::size_t k = 0; k < kProbes; ++k) add_object(first_batch[n_sat + i * kProbes + k]);
+      }
+      const double excess_max_m = blocked ? blocked_excess_max_m : grazing_excess_max_m;
+      hits.clear();
+      // The excess over any point within distance R of a point c is at least h^2 / (2 D): h the
+      // least distance of the ball from the ray, D its largest distance from the receiver.
+      auto may_reach = [&](const Eigen::Vector3d& centre_m, double radius_m) {
+        const Eigen::Vector3d m = centre_m - r;
+        const double along = m.dot(s);
+        if (along < -radius_m) return false;
+        const double h_min = std::max(std::sqrt(std::max(m.squaredNorm() - along * along, 0.0)) - radius_m, 0.0);
+        return h_min * h_min <= 2.0 * excess_max_m * (m.norm() + radius_m);
+      };
+      for (const std::size_t object : objects) {
+        for (const EdgeCluster& cluster : object_clusters_[object]) {
+        if (!may_reach(cluster.centre_m, cluster.radius_m)) continue;
+        for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+          const std::size_t e = object_edges_[object][k];
+          const DiffractionEdge& edge = edges_[e];
+          if (!may_reach(edge.midpoint_m, edge.half_length_m)) continue;
+          Eigen::Vector3d axis = edge.end_m - edge.start_m;
+          const double length = axis.norm();
+          axis /= length;
+          const double c = s.dot(axis);
+          if (1.0 - c * c < 1e-9) continue;
+          const Eigen::Vector3d w = edge.start_m - r;
+          const double along = w.dot(axis);
+          const double rho = (w - along * axis).norm();
+          const double u = c * rho / std::sqrt(1.0 - c * c) - along;
+          if (u <= 1e-3 || u >= length - 1e-3) continue;
+          const Eigen::Vector3d q = edge.start_m + u * axis;
+          const double d2 = (q - r).norm();
+          if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(s) <= 0.0) continue;
+          const double excess = d2 - s.dot(q - r);
+          if (excess > excess_max_m) continue;
+          const double v_magnitude = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+          const double v = blocked ? v_magnitude : -v_magnitude;
+          hits.push_back(EdgeHit{e, q, excess, v, knife_edge_loss_db(v)});
+        }
+        }
+      }
+      if (!blocked) {
+        // Line of sight grazing an edge: the knife-edge loss applies to the direct signal.
+        const auto worst = std::max_element(hits.begin(), hits.end(),
+                                            [](const EdgeHit& a, const EdgeHit& b) { return a.v < b.v; });
+        if (worst != hits.end() && worst->loss_db > 0.0 && !out[i].paths.empty()) {
+          SignalPath& d = out[i].paths.front();
+          d.diffraction_v = worst->v;
+          d.diffraction_loss_db = worst->loss_db;
+          d.rhcp_amplitude *= std::pow(10.0, -worst->loss_db / 20.0);
+        }
+        continue;
+      }
+      // A few more than kept, as some fail their leg checks.
+      std::sort(hits.begin(), hits.end(), [](const EdgeHit& a, const EdgeHit& b) { return a.loss_db < b.loss_db; });
+      if (hits.size() > 4 * kMaxDiffractedPaths) hits.resize(4 * kMaxDiffractedPaths);
+      for (const EdgeHit& hit : hits) {
+        const DiffractionEdge& edge = edges_[hit.edge];
+        const double d2 = (hit.point_m - r).norm();
+        const Eigen::Vector3d toward = (hit.point_m - r) / d2;
         Pending p;
         p.satellite = i;
         p.path.type = PathType::kDiffracted;
-        p.path.excess_delay_m = excess;
-        p.path.diffraction_v = v_magnitude;
-        p.path.diffraction_loss_db = loss_db;
+        p.path.excess_delay_m = hit.excess_m;
+        p.path.diffraction_v = hit.v;
+        p.path.diffraction_loss_db = hit.loss_db;
         // Keller's diffraction coefficient carries exp(-j pi/4) in the shadow.
-        p.path.rhcp_amplitude = std::polar(std::pow(10.0, -loss_db / 20.0), -std::numbers::pi / 4.0);
+        p.path.rhcp_amplitude = std::polar(std::pow(10.0, -hit.loss_db / 20.0), -std::numbers::pi / 4.0);
         p.path.lhcp_amplitude = 0.0;
         p.path.arrival_direction = toward;
-        p.path.point_m = q;
+        p.path.point_m = hit.point_m;
         p.path.material = edge.material;
         p.path.object = object_names_[edge.object];
         p.path.delay_gradient_origin = s - toward;
-        p.path.delay_gradient_direction = -(q - r);
+        p.path.delay_gradient_direction = -(hit.point_m - r);
         p.first_leg_m = d2;
-        p.legs.push_back(Leg{q + kEdgeOffset_m * edge.outward, s, kInf});
-        diffracted.push_back(std::move(p));
-      }
-      if (!blocked && strongest_los_v > -0.78 && !out[i].paths.empty()) {
-        SignalPath& d = out[i].paths.front();
-        d.diffraction_v = strongest_los_v;
-        d.diffraction_loss_db = strongest_los_loss_db;
-        d.rhcp_amplitude *= std::pow(10.0, -strongest_los_loss_db / 20.0);
-      }
-      std::sort(diffracted.begin(), diffracted.end(),
-                [](const Pending& a, const Pending& b) { return a.path.diffraction_loss_db < b.path.diffraction_loss_db; });
-      // A few more than kept, as some fail their leg checks.
-      if (diffracted.size() > 4 * kMaxDiffractedPaths) diffracted.resize(4 * kMaxDiffractedPaths);
-      for (Pending& p : diffracted) {
-        first_legs.push_back(p.path.arrival_direction);
+        p.legs.push_back(Leg{hit.point_m + kEdgeOffset_m * edge.outward, s, kInf});
+        first_legs.push_back(toward);
         pending.push_back(std::move(p));
       }
     }
@@ -566,7 +650,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
 
   // All first legs start at the receiver: one batch. The others one ray each.
   const std::vector<RayOutcome> first = scene_->trace(r, first_legs);
-  std::vector<std::size_t> diffracted_kept(directions.size(), 0);
+  std::vector<std::size_t> diffracted_kept(n_sat, 0);
   std::vector<Eigen::Vector3d> one(1);
   for (std::size_t k = 0; k < pending.size(); ++k) {
     Pending& p = pending[k];

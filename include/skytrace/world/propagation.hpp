@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "skytrace/core/error.hpp"
@@ -59,6 +60,8 @@ struct Facet {
   std::vector<Eigen::Vector2d> triangles_uv;  // 3 per triangle, in the plane's coordinates
   Eigen::Vector2d min_uv = Eigen::Vector2d::Zero(), max_uv = Eigen::Vector2d::Zero();
   Eigen::Vector3d min_m = Eigen::Vector3d::Zero(), max_m = Eigen::Vector3d::Zero();  // 3D bounds
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  // bounding sphere of the corners
+  double radius_m = 0.0;
   double area_m2 = 0.0;
   MaterialClass material = MaterialClass::kConcrete;
   std::size_t object = 0;  // index into PropagationScene::object_names()
@@ -74,6 +77,8 @@ struct DiffractionEdge {
   // Unit outward direction away from the object (bisector of the faces' normals): the offset
   // for rays leaving the edge.
   Eigen::Vector3d outward = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d midpoint_m = Eigen::Vector3d::Zero();
+  double half_length_m = 0.0;
   std::size_t object = 0;
   MaterialClass material = MaterialClass::kConcrete;
 };
@@ -81,6 +86,9 @@ struct DiffractionEdge {
 // A PathQuery that answers trace() with the given scene and paths() with reflections and
 // diffraction from the static objects of the world model (movable objects block but do not
 // reflect). paths() is const and thread-safe.
+// Diffraction edges are searched on the objects that matter: the blocking object of a hidden
+// satellite, and for a satellite in view the objects hit by 4 probe rays 3.5 deg around its
+// direction (an edge must pass within ~1.4 m of the ray 30 m away to cost the direct signal anything).
 class PropagationScene final : public PathQuery {
  public:
   // `scene` must answer for the same world (it does the ray casting); blocking details are
@@ -99,12 +107,20 @@ class PropagationScene final : public PathQuery {
 
  private:
   PropagationScene() = default;
+  // A facet near the receiver, seen from it: the normal turned towards it, its height above the
+  // plane, the material's permittivity.
+  struct NearFacet {
+    std::size_t index = 0;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    double height_m = 0.0;
+    std::complex<double> eta;
+  };
   struct Candidates {
     Eigen::Vector3d origin_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    double radius_m = 0.0, min_area_m2 = 0.0;
-    std::vector<std::size_t> facets, edges;
+    double radius_m = 0.0, min_area_m2 = 0.0, frequency_hz = 0.0;
+    std::vector<NearFacet> facets;
   };
-  // Facets and edges near a point (a uniform grid in x, y; the last answer is cached).
+  // Facets near a point (a uniform grid in x, y; the last answer is cached).
   std::shared_ptr<const Candidates> candidates(const Eigen::Vector3d& origin_m, const PathSearchSettings& settings) const;
 
   std::shared_ptr<const PathQuery> scene_;
@@ -115,7 +131,17 @@ class PropagationScene final : public PathQuery {
   double cell_m_ = 20.0;
   Eigen::Vector2d grid_min_ = Eigen::Vector2d::Zero();
   int grid_nx_ = 0, grid_ny_ = 0;
-  std::vector<std::vector<std::size_t>> facet_cells_, edge_cells_;
+  std::vector<std::vector<std::size_t>> facet_cells_;
+  // Edge indices per object, in spatial order, and clusters of them with a bounding sphere, so
+  // that a ray's search skips the clusters far from it.
+  struct EdgeCluster {
+    Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+    double radius_m = 0.0;
+    std::size_t begin = 0, end = 0;  // range in object_edges_[object]
+  };
+  std::vector<std::vector<std::size_t>> object_edges_;
+  std::vector<std::vector<EdgeCluster>> object_clusters_;
+  std::unordered_map<std::string, std::size_t> object_index_;
   mutable std::mutex cache_mutex_;
   mutable std::shared_ptr<const Candidates> cache_;
 };
