@@ -24,6 +24,8 @@ constexpr double kSurfaceOffset_m = 0.005;
 constexpr double kEdgeOffset_m = 0.02;
 // Diffraction candidates kept per blocked satellite (least loss first).
 constexpr std::size_t kMaxDiffractedPaths = 3;
+// The facet candidates found for one point serve antenna positions this close to it.
+constexpr double kCandidateMargin_m = 10.0;
 
 double leg_tolerance_m(double length_m) { return std::max(0.02, 1e-4 * length_m); }
 
@@ -343,7 +345,7 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
                                                                                 const PathSearchSettings& settings) const {
   {
     const std::lock_guard lock(cache_mutex_);
-    if (cache_ && cache_->origin_m == origin_m && cache_->radius_m == settings.radius_m &&
+    if (cache_ && (cache_->origin_m - origin_m).norm() <= kCandidateMargin_m && cache_->radius_m == settings.radius_m &&
         cache_->min_area_m2 == settings.min_facet_area_m2 && cache_->frequency_hz == settings.frequency_hz) {
       return cache_;
     }
@@ -354,7 +356,7 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   c->min_area_m2 = settings.min_facet_area_m2;
   c->frequency_hz = settings.frequency_hz;
   if (grid_nx_ > 0) {
-    const double r = settings.radius_m;
+    const double r = settings.radius_m + kCandidateMargin_m;
     const int x0 = std::max(0, static_cast<int>(std::floor((origin_m.x() - r - grid_min_.x()) / cell_m_)));
     const int x1 = std::min(grid_nx_ - 1, static_cast<int>(std::floor((origin_m.x() + r - grid_min_.x()) / cell_m_)));
     const int y0 = std::max(0, static_cast<int>(std::floor((origin_m.y() - r - grid_min_.y()) / cell_m_)));
@@ -377,10 +379,7 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
       const Facet& f = facets_[i];
       const Eigen::Vector3d nearest = origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m);
       if (f.area_m2 < settings.min_facet_area_m2 || (nearest - origin_m).norm() > r) continue;
-      const double h = f.normal.dot(origin_m) - f.offset_m;
-      if (std::abs(h) < 1e-6) continue;  // in the plane: no reflection
-      c->facets.push_back(NearFacet{i, h >= 0.0 ? f.normal : Eigen::Vector3d(-f.normal), std::abs(h),
-                                    eta_of[static_cast<std::size_t>(f.material)]});
+      c->facets.push_back(NearFacet{i, f.normal, 0.0, eta_of[static_cast<std::size_t>(f.material)]});
     }
   }
   const std::lock_guard lock(cache_mutex_);
@@ -424,7 +423,16 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       out[i].paths.push_back(std::move(p));
     }
   }
-  const std::shared_ptr<const Candidates> near = candidates(r, settings);
+  // The facet candidates seen from the antenna: normal towards it, its height above the plane.
+  std::vector<NearFacet> near_facets;
+  const std::shared_ptr<const Candidates> near =
+      settings.max_reflection_order >= 1 ? candidates(r, settings) : std::make_shared<const Candidates>();
+  near_facets.reserve(near->facets.size());
+  for (const NearFacet& c : near->facets) {
+    const double h = c.normal.dot(r) - facets_[c.index].offset_m;
+    if (std::abs(h) < 1e-6) continue;  // in the plane: no reflection
+    near_facets.push_back(NearFacet{c.index, h >= 0.0 ? c.normal : Eigen::Vector3d(-c.normal), std::abs(h), c.eta});
+  }
   const double wavelength_m = kSpeedOfLight_mps / settings.frequency_hz;
   const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
 
@@ -461,7 +469,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     // First order: the image of the receiver in the facet's plane, the line from it towards the
     // satellite meets the plane at the reflection point.
     if (settings.max_reflection_order >= 1) {
-      for (const NearFacet& nf : near->facets) {
+      for (const NearFacet& nf : near_facets) {
         const double ns = nf.normal.dot(s);
         if (ns <= 1e-6) continue;
         const double t = nf.height_m / ns;  // receiver to reflection point
@@ -493,12 +501,12 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A
     // taken in B gives the point on B, the line from there to the first image the point on A.
     if (settings.max_reflection_order >= 2) {
-      for (const NearFacet& a : near->facets) {
+      for (const NearFacet& a : near_facets) {
         const Facet& fa = facets_[a.index];
         const Eigen::Vector3d& na = a.normal;
         const double ca = na.dot(r) - a.height_m;  // plane of A: na . x = ca
         const Eigen::Vector3d image_a = r - 2.0 * a.height_m * na;
-        for (const NearFacet& b : near->facets) {
+        for (const NearFacet& b : near_facets) {
           if (b.index == a.index) continue;
           const Facet& fb = facets_[b.index];
           const double hb = fb.normal.dot(image_a) - fb.offset_m;

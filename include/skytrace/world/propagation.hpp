@@ -120,7 +120,9 @@ class PropagationScene final : public PathQuery {
     double radius_m = 0.0, min_area_m2 = 0.0, frequency_hz = 0.0;
     std::vector<NearFacet> facets;
   };
-  // Facets near a point (a uniform grid in x, y; the last answer is cached).
+  // Facets near a point (a uniform grid in x, y): those within the radius plus a margin, so that the
+  // last answer serves an antenna moving less than the margin. Normal and height as seen from the
+  // cached point; paths() turns them to the antenna's actual position.
   std::shared_ptr<const Candidates> candidates(const Eigen::Vector3d& origin_m, const PathSearchSettings& settings) const;
 
   std::shared_ptr<const PathQuery> scene_;
