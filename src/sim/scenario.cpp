@@ -360,7 +360,8 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   }
 
   if (auto models = root.child("models")) {
-    models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath"});
+    models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
+                         "multipath_radius_m", "multipath_order", "diffraction"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
     if (auto c = models->child("ionex_file")) s.models.ionex_file = existing_file(*c, base);
     if (s.models.ionosphere == "ionex" && !s.models.ionex_file) {
@@ -372,6 +373,13 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     }
     if (auto c = models->child("noise")) s.models.noise = c->as_bool();
     if (auto c = models->child("multipath")) s.models.multipath = c->as_bool();
+    if (auto c = models->child("multipath_radius_m")) s.models.multipath_radius_m = c->as_double_in(1.0, 5000.0);
+    if (auto c = models->child("multipath_order")) {
+      const double order = c->as_double_in(0.0, 2.0);
+      if (order != std::floor(order)) c->fail("must be 0, 1 or 2");
+      s.models.multipath_order = static_cast<int>(order);
+    }
+    if (auto c = models->child("diffraction")) s.models.diffraction = c->as_bool();
   }
 
   if (auto world = root.child("world")) parse_world(*world, base, s.world);
@@ -522,7 +530,10 @@ std::string scenario_to_json(const Scenario& s) {
                  {"troposphere", s.models.troposphere},
                  {"receiver_clock", s.models.receiver_clock},
                  {"noise", s.models.noise},
-                 {"multipath", s.models.multipath}};
+                 {"multipath", s.models.multipath},
+                 {"multipath_radius_m", s.models.multipath_radius_m},
+                 {"multipath_order", s.models.multipath_order},
+                 {"diffraction", s.models.diffraction}};
   json w;
   if (s.world.sdf) w["sdf"] = s.world.sdf->string();
   w["model_paths"] = paths(s.world.model_paths);

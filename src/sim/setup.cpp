@@ -183,6 +183,9 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.seed = s.seed;
   g.receiver_index = static_cast<int>(index);
   g.multipath = s.models.multipath;
+  g.path_search.radius_m = s.models.multipath_radius_m;
+  g.path_search.max_reflection_order = s.models.multipath_order;
+  g.path_search.diffraction = s.models.diffraction;
   auto generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), *resources.ephemerides,
                                                                     std::move(kinematics), resources.precise.get());
   if (resources.world) generator->set_world(resources.world->scene.get(), resources.world->frame);

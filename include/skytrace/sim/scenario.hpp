@@ -66,6 +66,10 @@ struct ModelSettings {
   std::string receiver_clock = "ideal";      // ideal | profile | tcxo | ocxo
   bool noise = false;
   bool multipath = false;
+  // With multipath: reflectors within this radius, reflection order (0-2), knife-edge diffraction.
+  double multipath_radius_m = 150.0;
+  int multipath_order = 1;
+  bool diffraction = true;
 };
 
 // A mesh file placed in the world frame (world.meshes).
