@@ -49,11 +49,11 @@ std::optional<RecordState> select_record(const orbits::BroadcastEphemerides& eph
 }
 
 // Evaluates the record's orbit and clock at instant t (on the GPST timeline).
-void evaluate_record(RecordState& record, const GnssTime& t) {
+void evaluate_record(RecordState& record, const GnssTime& t, orbits::GlonassOrbitCache& glonass_orbits) {
   if (record.kepler != nullptr) {
     record.state = orbits::evaluate_kepler(*record.kepler, t);
   } else if (record.glonass != nullptr) {
-    record.state = orbits::evaluate_glonass(*record.glonass, t);
+    record.state = glonass_orbits.evaluate(*record.glonass, t);
   } else {
     record.state = orbits::evaluate_sbas(*record.sbas, t);
   }
@@ -272,7 +272,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const auto guess = flight_time_guess_s_.find(sat);
     const double guess_s = guess != flight_time_guess_s_.end() ? guess->second : 0.075;
     const GnssTime evaluation_time = epoch.true_time - guess_s;
-    evaluate_record(*record, evaluation_time);
+    evaluate_record(*record, evaluation_time, glonass_orbits_);
     bool precise_truth = false;
     if (truth_orbits_ != nullptr) {
       // Precise products as the truth: the signals come from the precise orbit and clock, while
@@ -500,7 +500,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
           auto r = select_record(ephemerides_, sat, tag, wanted);
           if (r && r->kepler != record->kepler) {
             if (!precise_truth) {
-              evaluate_record(*r, transmit_time);
+              evaluate_record(*r, transmit_time, glonass_orbits_);
             } else {
               r->state = record->state;  // the precise clock serves every signal
             }
@@ -605,6 +605,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     if (obs.signals.empty() && direct_blocked) {
       obs.status = SatelliteStatus::kBlocked;  // its reflected and diffracted paths are too weak
       obs.detail = outcomes[pending_index].blocking_object + " (indirect paths too weak)";
+      obs.path_kind = PathKind::kNone;  // paths.csv still lists them
       arcs_lost(sat);
     } else if (obs.signals.empty()) {
       const bool attenuated = attenuation_db > 0.0 && not_tracked_because.starts_with("below");
