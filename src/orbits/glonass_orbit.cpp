@@ -58,10 +58,28 @@ void runge_kutta_step(State& x, double h_s, const Eigen::Vector3d& lunisolar_mps
 
 }  // namespace
 
+namespace {
+
+State initial_state(const GlonassEphemeris& eph) {
+  return {eph.position_m.x(),   eph.position_m.y(),   eph.position_m.z(),
+          eph.velocity_mps.x(), eph.velocity_mps.y(), eph.velocity_mps.z()};
+}
+
+SatelliteState to_satellite_state(const GlonassEphemeris& eph, const State& x, double dt_s) {
+  SatelliteState state;
+  state.position_m = Eigen::Vector3d(x[0], x[1], x[2]);
+  state.velocity_mps = Eigen::Vector3d(x[3], x[4], x[5]);
+  // The broadcast -tau_n + gamma_n (t - t_b) already contains the relativistic effect (ICD 3.3.3).
+  state.clock_bias_s = eph.minus_tau_n_s + eph.gamma_n * dt_s;
+  state.clock_drift_s_per_s = eph.gamma_n;
+  return state;
+}
+
+}  // namespace
+
 SatelliteState evaluate_glonass(const GlonassEphemeris& eph, const GnssTime& t) {
   const double dt_s = t - eph.toe;
-  State x{eph.position_m.x(),   eph.position_m.y(),   eph.position_m.z(),
-          eph.velocity_mps.x(), eph.velocity_mps.y(), eph.velocity_mps.z()};
+  State x = initial_state(eph);
   double remaining_s = dt_s;
   const double step_s = remaining_s < 0.0 ? -kMaxStep_s : kMaxStep_s;
   // The 1 ns guard ends the loop on rounding residue of the subtraction.
@@ -70,14 +88,30 @@ SatelliteState evaluate_glonass(const GlonassEphemeris& eph, const GnssTime& t) 
     runge_kutta_step(x, h_s, eph.acceleration_mps2);
     remaining_s -= h_s;
   }
+  return to_satellite_state(eph, x, dt_s);
+}
 
-  SatelliteState state;
-  state.position_m = Eigen::Vector3d(x[0], x[1], x[2]);
-  state.velocity_mps = Eigen::Vector3d(x[3], x[4], x[5]);
-  // The broadcast -tau_n + gamma_n (t - t_b) already contains the relativistic effect (ICD 3.3.3).
-  state.clock_bias_s = eph.minus_tau_n_s + eph.gamma_n * dt_s;
-  state.clock_drift_s_per_s = eph.gamma_n;
-  return state;
+SatelliteState GlonassOrbitCache::evaluate(const GlonassEphemeris& eph, const GnssTime& t) {
+  const double dt_s = t - eph.toe;
+  const double step_s = dt_s < 0.0 ? -kMaxStep_s : kMaxStep_s;
+  // The full steps evaluate_glonass takes, counted with the same subtractions.
+  double remaining_s = dt_s;
+  size_t full_steps = 0;
+  while (std::abs(remaining_s) > 1e-9 && std::abs(remaining_s) >= kMaxStep_s) {
+    remaining_s -= step_s;
+    ++full_steps;
+  }
+  Nodes& nodes = nodes_[&eph];
+  auto& chain = dt_s < 0.0 ? nodes.backward : nodes.forward;
+  if (chain.empty()) chain.push_back(initial_state(eph));
+  while (chain.size() <= full_steps) {
+    State next = chain.back();
+    runge_kutta_step(next, step_s, eph.acceleration_mps2);
+    chain.push_back(next);
+  }
+  State x = chain[full_steps];
+  if (std::abs(remaining_s) > 1e-9) runge_kutta_step(x, remaining_s, eph.acceleration_mps2);
+  return to_satellite_state(eph, x, dt_s);
 }
 
 }  // namespace skytrace::orbits

@@ -420,6 +420,26 @@ TEST(BroadcastGlonass, ForwardThenBackwardReturnsToTheStart) {
   }
 }
 
+// The cache of full-step states gives exactly what the plain integration gives, in any order of
+// evaluation times (forward, backward, repeated, out of order), the step boundaries included.
+TEST(BroadcastGlonass, OrbitCacheIsBitIdenticalToTheIntegration) {
+  const GlonassEphemeris eph = glonass_r02();
+  GlonassOrbitCache cache;
+  for (double dt_s : {0.0, 1.0, 0.067, 59.999999, 60.0, 60.000001, 899.93, 120.0, -0.5, -60.0, -61.25, -1799.0, 1800.0,
+                      300.07, 1e-10, -1e-10}) {
+    const SatelliteState plain = evaluate_glonass(eph, eph.toe + dt_s);
+    const SatelliteState cached = cache.evaluate(eph, eph.toe + dt_s);
+    EXPECT_EQ(cached.position_m, plain.position_m) << dt_s;
+    EXPECT_EQ(cached.velocity_mps, plain.velocity_mps) << dt_s;
+    EXPECT_EQ(cached.clock_bias_s, plain.clock_bias_s) << dt_s;
+  }
+  // Another record in the same cache keeps its own nodes.
+  GlonassEphemeris other = eph;
+  other.position_m.x() += 1000.0;
+  EXPECT_EQ(cache.evaluate(other, other.toe + 700.0).position_m, evaluate_glonass(other, other.toe + 700.0).position_m);
+  EXPECT_EQ(cache.evaluate(eph, eph.toe + 700.0).position_m, evaluate_glonass(eph, eph.toe + 700.0).position_m);
+}
+
 TEST(BroadcastGlonass, VelocityIsTheDerivativeOfPosition) {
   const GlonassEphemeris eph = glonass_r02();
   for (double dt_s : {-700.0, 300.0}) {

@@ -1,6 +1,8 @@
 // Satellite state from broadcast ephemerides, with ephemeris selection as receivers do it.
 #pragma once
 
+#include <array>
+
 #include <optional>
 #include <string_view>
 #include <unordered_map>
@@ -18,6 +20,21 @@ namespace skytrace::orbits {
 // GLONASS: 4th-order Runge-Kutta integration of the PZ-90 equations of motion (J2, Earth rotation,
 // broadcast lunisolar acceleration) from t_b to t, GLONASS ICD 5.1 appendix A.3.1.2.
 [[nodiscard]] SatelliteState evaluate_glonass(const GlonassEphemeris& eph, const GnssTime& t);
+// The same integration with the states at the full 60 s steps from t_b kept per record, so that a
+// receiver evaluating the same record epoch after epoch integrates one partial step instead of up
+// to fifteen full ones. Results are identical to evaluate_glonass (same steps in the same order).
+// Not thread-safe: one per generator.
+class GlonassOrbitCache {
+ public:
+  [[nodiscard]] SatelliteState evaluate(const GlonassEphemeris& eph, const GnssTime& t);
+
+ private:
+  struct Nodes {
+    std::vector<std::array<double, 6>> forward{};   // [k]: after k steps of +60 s
+    std::vector<std::array<double, 6>> backward{};  // [k]: after k steps of -60 s
+  };
+  std::unordered_map<const GlonassEphemeris*, Nodes> nodes_;
+};
 // SBAS: second-order polynomial of the broadcast state (RTCA DO-229).
 [[nodiscard]] SatelliteState evaluate_sbas(const SbasEphemeris& eph, const GnssTime& t);
 

@@ -200,6 +200,7 @@ class ObservationGenerator {
   std::vector<SatelliteId> satellites_;
   std::map<std::pair<SatelliteId, Signal>, Arc> arcs_;
   std::map<std::pair<SatelliteId, Signal>, SignalStreams> streams_;
+  orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
   std::set<const orbits::KeplerEphemeris*> used_kepler_;
   std::set<const orbits::GlonassEphemeris*> used_glonass_;
   std::set<const orbits::SbasEphemeris*> used_sbas_;
