@@ -142,7 +142,9 @@ TEST(MultipathCanyon, NlosExcessIsTheSingleBounceGeometry) {
       ASSERT_TRUE(type == "los" || type == "multipath") << type;
       ++in_view;
       if (std::abs(excess_m) > 1e-4) ++in_view_with_error;
-      if (type == "multipath") EXPECT_GT(std::abs(truth.number(row, "code_multipath_m")), 1e-4);
+      if (type == "multipath") {
+        EXPECT_GT(std::abs(truth.number(row, "code_multipath_m")), 1e-4);
+      }
     }
   }
   std::printf("[ figures ] canyon.yaml: %zu single-bounce NLOS signal-epochs (worst %.4f m off the geometry), "
