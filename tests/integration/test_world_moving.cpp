@@ -164,7 +164,9 @@ world:
     }
     if (hits) {
       EXPECT_EQ(status, "blocked") << line;
-      if (status == "blocked") EXPECT_NE(line.find("truck/body/box"), std::string::npos) << line;
+      if (status == "blocked") {
+        EXPECT_NE(line.find("truck/body/box"), std::string::npos) << line;
+      }
       ++blocked;
     } else {
       // Tracked, or too weak for the profile at low elevation, but never blocked.

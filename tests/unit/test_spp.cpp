@@ -265,7 +265,9 @@ TEST(SinglePointSolver, TooFewSatellitesGiveNoFixWithAReason) {
   EXPECT_EQ(fix.satellites_used, 4);
   EXPECT_EQ(fix.clock_bias_m.count(GnssSystem::kGalileo), 0u);
   for (const auto& use : fix.satellites) {
-    if (use.satellite.system == GnssSystem::kGalileo) EXPECT_EQ(use.note, "only satellite of its system");
+    if (use.satellite.system == GnssSystem::kGalileo) {
+      EXPECT_EQ(use.note, "only satellite of its system");
+    }
   }
   const Scene three_two = make_scene(truth, 3, 2);
   SinglePointSolver three_two_solver(three_two.ephemerides, exact_settings(false));

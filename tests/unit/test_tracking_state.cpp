@@ -151,7 +151,9 @@ TEST(TrackingState, AcquisitionLockTimeHalfCyclesAndLossOfLock) {
   for (int i = 11; i < 14; ++i) {
     EXPECT_EQ(find(epochs[i], sat, "G1C"), nullptr) << i;
     for (const auto& s : epochs[i].satellites) {
-      if (s.satellite.to_string() == sat) EXPECT_EQ(s.detail, "acquiring");
+      if (s.satellite.to_string() == sat) {
+        EXPECT_EQ(s.detail, "acquiring");
+      }
     }
   }
   const SignalMeasurement* again = find(epochs[14], sat, "G1C");
