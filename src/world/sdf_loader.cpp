@@ -1317,14 +1317,26 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
     }
   }
 
+  // sdf::init builds the SDF description from sdformat's embedded spec files (tens of ms); the world
+  // and every model file get a copy of one description instead of building their own.
+  sdf::SDFPtr description;
+  const auto fresh_sdf = [&description]() {
+    if (!description) {
+      description = std::make_shared<sdf::SDF>();
+      sdf::init(description);
+    }
+    auto copy = std::make_shared<sdf::SDF>();
+    copy->Root(description->Root()->Clone());
+    return copy;
+  };
+
   // Parse to an element tree first: duplicate model names are made unique before the DOM load.
   sdf::Errors errors;
   sdf::SDFPtr parsed;
   if (own_includes.empty()) {
     parsed = sdf::readFile(path.string(), config, errors);
   } else {
-    parsed = std::make_shared<sdf::SDF>();
-    sdf::init(parsed);
+    parsed = fresh_sdf();
     if (!sdf::readString(text, config, parsed, errors)) parsed.reset();
   }
   std::map<std::string, std::pair<std::string, int>> missing_models;  // uri -> (first place, count)
@@ -1455,7 +1467,13 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
       auto& loaded = model_files[file];
       if (!loaded) {
         loaded = std::make_unique<sdf::Root>();
-        sort_errors(loaded->Load(file, config));
+        sdf::Errors file_errors;
+        sdf::SDFPtr file_sdf = fresh_sdf();
+        if (!sdf::readFile(file, config, file_sdf, file_errors) && file_errors.empty()) {
+          file_errors.emplace_back(sdf::ErrorCode::FILE_READ, "unable to read file [" + file + "]");
+        }
+        sort_errors(file_errors);
+        if (fatal.empty()) sort_errors(loaded->Load(file_sdf, config));
         if (!fatal.empty())
           return fail("invalid model " + file + " included at line " +
                       std::to_string(include->line));
