@@ -12,6 +12,7 @@
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/text_file.hpp"
+#include "skytrace/core/yaml_field.hpp"
 
 #ifndef SKYTRACE_PROFILE_DIR
 #define SKYTRACE_PROFILE_DIR "profiles"
@@ -20,105 +21,8 @@
 namespace skytrace::receiver {
 namespace {
 
-// Thrown inside the parser and turned into an Error at the boundary.
-struct ProfileError {
-  std::string message;
-};
-
-// A YAML node with its key path, for messages like "file:12: tracking.pll_bandwidth_hz: ...".
-class Field {
- public:
-  Field(YAML::Node node, std::string path, const std::string* file) : node_(std::move(node)), path_(std::move(path)), file_(file) {}
-
-  [[noreturn]] void fail(const std::string& what) const {
-    std::string where = *file_;
-    if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
-    throw ProfileError{where + ": " + (path_.empty() ? std::string("profile") : path_) + ": " + what};
-  }
-  void expect_keys(std::initializer_list<const char*> allowed) const {
-    if (!node_.IsMap()) fail("expected a mapping of keys");
-    for (const auto& item : node_) {
-      const std::string key = item.first.as<std::string>();
-      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
-        std::string list;
-        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        Field(item.first, join(key), file_).fail("unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-  [[nodiscard]] std::optional<Field> child(const std::string& key) const {
-    const YAML::Node c = node_[key];
-    if (!c || c.IsNull()) return std::nullopt;
-    return Field(c, join(key), file_);
-  }
-  [[nodiscard]] Field required(const std::string& key) const {
-    auto c = child(key);
-    if (!c) fail("missing required key '" + key + "'");
-    return *c;
-  }
-  [[nodiscard]] bool is_sequence() const { return node_.IsSequence(); }
-  [[nodiscard]] bool is_map() const { return node_.IsMap(); }
-  [[nodiscard]] std::vector<Field> elements() const {
-    if (!node_.IsSequence()) fail("expected a list");
-    std::vector<Field> out;
-    for (size_t i = 0; i < node_.size(); ++i) out.emplace_back(node_[i], path_ + "[" + std::to_string(i) + "]", file_);
-    return out;
-  }
-  [[nodiscard]] std::vector<std::pair<std::string, Field>> entries() const {
-    if (!node_.IsMap()) fail("expected a mapping of keys");
-    std::vector<std::pair<std::string, Field>> out;
-    for (const auto& item : node_) {
-      const std::string key = item.first.as<std::string>();
-      out.emplace_back(key, Field(item.second, join(key), file_));
-    }
-    return out;
-  }
-  [[nodiscard]] std::string as_string() const {
-    if (!node_.IsScalar()) fail("expected a single value");
-    return node_.Scalar();
-  }
-  [[nodiscard]] double as_double_in(double low, double high) const {
-    const std::string text = as_string();
-    double v = 0.0;
-    try {
-      size_t used = 0;
-      v = std::stod(text, &used);
-      if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
-    } catch (const std::exception&) {
-      fail("expected a number, got '" + text + "'");
-    }
-    if (v < low || v > high) {
-      std::ostringstream s;
-      s << "value " << v << " out of range [" << low << ", " << high << "]";
-      fail(s.str());
-    }
-    return v;
-  }
-  [[nodiscard]] int as_int_in(int low, int high) const {
-    const double v = as_double_in(low, high);
-    if (v != std::floor(v)) fail("expected a whole number, got '" + as_string() + "'");
-    return static_cast<int>(v);
-  }
-  [[nodiscard]] std::string as_choice(std::initializer_list<const char*> choices) const {
-    const std::string text = as_string();
-    if (std::any_of(choices.begin(), choices.end(), [&](const char* c) { return text == c; })) return text;
-    std::string list;
-    for (const char* c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
-    fail("unknown value '" + text + "' (expected one of: " + list + ")");
-  }
-  [[nodiscard]] std::vector<double> as_doubles_in(double low, double high) const {
-    std::vector<double> out;
-    for (const Field& e : elements()) out.push_back(e.as_double_in(low, high));
-    return out;
-  }
-
- private:
-  [[nodiscard]] std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-
-  YAML::Node node_;
-  std::string path_;
-  const std::string* file_;
-};
+// Profile keys with their path and line in every message (core/yaml_field.hpp).
+using Field = YamlField;
 
 // Gain rows: one list (no azimuth) or one list per azimuth, each as long as the elevations.
 std::vector<std::vector<double>> parse_gain_rows(const Field& node, size_t elevations, size_t azimuths) {
@@ -324,8 +228,8 @@ Result<ReceiverProfile> parse_profile(const std::string& yaml_text, const std::s
   try {
     const YAML::Node root = YAML::Load(yaml_text);
     if (!root || root.IsNull()) return make_error(ErrorCode::kParse, source + ": empty profile");
-    return parse_root(Field(root, "", &source), source);
-  } catch (const ProfileError& e) {
+    return parse_root(Field(root, "", &source, "profile"), source);
+  } catch (const YamlFieldError& e) {
     return make_error(ErrorCode::kParse, e.message);
   } catch (const YAML::Exception& e) {
     return make_error(ErrorCode::kParse, source + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);

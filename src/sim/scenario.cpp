@@ -1,5 +1,7 @@
 #include "skytrace/sim/scenario.hpp"
 
+#include "skytrace/core/yaml_field.hpp"
+
 #include <yaml-cpp/yaml.h>
 #include <nlohmann/json.hpp>
 
@@ -15,112 +17,8 @@
 namespace skytrace::sim {
 namespace {
 
-// Thrown inside the parser and turned into an Error at the boundary.
-struct ScenarioError {
-  std::string message;
-};
-
-// A YAML node with its key path, for messages like "file:12: receiver.signals[2]: ...".
-class Node {
- public:
-  Node(YAML::Node node, std::string path, const std::string* file) : node_(std::move(node)), path_(std::move(path)), file_(file) {}
-
-  [[nodiscard]] const std::string& path() const { return path_; }
-  [[nodiscard]] bool is_map() const { return node_.IsMap(); }
-  [[nodiscard]] bool is_sequence() const { return node_.IsSequence(); }
-  [[nodiscard]] bool is_scalar() const { return node_.IsScalar(); }
-
-  [[noreturn]] void fail(const std::string& what) const {
-    const int line = node_.Mark().line;
-    std::string where = *file_;
-    if (line >= 0) where += ":" + std::to_string(line + 1);
-    throw ScenarioError{where + ": " + (path_.empty() ? std::string("scenario") : path_) + ": " + what};
-  }
-
-  // Checks that a map holds only the allowed keys.
-  void expect_keys(std::initializer_list<const char*> allowed) const {
-    if (!node_.IsMap()) fail("expected a mapping of keys");
-    for (const auto& item : node_) {
-      const std::string key = item.first.as<std::string>();
-      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
-        std::string list;
-        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        Node(item.first, join(key), file_).fail("unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-
-  [[nodiscard]] std::optional<Node> child(const std::string& key) const {
-    const YAML::Node c = node_[key];
-    if (!c || c.IsNull()) return std::nullopt;
-    return Node(c, join(key), file_);
-  }
-  [[nodiscard]] Node required(const std::string& key) const {
-    auto c = child(key);
-    if (!c) fail("missing required key '" + key + "'");
-    return *c;
-  }
-  [[nodiscard]] std::vector<Node> elements() const {
-    if (!node_.IsSequence()) fail("expected a list");
-    std::vector<Node> out;
-    for (size_t i = 0; i < node_.size(); ++i) out.emplace_back(node_[i], path_ + "[" + std::to_string(i) + "]", file_);
-    return out;
-  }
-
-  [[nodiscard]] std::string as_string() const {
-    if (!node_.IsScalar()) fail("expected a single value");
-    return node_.Scalar();
-  }
-  [[nodiscard]] double as_double() const {
-    const std::string text = as_string();
-    try {
-      size_t used = 0;
-      const double v = std::stod(text, &used);
-      if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
-      return v;
-    } catch (const std::exception&) {
-      fail("expected a number, got '" + text + "'");
-    }
-  }
-  [[nodiscard]] double as_double_in(double low, double high) const {
-    const double v = as_double();
-    if (v < low || v > high) {
-      std::ostringstream s;
-      s << "value " << v << " out of range [" << low << ", " << high << "]";
-      fail(s.str());
-    }
-    return v;
-  }
-  [[nodiscard]] bool as_bool() const {
-    const std::string text = as_string();
-    if (text == "true" || text == "yes" || text == "on") return true;
-    if (text == "false" || text == "no" || text == "off") return false;
-    fail("expected true or false, got '" + text + "'");
-  }
-  [[nodiscard]] std::string as_choice(std::initializer_list<const char*> choices) const {
-    const std::string text = as_string();
-    if (std::any_of(choices.begin(), choices.end(), [&](const char* c) { return text == c; })) return text;
-    std::string list;
-    for (const char* c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
-    fail("unknown value '" + text + "' (expected one of: " + list + ")");
-  }
-  [[nodiscard]] Eigen::Vector3d as_vector3() const {
-    auto items = elements();
-    if (items.size() != 3) fail("expected a list of 3 numbers");
-    return {items[0].as_double(), items[1].as_double(), items[2].as_double()};
-  }
-  [[nodiscard]] std::vector<Node> as_list_or_single() const {
-    if (node_.IsSequence()) return elements();
-    return {*this};
-  }
-
- private:
-  [[nodiscard]] std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-
-  YAML::Node node_;
-  std::string path_;
-  const std::string* file_;
-};
+// Scenario keys with their path and line in every message (core/yaml_field.hpp).
+using Node = YamlField;
 
 std::filesystem::path resolve(const std::filesystem::path& base, const std::string& text) {
   std::filesystem::path p(text);
@@ -463,9 +361,9 @@ Result<Scenario> parse_scenario(const std::string& text, const std::string& name
     if (auto st = apply_override(root, assignment); !st) return st.error().with_context(name);
   }
   try {
-    Scenario s = parse_root(Node(root, "", &name), base_dir);
+    Scenario s = parse_root(Node(root, "", &name, "scenario"), base_dir);
     return s;
-  } catch (const ScenarioError& e) {
+  } catch (const YamlFieldError& e) {
     return make_error(ErrorCode::kParse, e.message);
   } catch (const YAML::Exception& e) {
     return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);

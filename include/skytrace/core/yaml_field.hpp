@@ -1,0 +1,66 @@
+// A YAML node with its key path and file, so that every message about a configuration file (scenario,
+// receiver profile) reads "file:12: receiver.signals[2]: what was expected". Parsers throw
+// YamlFieldError from deep inside and turn it into an Error at their boundary.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+
+#include <initializer_list>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace skytrace {
+
+struct YamlFieldError {
+  std::string message;
+};
+
+class YamlField {
+ public:
+  // `file` names the document in messages and must outlive the field; `document` stands for the
+  // empty path ("scenario", "profile").
+  YamlField(YAML::Node node, std::string path, const std::string* file, std::string document = "document")
+      : node_(std::move(node)), path_(std::move(path)), file_(file), document_(std::move(document)) {}
+
+  [[nodiscard]] const std::string& path() const { return path_; }
+  [[nodiscard]] bool is_map() const { return node_.IsMap(); }
+  [[nodiscard]] bool is_sequence() const { return node_.IsSequence(); }
+  [[nodiscard]] bool is_scalar() const { return node_.IsScalar(); }
+
+  // Throws YamlFieldError "file:line: path: what".
+  [[noreturn]] void fail(const std::string& what) const;
+  // A mapping holding only the allowed keys.
+  void expect_keys(std::initializer_list<const char*> allowed) const;
+
+  [[nodiscard]] std::optional<YamlField> child(const std::string& key) const;  // absent or null: nullopt
+  [[nodiscard]] YamlField required(const std::string& key) const;
+  [[nodiscard]] std::vector<YamlField> elements() const;                            // a list
+  [[nodiscard]] std::vector<std::pair<std::string, YamlField>> entries() const;     // a mapping, in order
+  [[nodiscard]] std::vector<YamlField> as_list_or_single() const;
+
+  [[nodiscard]] std::string as_string() const;
+  [[nodiscard]] double as_double() const;
+  [[nodiscard]] double as_double_in(double low, double high) const;
+  [[nodiscard]] int as_int_in(int low, int high) const;
+  [[nodiscard]] bool as_bool() const;
+  [[nodiscard]] std::string as_choice(std::initializer_list<const char*> choices) const;
+  [[nodiscard]] Eigen::Vector3d as_vector3() const;
+  [[nodiscard]] std::vector<double> as_doubles_in(double low, double high) const;
+
+ private:
+  [[nodiscard]] std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  [[nodiscard]] YamlField at(YAML::Node node, std::string path) const {
+    return YamlField(std::move(node), std::move(path), file_, document_);
+  }
+
+  YAML::Node node_;
+  std::string path_;
+  const std::string* file_;
+  std::string document_;
+};
+
+}  // namespace skytrace

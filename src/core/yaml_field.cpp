@@ -1,0 +1,127 @@
+#include "skytrace/core/yaml_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace skytrace {
+namespace {
+
+std::string one_of(std::initializer_list<const char*> items) {
+  std::string list;
+  for (const char* item : items) list += (list.empty() ? "" : ", ") + std::string(item);
+  return list;
+}
+
+}  // namespace
+
+void YamlField::fail(const std::string& what) const {
+  std::string where = *file_;
+  if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
+  throw YamlFieldError{where + ": " + (path_.empty() ? document_ : path_) + ": " + what};
+}
+
+void YamlField::expect_keys(std::initializer_list<const char*> allowed) const {
+  if (!node_.IsMap()) fail("expected a mapping of keys");
+  for (const auto& item : node_) {
+    const std::string key = item.first.as<std::string>();
+    if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
+      at(item.first, join(key)).fail("unknown key (expected one of: " + one_of(allowed) + ")");
+    }
+  }
+}
+
+std::optional<YamlField> YamlField::child(const std::string& key) const {
+  const YAML::Node c = node_[key];
+  if (!c || c.IsNull()) return std::nullopt;
+  return at(c, join(key));
+}
+
+YamlField YamlField::required(const std::string& key) const {
+  auto c = child(key);
+  if (!c) fail("missing required key '" + key + "'");
+  return *c;
+}
+
+std::vector<YamlField> YamlField::elements() const {
+  if (!node_.IsSequence()) fail("expected a list");
+  std::vector<YamlField> out;
+  for (size_t i = 0; i < node_.size(); ++i) out.push_back(at(node_[i], path_ + "[" + std::to_string(i) + "]"));
+  return out;
+}
+
+std::vector<std::pair<std::string, YamlField>> YamlField::entries() const {
+  if (!node_.IsMap()) fail("expected a mapping of keys");
+  std::vector<std::pair<std::string, YamlField>> out;
+  for (const auto& item : node_) {
+    const std::string key = item.first.as<std::string>();
+    out.emplace_back(key, at(item.second, join(key)));
+  }
+  return out;
+}
+
+std::vector<YamlField> YamlField::as_list_or_single() const {
+  if (node_.IsSequence()) return elements();
+  return {*this};
+}
+
+std::string YamlField::as_string() const {
+  if (!node_.IsScalar()) fail("expected a single value");
+  return node_.Scalar();
+}
+
+double YamlField::as_double() const {
+  const std::string text = as_string();
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
+    return v;
+  } catch (const std::exception&) {
+    fail("expected a number, got '" + text + "'");
+  }
+}
+
+double YamlField::as_double_in(double low, double high) const {
+  const double v = as_double();
+  if (v < low || v > high) {
+    std::ostringstream s;
+    s << "value " << v << " out of range [" << low << ", " << high << "]";
+    fail(s.str());
+  }
+  return v;
+}
+
+int YamlField::as_int_in(int low, int high) const {
+  const double v = as_double_in(low, high);
+  if (v != std::floor(v)) fail("expected a whole number, got '" + as_string() + "'");
+  return static_cast<int>(v);
+}
+
+bool YamlField::as_bool() const {
+  const std::string text = as_string();
+  if (text == "true" || text == "yes" || text == "on") return true;
+  if (text == "false" || text == "no" || text == "off") return false;
+  fail("expected true or false, got '" + text + "'");
+}
+
+std::string YamlField::as_choice(std::initializer_list<const char*> choices) const {
+  const std::string text = as_string();
+  if (std::any_of(choices.begin(), choices.end(), [&](const char* c) { return text == c; })) return text;
+  fail("unknown value '" + text + "' (expected one of: " + one_of(choices) + ")");
+}
+
+Eigen::Vector3d YamlField::as_vector3() const {
+  const auto items = elements();
+  if (items.size() != 3) fail("expected a list of 3 numbers");
+  return {items[0].as_double(), items[1].as_double(), items[2].as_double()};
+}
+
+std::vector<double> YamlField::as_doubles_in(double low, double high) const {
+  std::vector<double> out;
+  for (const YamlField& e : elements()) out.push_back(e.as_double_in(low, high));
+  return out;
+}
+
+}  // namespace skytrace
