@@ -203,8 +203,8 @@ void ObservationGenerator::set_world(const PathQuery* world, const LocalFrame& f
 }
 
 void ObservationGenerator::arcs_lost(const SatelliteId& sat) {
-  for (auto& [key, arc] : arcs_) {
-    if (key.first == sat) arc.active = false;
+  for (const Signal& signal : settings_.signals) {
+    if (const auto it = arcs_.find(SignalKey{sat, signal}); it != arcs_.end()) it->second.active = false;
   }
 }
 

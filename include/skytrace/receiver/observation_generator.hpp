@@ -11,6 +11,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "skytrace/atmosphere/ionosphere.hpp"
@@ -188,7 +189,17 @@ class ObservationGenerator {
   std::vector<Signal> untrackable_;
   double elevation_mask_deg_ = 0.0;  // the scenario's and the profile's, whichever is higher
   std::vector<std::pair<const Signal*, double>> candidates_;  // a satellite's signals and C/N0 (scratch)
-  std::map<std::pair<SatelliteId, Signal>, std::pair<std::int64_t, bool>> transmits_cache_;
+  // Per (satellite, signal) state, looked up several times per signal and epoch: hashed.
+  using SignalKey = std::pair<SatelliteId, Signal>;
+  struct SignalKeyHash {
+    std::size_t operator()(const SignalKey& k) const noexcept {
+      return std::hash<std::uint32_t>{}(static_cast<std::uint32_t>(k.first.system) << 24 |
+                                        static_cast<std::uint32_t>(k.first.number) << 16 |
+                                        static_cast<std::uint32_t>(static_cast<unsigned char>(k.second.band)) << 8 |
+                                        static_cast<std::uint32_t>(static_cast<unsigned char>(k.second.attribute)));
+    }
+  };
+  std::unordered_map<SignalKey, std::pair<std::int64_t, bool>, SignalKeyHash> transmits_cache_;
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
@@ -198,8 +209,8 @@ class ObservationGenerator {
   ReceiverClock clock_;
   std::optional<GnssTime> last_tag_;
   std::vector<SatelliteId> satellites_;
-  std::map<std::pair<SatelliteId, Signal>, Arc> arcs_;
-  std::map<std::pair<SatelliteId, Signal>, SignalStreams> streams_;
+  std::unordered_map<SignalKey, Arc, SignalKeyHash> arcs_;
+  std::unordered_map<SignalKey, SignalStreams, SignalKeyHash> streams_;
   orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
   std::set<const orbits::KeplerEphemeris*> used_kepler_;
   std::set<const orbits::GlonassEphemeris*> used_glonass_;
