@@ -7,6 +7,8 @@
 // signals per satellite from those paths. One epoch = one iteration; goal 1,000 epochs/s, one core.
 #include <benchmark/benchmark.h>
 
+#include "bench_support.hpp"
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -29,11 +31,6 @@ using namespace skytrace::world;
 constexpr int kSatellites = 40;
 constexpr int kReceivers = 64;
 
-std::filesystem::path shared_file(const std::string& relative) {
-  const char* env = std::getenv("SKYTRACE_SHARED_DATA");
-  const std::filesystem::path base = env != nullptr && *env != '\0' ? env : SKYTRACE_DEFAULT_SHARED_DATA;
-  return base / relative;
-}
 
 struct City {
   WorldModel world;
@@ -46,13 +43,8 @@ struct City {
 const City& citysim() {
   static const City city = [] {
     City out;
-    const auto path = shared_file("worlds/citysim/simple_city.world");
-    if (!std::filesystem::exists(path)) return out;
-    SdfLoadOptions options;
-    options.model_paths = {shared_file("worlds/models")};
-    options.use_environment_paths = false;
-    auto world = load_sdf_world(path, options);
-    if (!world.ok()) return out;
+    auto world = skytrace::bench::load_citysim();
+    if (!world) return out;
     out.world = std::move(*world);
     auto embree = EmbreeScene::build(out.world);
     if (!embree.ok()) return City{};

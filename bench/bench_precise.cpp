@@ -3,6 +3,8 @@
 // change from call to call. Uses the real GRG files of ../shared/data (skipped when absent).
 #include <benchmark/benchmark.h>
 
+#include "bench_support.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -15,11 +17,7 @@ namespace {
 using namespace skytrace;
 using namespace skytrace::orbits;
 
-std::filesystem::path shared_file(const std::string& relative) {
-  const char* env = std::getenv("SKYTRACE_SHARED_DATA");
-  const std::filesystem::path base = env != nullptr && *env != '\0' ? env : SKYTRACE_DEFAULT_SHARED_DATA;
-  return base / relative;
-}
+using skytrace::bench::shared_file;
 
 const std::string kOrbit = "real/esbc_2020177/GRG0MGXFIN_20201770000_01D_15M_ORB.SP3";
 const std::string kClock = "real/esbc_2020177/GRG0MGXFIN_20201770000_01D_30S_CLK.CLK";

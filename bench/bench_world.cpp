@@ -4,6 +4,8 @@
 // street-level point. Synthetic city: a grid of a few hundred box buildings plus a ~100k-triangle
 // soup of clutter. Also the cost of moving an object between epochs and of building the scene.
 #include <benchmark/benchmark.h>
+
+#include "bench_support.hpp"
 #include <embree3/rtcore.h>
 
 #include <cmath>
@@ -380,11 +382,6 @@ void api_over_raw(benchmark::State& state, const City& city) {
 void BM_ApiOverRawOccluded(benchmark::State& state) { api_over_raw(state, plain_city()); }
 BENCHMARK(BM_ApiOverRawOccluded)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
 
-std::filesystem::path shared_file(const std::string& relative) {
-  const char* env = std::getenv("SKYTRACE_SHARED_DATA");
-  const std::filesystem::path base = env != nullptr && *env != '\0' ? env : SKYTRACE_DEFAULT_SHARED_DATA;
-  return base / relative;
-}
 
 // The citysim world of ../shared/data (Gazebo's simple_city.world with its models: terrain,
 // buildings, trees as vegetation hulls), receivers 1.5 m above whatever is below a random point of
@@ -392,13 +389,8 @@ std::filesystem::path shared_file(const std::string& relative) {
 const City& citysim() {
   static const City city = [] {
     City out;
-    const auto path = shared_file("worlds/citysim/simple_city.world");
-    if (!std::filesystem::exists(path)) return out;
-    SdfLoadOptions options;
-    options.model_paths = {shared_file("worlds/models")};
-    options.use_environment_paths = false;
-    auto world = load_sdf_world(path, options);
-    if (!world.ok()) return out;
+    auto world = skytrace::bench::load_citysim();
+    if (!world) return out;
     out.world = std::move(*world);
     auto scene = EmbreeScene::build(out.world);
     if (!scene.ok()) return City{};
