@@ -19,15 +19,6 @@ constexpr double kNlosAmplitude = 0.5;
 constexpr double kSecondaryAmplitude = 0.3;
 constexpr double kSecondaryDelay_m = 3.0;
 
-class StaticPoint final : public KinematicsSource {
- public:
-  explicit StaticPoint(Eigen::Vector3d p) : p_(std::move(p)) {}
-  Result<Kinematics> at(const GnssTime&) const override { return Kinematics{p_, Eigen::Vector3d::Zero()}; }
-
- private:
-  Eigen::Vector3d p_;
-};
-
 // Northern satellites are hidden and arrive only off a wall 20 m south (normal +y); southern
 // ones arrive directly plus a fixed 3 m reflection.
 class MirrorWorld final : public PathQuery {
@@ -85,7 +76,7 @@ std::vector<EpochObservations> run(bool multipath, int epochs) {
   settings.signals = {Signal::parse("G1C").value(), Signal::parse("E1C").value()};
   settings.profile = builtin_profile("ideal").value();
   settings.multipath = multipath;
-  ObservationGenerator generator(settings, ephemerides, std::make_shared<StaticPoint>(geodetic_to_ecef(site)));
+  ObservationGenerator generator(settings, ephemerides, std::make_shared<StaticPosition>(geodetic_to_ecef(site)));
   static const MirrorWorld world;
   if (multipath) generator.set_world(&world, LocalFrame{site, 0.0});
   std::vector<EpochObservations> out;

@@ -10,15 +10,6 @@
 namespace skytrace::receiver {
 namespace {
 
-class StaticPoint final : public KinematicsSource {
- public:
-  explicit StaticPoint(Eigen::Vector3d p) : p_(std::move(p)) {}
-  Result<Kinematics> at(const GnssTime&) const override { return Kinematics{p_, Eigen::Vector3d::Zero()}; }
-
- private:
-  Eigen::Vector3d p_;
-};
-
 // Blocks everything towards the north-east quadrant below 60 degrees; vegetation of a given
 // attenuation to the south-west quadrant.
 class QuadrantWorld final : public PathQuery {
@@ -55,7 +46,7 @@ Counts run_epoch(const PathQuery* world, std::vector<SatelliteObservation>* out 
   GeneratorSettings settings;
   settings.signals = {Signal::parse("G1C").value(), Signal::parse("E1C").value()};
   settings.profile = builtin_profile("ideal").value();
-  ObservationGenerator generator(settings, ephemerides, std::make_shared<StaticPoint>(geodetic_to_ecef(site)));
+  ObservationGenerator generator(settings, ephemerides, std::make_shared<StaticPosition>(geodetic_to_ecef(site)));
   if (world != nullptr) generator.set_world(world, LocalFrame{site, 0.0});
   const auto epoch = generator.observe(start).value();
   Counts c;

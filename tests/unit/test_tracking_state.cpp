@@ -13,15 +13,6 @@
 namespace skytrace::receiver {
 namespace {
 
-class StaticPoint final : public KinematicsSource {
- public:
-  explicit StaticPoint(Eigen::Vector3d p) : p_(std::move(p)) {}
-  Result<Kinematics> at(const GnssTime&) const override { return Kinematics{p_, Eigen::Vector3d::Zero()}; }
-
- private:
-  Eigen::Vector3d p_;
-};
-
 // Open sky, everything blocked, or everything behind a given vegetation loss.
 class SwitchWorld final : public PathQuery {
  public:
@@ -89,7 +80,7 @@ ObservationGenerator make_generator(const ReceiverProfile& profile, bool noise, 
   settings.profile = profile;
   settings.noise = noise;
   settings.seed = 42;
-  return ObservationGenerator(settings, ephemerides(), std::make_shared<StaticPoint>(geodetic_to_ecef(kSite)));
+  return ObservationGenerator(settings, ephemerides(), std::make_shared<StaticPosition>(geodetic_to_ecef(kSite)));
 }
 
 const SignalMeasurement* find(const EpochObservations& e, const std::string& sat, const char* signal) {

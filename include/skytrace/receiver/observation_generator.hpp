@@ -39,6 +39,18 @@ class KinematicsSource {
   [[nodiscard]] virtual Result<Kinematics> at(const GnssTime& t) const = 0;
 };
 
+// A receiver that stands still.
+class StaticPosition final : public KinematicsSource {
+ public:
+  explicit StaticPosition(const Eigen::Vector3d& position_m) : position_m_(position_m) {}
+  [[nodiscard]] Result<Kinematics> at(const GnssTime& /*t*/) const override {
+    return Kinematics{position_m_, Eigen::Vector3d::Zero()};
+  }
+
+ private:
+  Eigen::Vector3d position_m_;
+};
+
 struct GeneratorSettings {
   std::vector<Signal> signals;
   double elevation_mask_deg = 5.0;

@@ -12,16 +12,7 @@
 
 namespace skytrace::sim {
 
-class StaticPosition final : public receiver::KinematicsSource {
- public:
-  explicit StaticPosition(const Eigen::Vector3d& position_m) : position_m_(position_m) {}
-  [[nodiscard]] Result<receiver::Kinematics> at(const GnssTime& /*t*/) const override {
-    return receiver::Kinematics{position_m_, Eigen::Vector3d::Zero()};
-  }
-
- private:
-  Eigen::Vector3d position_m_;
-};
+using StaticPosition = receiver::StaticPosition;
 
 struct TrajectorySample {
   GnssTime time;
