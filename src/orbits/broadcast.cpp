@@ -474,6 +474,39 @@ std::optional<NavMessage> preferred_message(const Signal& signal) {
   }
 }
 
+bool signal_carries(const Signal& signal, NavMessage message) {
+  using S = GnssSystem;
+  const char band = signal.band;
+  const char attribute = signal.attribute;
+  const auto attribute_in = [&](std::string_view set) { return set.find(attribute) != std::string_view::npos; };
+  const bool gps_like = signal.system == S::kGps || signal.system == S::kQzss;
+  const bool is_qzss = signal.system == S::kQzss;
+  switch (message) {
+    case NavMessage::kGpsLnav:
+    case NavMessage::kQzssLnav:
+      return gps_like && is_qzss == (message == NavMessage::kQzssLnav) && band == '1' && attribute == 'C';
+    case NavMessage::kGpsCnav:
+    case NavMessage::kQzssCnav:
+      return gps_like && is_qzss == (message == NavMessage::kQzssCnav) &&
+             ((band == '2' && attribute_in("SLX")) || (band == '5' && attribute_in("IQX")));
+    case NavMessage::kGpsCnav2:
+    case NavMessage::kQzssCnav2:
+      return gps_like && is_qzss == (message == NavMessage::kQzssCnav2) && band == '1' && attribute_in("SLX");
+    case NavMessage::kGalileoInav: return signal.system == S::kGalileo && (band == '1' || band == '7' || band == '8');
+    case NavMessage::kGalileoFnav: return signal.system == S::kGalileo && (band == '5' || band == '8');
+    case NavMessage::kBeiDouD1:
+    case NavMessage::kBeiDouD2:
+      return signal.system == S::kBeiDou && (band == '2' || band == '6' || band == '7') && attribute_in("IQX");
+    case NavMessage::kBeiDouCnav1: return signal.system == S::kBeiDou && band == '1' && attribute_in("DPX");
+    case NavMessage::kBeiDouCnav2: return signal.system == S::kBeiDou && band == '5';
+    case NavMessage::kBeiDouCnav3: return signal.system == S::kBeiDou && band == '7' && attribute_in("DPZ");
+    case NavMessage::kNavicLnav: return signal.system == S::kNavic;
+    case NavMessage::kGlonassFdma: return signal.system == S::kGlonass && (band == '1' || band == '2');
+    case NavMessage::kSbas: return signal.system == S::kSbas;
+  }
+  return false;
+}
+
 double validity_half_window_s(const KeplerEphemeris& eph) {
   // RTKLIB 2.4.3 MAXDTOE*: GPS 7200, QZSS 7200, Galileo 14400, BeiDou 21600, NavIC 7200 s; a
   // narrower window here only makes a satellite absent where RTKLIB would still accept it.
@@ -511,6 +544,36 @@ const KeplerEphemeris* BroadcastEphemerides::find_kepler(const SatelliteId& sate
     return healthy(e) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
   };
   return select_nearest(data_.kepler, it->second, t, kepler_max_window_s_.at(satellite), accept);
+}
+
+std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const SatelliteId& satellite) const {
+  std::vector<RecordAvailability> out;
+  if (const auto it = kepler_index_.find(satellite); it != kepler_index_.end()) {
+    const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;  // as find_kepler
+    for (size_t i : it->second) {
+      const KeplerEphemeris& e = data_.kepler[i];
+      if (!healthy(e)) continue;
+      const double w = window_s(e);
+      out.push_back({e.message, toe_must_be_past ? e.toe : e.toe - w, e.toe + w, transmission_time(e)});
+    }
+  }
+  if (const auto it = glonass_index_.find(satellite); it != glonass_index_.end()) {
+    for (size_t i : it->second) {
+      const GlonassEphemeris& g = data_.glonass[i];
+      if (!healthy(g)) continue;
+      const double w = window_s(g);
+      out.push_back({NavMessage::kGlonassFdma, g.toe - w, g.toe + w, transmission_time(g)});
+    }
+  }
+  if (const auto it = sbas_index_.find(satellite); it != sbas_index_.end()) {
+    for (size_t i : it->second) {
+      const SbasEphemeris& r = data_.sbas[i];
+      if (!healthy(r)) continue;
+      const double w = window_s(r);
+      out.push_back({NavMessage::kSbas, r.toe - w, r.toe + w, transmission_time(r)});
+    }
+  }
+  return out;
 }
 
 const GlonassEphemeris* BroadcastEphemerides::find_glonass(const SatelliteId& satellite, const GnssTime& t) const {

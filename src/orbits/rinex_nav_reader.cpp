@@ -678,7 +678,7 @@ class NavReader {
         e.health = static_cast<int>(std::lround(f.required(6, 1, "SV health")));
         e.group_delays.tgd_s = f.optional(6, 2, "TGD");
         e.iodc = static_cast<int>(std::lround(f.optional(6, 3, "IODC", iode)));
-        e.transmission_time_sow = f.optional(7, 0, "transmission time of message");
+        e.transmission_time_sow = f.optional(7, 0, "transmission time of message", kUnknownTransmissionTime_s);
         const double fit = f.optional(7, 1, "fit interval");
         // QZSS writes the fit-interval flag (0: 2 hours, 1: more than 2 hours, not quantified).
         if (sat.system == S::kQzss && fit < 1.5) e.fit_interval_h = fit == 0.0 ? 2.0 : 0.0;
@@ -693,7 +693,7 @@ class NavReader {
         e.health = static_cast<int>(std::lround(f.required(6, 1, "SV health")));
         e.group_delays.bgd_e1e5a_s = f.optional(6, 2, "BGD E5a/E1");
         e.group_delays.bgd_e1e5b_s = f.optional(6, 3, "BGD E5b/E1");
-        e.transmission_time_sow = f.optional(7, 0, "transmission time of message");
+        e.transmission_time_sow = f.optional(7, 0, "transmission time of message", kUnknownTransmissionTime_s);
         break;
       case S::kBeiDou:
         week = f.required(5, 2, "BDT week");
@@ -701,7 +701,7 @@ class NavReader {
         e.health = static_cast<int>(std::lround(f.required(6, 1, "SatH1")));
         e.group_delays.tgd1_s = f.optional(6, 2, "TGD1 B1/B3");
         e.group_delays.tgd2_s = f.optional(6, 3, "TGD2 B2/B3");
-        e.transmission_time_sow = f.optional(7, 0, "transmission time of message");
+        e.transmission_time_sow = f.optional(7, 0, "transmission time of message", kUnknownTransmissionTime_s);
         e.iodc = static_cast<int>(std::lround(f.optional(7, 1, "AODC")));
         // GEO satellites (C01-C05, C59-C63) broadcast D2, the others D1.
         e.message = (sat.number <= 5 || sat.number >= 59) ? NavMessage::kBeiDouD2 : NavMessage::kBeiDouD1;
@@ -711,7 +711,7 @@ class NavReader {
         e.accuracy_m = f.optional(6, 0, "user range accuracy");
         e.health = static_cast<int>(std::lround(f.required(6, 1, "SV health")));
         e.group_delays.tgd_s = f.optional(6, 2, "TGD");
-        e.transmission_time_sow = f.optional(7, 0, "transmission time of message");
+        e.transmission_time_sow = f.optional(7, 0, "transmission time of message", kUnknownTransmissionTime_s);
         e.message = NavMessage::kNavicLnav;
         break;
       case S::kGlonass:
@@ -800,7 +800,7 @@ class NavReader {
       e.group_delays.isc_l1cp_s = f.optional(8, 1, "ISC_L1Cp");
       last = 9;
     }
-    e.transmission_time_sow = f.optional(last, 0, "transmission time of message");
+    e.transmission_time_sow = f.optional(last, 0, "transmission time of message", kUnknownTransmissionTime_s);
     const std::optional<double> week = f.maybe(last, 1, "week");
     if (f.error()) return *f.error();
     e.week = week ? static_cast<int>(std::lround(*week)) : e.toc.to_week_tow(TimeScale::kGpst).week;
@@ -826,7 +826,7 @@ class NavReader {
     if (message == NavMessage::kBeiDouCnav3) {
       e.health = static_cast<int>(std::lround(f.required(7, 1, "health")));
       gd.tgd_b2bi_s = f.optional(7, 3, "TGD_B2bI");
-      e.transmission_time_sow = f.optional(8, 0, "transmission time of message");
+      e.transmission_time_sow = f.optional(8, 0, "transmission time of message", kUnknownTransmissionTime_s);
     } else {
       if (message == NavMessage::kBeiDouCnav1) gd.isc_b1cd_s = f.optional(7, 0, "ISC_B1Cd");
       else gd.isc_b2ad_s = f.optional(7, 1, "ISC_B2ad");
@@ -834,7 +834,7 @@ class NavReader {
       gd.tgd_b2ap_s = f.optional(7, 3, "TGD_B2ap");
       e.health = static_cast<int>(std::lround(f.required(8, 1, "health")));
       e.iodc = static_cast<int>(std::lround(f.optional(8, 3, "IODC")));
-      e.transmission_time_sow = f.optional(9, 0, "transmission time of message");
+      e.transmission_time_sow = f.optional(9, 0, "transmission time of message", kUnknownTransmissionTime_s);
       e.iode = static_cast<int>(std::lround(f.optional(9, 3, "IODE")));
     }
     if (f.error()) return *f.error();
@@ -863,9 +863,14 @@ class NavReader {
     g.minus_tau_n_s = f.required(0, 1, "SV clock bias (-TauN)");
     g.gamma_n = f.required(0, 2, "SV relative frequency bias (+GammaN)");
     // Seconds of the UTC day in RINEX 2, of the UTC week in RINEX 3.02+: reduced to the day.
-    const double frame_s = f.optional(0, 3, "message frame time");
-    g.message_frame_time_s = std::fmod(frame_s, kDay_s);
-    if (g.message_frame_time_s < 0.0) g.message_frame_time_s += kDay_s;
+    // Blank or 0.9999E9: unknown, kept as the marker.
+    const double frame_s = f.optional(0, 3, "message frame time", kUnknownTransmissionTime_s);
+    if (std::fabs(frame_s) >= kUnknownTransmissionTime_s) {
+      g.message_frame_time_s = kUnknownTransmissionTime_s;
+    } else {
+      g.message_frame_time_s = std::fmod(frame_s, kDay_s);
+      if (g.message_frame_time_s < 0.0) g.message_frame_time_s += kDay_s;
+    }
     static constexpr std::array<const char*, 3> kAxis = {"X", "Y", "Z"};
     for (size_t axis = 0; axis < 3; ++axis) {
       const std::string a = kAxis[axis];
@@ -910,7 +915,7 @@ class NavReader {
     s.toe = GnssTime::from_calendar(*epoch, TimeScale::kGpst);
     s.agf0_s = f.required(0, 1, "SV clock bias (aGf0)");
     s.agf1_s_per_s = f.required(0, 2, "SV relative frequency bias (aGf1)");
-    s.transmission_time_sow = f.optional(0, 3, "transmission time of message");
+    s.transmission_time_sow = f.optional(0, 3, "transmission time of message", kUnknownTransmissionTime_s);
     static constexpr std::array<const char*, 3> kAxis = {"X", "Y", "Z"};
     for (size_t axis = 0; axis < 3; ++axis) {
       const std::string a = kAxis[axis];

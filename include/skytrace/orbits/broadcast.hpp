@@ -60,6 +60,23 @@ class GlonassOrbitCache {
 // B2a -> CNAV2, B2b -> CNAV3); nullopt when any message of the system serves.
 [[nodiscard]] std::optional<NavMessage> preferred_message(const Signal& signal);
 
+// Whether a signal carries a navigation message, i.e. a receiver tracking it can decode it: GPS/QZSS
+// LNAV on L1 C/A (P(Y) is encrypted), CNAV on L2C and L5, CNAV-2 on L1C; Galileo I/NAV on E1 and
+// E5b, F/NAV on E5a, both on E5 AltBOC; BeiDou D1/D2 on B1I, B2I and B3I, CNAV1 on B1C, CNAV2 on
+// B2a, CNAV3 on B2b; NavIC LNAV on every signal; GLONASS FDMA on L1 and L2; SBAS on every signal.
+[[nodiscard]] bool signal_carries(const Signal& signal, NavMessage message);
+
+// One healthy record of a satellite as a receiver can come to hold it: its message, the span of
+// receiver time over which ephemeris selection may pick it (toe -/+ the validity half window;
+// Galileo from toe, as selection takes only records whose toe has passed) and when it was
+// transmitted (transmission_time(), nullopt when the file does not say).
+struct RecordAvailability {
+  NavMessage message = NavMessage::kGpsLnav;
+  GnssTime valid_from;
+  GnssTime valid_until;
+  std::optional<GnssTime> transmitted;
+};
+
 // Broadcast ephemerides of all systems, indexed per satellite.
 class BroadcastEphemerides final : public SatelliteStateSource {
  public:
@@ -87,6 +104,8 @@ class BroadcastEphemerides final : public SatelliteStateSource {
   // Code group delay of the signal from the record selected for it.
   [[nodiscard]] Result<double> group_delay_for_signal(const SatelliteId& satellite, const Signal& signal,
                                                       const GnssTime& t) const;
+  // The satellite's healthy records of every message, in order of toe (Keplerian, GLONASS, SBAS).
+  [[nodiscard]] std::vector<RecordAvailability> record_availability(const SatelliteId& satellite) const;
   // GLONASS frequency channel k of a satellite from its records.
   [[nodiscard]] std::optional<int> glonass_channel(const SatelliteId& satellite) const;
 

@@ -28,6 +28,29 @@ enum class NavMessage : std::uint8_t {
 };
 [[nodiscard]] std::string_view to_string(NavMessage message);  // "LNAV", "INAV", "D1", ... (RINEX 4 names)
 
+// Time a receiver needs, from the moment it tracks a satellite, to collect a complete ephemeris and
+// clock of the message: the period at which the message repeats them (the receiver starts
+// anywhere in the cycle and needs every part once).
+//   GPS/QZSS LNAV 30 s: subframes 1-3 of every 30-s frame (IS-GPS-200).
+//   Galileo I/NAV 30 s: word types 1-4 in every 30-s nominal subframe (a receiver combining E1-B and
+//   E5b could halve it; not modelled). F/NAV 50 s: page types 1-4 of the 50-s subframe (OS SIS ICD).
+//   BeiDou D1 30 s: subframes 1-3 of the 30-s frame. D2 (GEO) 30 s too: D2 runs at 500 bit/s
+//   with 3-s frames, but the ephemeris fills the 10 pages of subframe 1 and each frame carries one
+//   page (B1I ICD 3.0, 5.3.2), so the cycle is 10 frames.
+//   GLONASS 30 s: strings 1-4 of every 30-s frame (ICD 5.1).
+//   NavIC 48 s: subframes 1 and 2 of the 48-s master frame (SPS ICD 1.1).
+//   SBAS 12 s: a lower bound (frame synchronisation on the preamble spread over three 1-s messages,
+//   then the GEO navigation message, type 9, which RTCA DO-229 lets be up to 120 s apart).
+//   GPS/QZSS CNAV 48 s: message types 10, 11 and a clock message at least every 48 s (IS-GPS-200,
+//   CNAV broadcast intervals). CNAV-2 and BeiDou CNAV1 18 s: ephemeris and clock in subframe 2 of
+//   every 18-s frame. BeiDou CNAV2 (B2a) and CNAV3 (B2b) 48 s as GPS CNAV: their ICDs leave the
+//   order of the message types to the operator.
+[[nodiscard]] double ephemeris_decode_time_s(NavMessage message);
+
+// RINEX writes 0.9999E9 for an unknown value (RINEX 3.05 GLONASS: .999999999999E+09); the readers
+// store it for a blank transmission time too.
+inline constexpr double kUnknownTransmissionTime_s = 0.9999e9;
+
 // Per-signal group delays as broadcast. Which applies to which signal: see group_delay_s().
 struct GroupDelays {
   double tgd_s = 0.0;  // GPS/QZSS LNAV and CNAV T_GD (L1 P(Y) / L1 C/A); NavIC T_GD (L5)
@@ -75,7 +98,10 @@ struct KeplerEphemeris {
   std::uint32_t data_source = 0;  // Galileo data source bits (bit 0 I/NAV E1-B, 1 F/NAV, 2 I/NAV E5b, 8 af for E5a, 9 af for E5b)
   int codes_on_l2 = 0;       // GPS: codes on L2 channel
   int l2p_data_flag = 0;     // GPS: L2 P data flag
-  double transmission_time_sow = 0.0;  // transmission time of message (seconds of week, system time)
+  // Transmission time of message (RINEX: seconds of the week of `week`, system time; may be
+  // negative or beyond a week to refer to that week; kUnknownTransmissionTime_s when unknown).
+  // transmission_time() places it on the timeline.
+  double transmission_time_sow = 0.0;
 
   // Where the record came from, for messages (file name and 1-based line of the record's first line).
   std::string source;
@@ -87,7 +113,7 @@ struct GlonassEphemeris {
   GnssTime toe;               // t_b on the GPST timeline (RINEX gives it in UTC)
   double minus_tau_n_s = 0.0;  // RINEX "SV clock bias (-TauN)"
   double gamma_n = 0.0;        // RINEX "SV relative frequency bias (+GammaN)"
-  double message_frame_time_s = 0.0;  // t_k, seconds of the UTC day (RINEX)
+  double message_frame_time_s = 0.0;  // t_k, seconds of the UTC day (RINEX); kUnknownTransmissionTime_s when unknown
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
   Eigen::Vector3d acceleration_mps2 = Eigen::Vector3d::Zero();  // lunisolar, as broadcast
@@ -107,7 +133,7 @@ struct SbasEphemeris {
   SatelliteId satellite;
   GnssTime toe;                 // t_0 on the GPST timeline
   double agf0_s = 0.0, agf1_s_per_s = 0.0;
-  double transmission_time_sow = 0.0;
+  double transmission_time_sow = 0.0;  // GPS seconds of week (start of the message), as Keplerian records
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
   Eigen::Vector3d acceleration_mps2 = Eigen::Vector3d::Zero();
@@ -116,6 +142,17 @@ struct SbasEphemeris {
   int iodn = 0;
   std::string source;
 };
+
+// When a record was transmitted, on the GPST timeline, from its transmission time of message
+// (GLONASS: the message frame time t_k, seconds of the UTC day, placed on the UTC day within 12 h
+// of t_b; the others: seconds of the record's week in the system's time, BeiDou in BDT, taken
+// within half a week of toe as RINEX allows a value adjusted by a week either way). nullopt when the
+// file does not say: blank, 0.9999E9, or anything beyond two weeks; for Keplerian and SBAS records
+// also 0, what writers without the value leave there (a true 0 is the first instant of a week).
+// GLONASS t_k = 0 is a frame at 00:00:00 UTC and is kept.
+[[nodiscard]] std::optional<GnssTime> transmission_time(const KeplerEphemeris& eph);
+[[nodiscard]] std::optional<GnssTime> transmission_time(const GlonassEphemeris& eph);
+[[nodiscard]] std::optional<GnssTime> transmission_time(const SbasEphemeris& eph);
 
 struct KlobucharCoefficients {
   std::array<double, 4> alpha{};  // s, s/semicircle, s/semicircle^2, s/semicircle^3
