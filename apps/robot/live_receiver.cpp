@@ -159,7 +159,7 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
     s.vegetation_path_m = sat.vegetation_path_m;
     s.vegetation_attenuation_db = sat.vegetation_attenuation_db;
     s.used_in_fix = used.count(sat.satellite) > 0;
-    if (sat.status != receiver::SatelliteStatus::kNoEphemeris) {
+    if (sat.status != receiver::SatelliteStatus::kNoEphemeris || sat.waiting_for_ephemeris) {
       s.direction_world = to_array((to_world * (sat.satellite_position_m - antenna_ecef)).normalized());
     }
     for (const auto& m : sat.signals) {

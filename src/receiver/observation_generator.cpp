@@ -11,6 +11,7 @@
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/satellite_catalog.hpp"
+#include "skytrace/receiver/ephemeris_decoding.hpp"
 #include "skytrace/receiver/link_budget.hpp"
 #include "skytrace/receiver/multipath.hpp"
 
@@ -445,6 +446,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     }
     const double acquisition_threshold_dbhz =
         satellite_acquirable ? profile.tracking_threshold_dbhz : profile.acquisition_threshold_dbhz;
+    std::optional<GnssTime> acquired;  // when this epoch's new arcs were acquired (the earliest)
+    records_used_.clear();
     std::string not_tracked_because;
     std::size_t candidate_index = 0;
     for (const auto& [signal_pointer, cn0_dbhz] : candidates_) {
@@ -488,6 +491,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
           continue;
         }
         new_arc = true;
+        const GnssTime signal_acquired = *arc.above_since + profile.acquisition_time_s;
+        if (!acquired || signal_acquired < *acquired) acquired = signal_acquired;
       }
 
       // The clock and group delay come from the record that belongs to the signal (Galileo E5a:
@@ -509,9 +514,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
           if (other_record) signal_record = &*other_record;
         }
       }
-      if (signal_record->kepler != nullptr) used_kepler_.insert(signal_record->kepler);
-      if (signal_record->glonass != nullptr) used_glonass_.insert(signal_record->glonass);
-      if (signal_record->sbas != nullptr) used_sbas_.insert(signal_record->sbas);
+      records_used_.emplace_back(signal_record->kepler, signal_record->glonass, signal_record->sbas);
 
       SignalMeasurement m;
       m.signal = signal;
@@ -612,10 +615,62 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.status = attenuated ? SatelliteStatus::kAttenuated : SatelliteStatus::kNoSignal;
       obs.detail = attenuated ? not_tracked_because + " after vegetation"
                               : (not_tracked_because.empty() ? "no listed signal tracked" : not_tracked_because);
+    } else if (profile.output_requires_ephemeris && !holds_ephemeris(obs, tag, acquired)) {
+      // Tracked (channel, arcs, lock time and noise streams run on) but not output.
+      obs.status = SatelliteStatus::kNoEphemeris;
+      obs.waiting_for_ephemeris = true;
+      obs.signals.clear();
+      continue;
+    }
+    for (const auto& [kepler, glonass, sbas] : records_used_) {
+      if (kepler != nullptr) used_kepler_.insert(kepler);
+      if (glonass != nullptr) used_glonass_.insert(glonass);
+      if (sbas != nullptr) used_sbas_.insert(sbas);
+    }
+  }
+  if (profile.output_requires_ephemeris) {
+    // A satellite lost before its ephemeris was decoded starts decoding again at its next acquisition.
+    for (auto it = ephemeris_state_.begin(); it != ephemeris_state_.end();) {
+      if (!it->second.held && it->second.tracked_tag != tag) {
+        it = ephemeris_state_.erase(it);
+      } else {
+        ++it;
+      }
     }
   }
   last_tag_ = tag;
   return epoch;
+}
+
+bool ObservationGenerator::holds_ephemeris(SatelliteObservation& obs, const GnssTime& tag,
+                                           const std::optional<GnssTime>& acquired) {
+  const SatelliteId& sat = obs.satellite;
+  EphemerisState& state = ephemeris_state_[sat];
+  state.tracked_tag = tag;
+  if (state.held) return true;
+  if (!last_tag_) {
+    // The run's first epoch: the receiver ran before and holds the ephemerides of what it tracks.
+    state.held = true;
+    return true;
+  }
+  if (!state.decoding) {
+    state.decoding = true;
+    std::vector<Signal> signals;  // what the receiver tracks of the satellite
+    signals.reserve(candidates_.size());
+    for (const auto& [signal, cn0_dbhz] : candidates_) signals.push_back(*signal);
+    state.held_from = ephemeris_held_from(ephemerides_, sat, acquired.value_or(tag), signals);
+  }
+  if (state.held_from && tag >= *state.held_from) {
+    // The first output: the carrier was tracked since the acquisition (the lock time says so), but
+    // for the user the arcs start here; the NetR9 flags them (LLI 1), as at any acquisition.
+    state.held = true;
+    for (SignalMeasurement& m : obs.signals) m.loss_of_lock = true;
+    return true;
+  }
+  obs.detail = state.held_from ? "navigation message not yet decoded (ephemeris held from " +
+                                 state.held_from->to_iso8601(TimeScale::kGpst, 0) + " GPST)"
+                           : "navigation message not yet decoded (no record to decode)";
+  return false;
 }
 
 }  // namespace skytrace::receiver

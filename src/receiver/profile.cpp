@@ -130,7 +130,8 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   const Field tracking = root.required("tracking");
   tracking.expect_keys({"dll_bandwidth_hz", "pll_bandwidth_hz", "fll_bandwidth_hz", "correlator_spacing_chips",
                         "integration_time_s", "acquisition_threshold_dbhz", "tracking_threshold_dbhz",
-                        "acquisition_time_s", "half_cycle_resolution_s", "cn0_resolution_dbhz"});
+                        "acquisition_time_s", "half_cycle_resolution_s", "cn0_resolution_dbhz",
+                        "output_requires_ephemeris"});
   p.dll_bandwidth_hz = tracking.required("dll_bandwidth_hz").as_double_in(0.0, 50.0);
   p.pll_bandwidth_hz = tracking.required("pll_bandwidth_hz").as_double_in(0.0, 100.0);
   p.fll_bandwidth_hz = tracking.required("fll_bandwidth_hz").as_double_in(0.0, 50.0);
@@ -146,6 +147,7 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   p.acquisition_time_s = tracking.required("acquisition_time_s").as_double_in(0.0, 600.0);
   p.half_cycle_resolution_s = tracking.required("half_cycle_resolution_s").as_double_in(0.0, 600.0);
   p.cn0_resolution_dbhz = tracking.required("cn0_resolution_dbhz").as_double_in(0.0, 10.0);
+  if (auto c = tracking.child("output_requires_ephemeris")) p.output_requires_ephemeris = c->as_bool();
 
   p.oscillator = parse_oscillator(root.required("oscillator"));
   return p;

@@ -234,7 +234,7 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
     const std::string status(receiver::to_string(sat.status));
     const std::string sat_name = sat.satellite.to_string();
     const std::string geometry =
-        sat.status == receiver::SatelliteStatus::kNoEphemeris
+        sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris
             ? std::string(kNoGeometry)
             : fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f}", sat.direction.azimuth_deg,
                           sat.direction.elevation_deg, sat.range_m, sat.range_rate_mps, sat.satellite_clock_m,
@@ -242,7 +242,8 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
     if (sat.signals.empty()) {
       // One row for the satellite: why it is not observed, with the geometry when known.
       const std::string atmosphere = sat.status == receiver::SatelliteStatus::kTracked ||
-                                             sat.status == receiver::SatelliteStatus::kNoSignal
+                                             sat.status == receiver::SatelliteStatus::kNoSignal ||
+                                             sat.waiting_for_ephemeris
                                          ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
                                          : std::string(",");
       fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,\n", time, receiver_name, sat_name,
@@ -366,7 +367,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     }
     if (receiver_index == 0) {
       for (const auto& sat : epoch.satellites) {
-        if (sat.status == receiver::SatelliteStatus::kNoEphemeris) continue;
+        if (sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris) continue;
         io::ReportSample sample;
         sample.time = epoch.receiver_time;
         sample.satellite = sat.satellite;

@@ -72,6 +72,22 @@ TEST(ReceiverProfiles, ParsesEveryField) {
   EXPECT_DOUBLE_EQ(p.oscillator.h0, oscillator_preset("tcxo")->h0);
   EXPECT_FALSE(p.oscillator.steered);
   EXPECT_DOUBLE_EQ(p.oscillator.initial_bias_s, 1e-4);
+  EXPECT_FALSE(p.output_requires_ephemeris);  // optional, false by default
+}
+
+TEST(ReceiverProfiles, OutputRequiresEphemerisIsATrackingKey) {
+  const std::string with = replaced(kValid, "  cn0_resolution_dbhz: 1\n", "  cn0_resolution_dbhz: 1\n  output_requires_ephemeris: true\n");
+  EXPECT_TRUE(parse_profile(with, "mine.yaml").value().output_requires_ephemeris);
+  const std::string e = error_of(replaced(with, "output_requires_ephemeris: true", "output_requires_ephemeris: sometimes"));
+  EXPECT_NE(e.find("mine.yaml:24: tracking.output_requires_ephemeris: expected true or false, got 'sometimes'"),
+            std::string::npos)
+      << e;
+  // The NetR9 outputs a satellite only once it holds its ephemeris (NYA1, docs/validation.md);
+  // u-blox and Septentrio receivers output raw measurements without.
+  EXPECT_TRUE(load_profile("trimble-netr9").value().output_requires_ephemeris);
+  for (const char* name : {"ideal", "septentrio-polarx5", "septentrio-mosaic-x5", "ublox-f9p", "ublox-m8t"}) {
+    EXPECT_FALSE(load_profile(name).value().output_requires_ephemeris) << name;
+  }
 }
 
 TEST(ReceiverProfiles, ErrorsNameFileLineAndField) {

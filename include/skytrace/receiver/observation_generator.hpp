@@ -11,6 +11,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <vector>
 
@@ -71,7 +72,7 @@ struct GeneratorSettings {
 enum class SatelliteStatus {
   kTracked,     // at least one signal observed
   kBelowMask,   // below the elevation mask
-  kNoEphemeris, // the receiver holds no valid ephemeris
+  kNoEphemeris, // the receiver holds no valid ephemeris (or, waiting_for_ephemeris, has not decoded one yet)
   kNoSignal,    // transmits none of the listed signals
   kBlocked,     // the world blocks the line of sight (detail: the blocking object)
   kAttenuated,  // vegetation lowers every signal below the tracking threshold
@@ -114,6 +115,10 @@ struct SatelliteObservation {
   SatelliteId satellite;
   SatelliteStatus status = SatelliteStatus::kTracked;
   std::string detail;  // why not tracked, for the truth file
+  // Tracked, but not output until the receiver holds an ephemeris for it (profile
+  // tracking.output_requires_ephemeris; status kNoEphemeris, no signals). Unlike a satellite
+  // without any valid record, its geometry and atmosphere are filled in.
+  bool waiting_for_ephemeris = false;
   int glonass_channel = 0;
   AzimuthElevation direction;
   double range_m = 0.0;            // geometric, transmit to receive, Sagnac included
@@ -189,6 +194,12 @@ class ObservationGenerator {
     SignalStreams(std::uint64_t noise_key, std::uint64_t slip_key) : noise(noise_key), slips(slip_key) {}
   };
 
+  // Whether the receiver holds an ephemeris for a satellite it tracks at `tag`, when the profile
+  // outputs only such satellites (output_requires_ephemeris); `acquired` is when this epoch's new
+  // arcs of it were acquired. Starts decoding at a first acquisition, holds at once at the run's
+  // first epoch. Not held: says why in obs.detail; held for the first time after decoding: sets
+  // the loss-of-lock flag of every signal (a new arc for the user).
+  bool holds_ephemeris(SatelliteObservation& obs, const GnssTime& tag, const std::optional<GnssTime>& acquired);
   // Ends every carrier arc of a satellite (its signals are blocked).
   void arcs_lost(const SatelliteId& sat);
   // Whether the satellite transmits the signal, cached per GPST day.
@@ -223,6 +234,18 @@ class ObservationGenerator {
   std::vector<SatelliteId> satellites_;
   std::unordered_map<SignalKey, Arc, SignalKeyHash> arcs_;
   std::unordered_map<SignalKey, SignalStreams, SignalKeyHash> streams_;
+  // output_requires_ephemeris: per tracked satellite, whether the receiver holds an ephemeris, or
+  // when it will (decoding since its acquisition). Dropped when lost before it is held.
+  struct EphemerisState {
+    bool held = false;
+    bool decoding = false;
+    std::optional<GnssTime> held_from;  // while decoding; nullopt: no record to decode
+    GnssTime tracked_tag;               // last epoch it was tracked
+  };
+  std::unordered_map<SatelliteId, EphemerisState> ephemeris_state_;
+  // The records a satellite's signals used this epoch, entered into used_* once it is output.
+  std::vector<std::tuple<const orbits::KeplerEphemeris*, const orbits::GlonassEphemeris*, const orbits::SbasEphemeris*>>
+      records_used_;
   orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
   std::set<const orbits::KeplerEphemeris*> used_kepler_;
   std::set<const orbits::GlonassEphemeris*> used_glonass_;

@@ -76,6 +76,10 @@ struct ReceiverProfile {
   double acquisition_time_s = 0.0;
   double half_cycle_resolution_s = 0.0;
   double cn0_resolution_dbhz = 0.25;
+  // Outputs a satellite's measurements only once it holds a broadcast ephemeris for it (as the
+  // Trimble NetR9 does; u-blox and Septentrio output raw measurements without). The satellite is
+  // tracked meanwhile (channel, lock time, arcs); receiver/ephemeris_decoding.hpp says when.
+  bool output_requires_ephemeris = false;
   OscillatorSettings oscillator;
 
   // The profile's entry for a signal, or nullptr when the receiver cannot track it.
