@@ -209,6 +209,23 @@ const orbits::BroadcastEphemerides& nominal() {
   return e;
 }
 
+// The same records, all first transmitted 10 minutes after the start (those expiring before that
+// left out: a record transmitted after its validity would be a wrong field, taken as unknown).
+const orbits::BroadcastEphemerides& nominal_transmitted_late() {
+  static const orbits::BroadcastEphemerides e([] {
+    orbits::NavigationData data = orbits::make_nominal_constellation(kStart, 7200.0).value();
+    std::erase_if(data.kepler, [](const orbits::KeplerEphemeris& r) {
+      return r.toe + orbits::validity_half_window_s(r) < kStart + 600.0;
+    });
+    for (auto& r : data.kepler) {
+      const TimeScale scale = r.satellite.system == GnssSystem::kBeiDou ? TimeScale::kBdt : TimeScale::kGpst;
+      r.transmission_time_sow = (kStart + 600.0).to_week_tow(scale).tow_s;
+    }
+    return data;
+  }());
+  return e;
+}
+
 // Everything blocked while `blocked` is set.
 class SwitchWorld final : public PathQuery {
  public:
@@ -225,7 +242,8 @@ class SwitchWorld final : public PathQuery {
 
 // Epochs every 10 s for `count` epochs, with the world blocked at the epochs in `blocked`.
 std::vector<EpochObservations> run(bool output_requires_ephemeris, int count, const std::set<int>& blocked = {},
-                                   std::set<const orbits::KeplerEphemeris*>* used = nullptr) {
+                                   std::set<const orbits::KeplerEphemeris*>* used = nullptr,
+                                   const orbits::BroadcastEphemerides& ephemerides = nominal()) {
   std::string text = kProfile;
   text.replace(text.find("OUTPUT"), 6, output_requires_ephemeris ? "true" : "false");
   GeneratorSettings settings;
@@ -234,7 +252,7 @@ std::vector<EpochObservations> run(bool output_requires_ephemeris, int count, co
   settings.profile = parse_profile(text, "test.yaml").value();
   settings.noise = true;
   settings.seed = 42;
-  ObservationGenerator generator(settings, nominal(), std::make_shared<StaticPosition>(geodetic_to_ecef(kSite)));
+  ObservationGenerator generator(settings, ephemerides, std::make_shared<StaticPosition>(geodetic_to_ecef(kSite)));
   SwitchWorld world;
   generator.set_world(&world, LocalFrame{kSite, 0.0});
   std::vector<EpochObservations> epochs;
@@ -263,8 +281,10 @@ int first_output(const std::vector<EpochObservations>& epochs, const SatelliteId
 }
 
 TEST(GeneratorEphemerisDecoding, WarmStartOutputsWhatIsTrackedAtTheFirstEpoch) {
-  const auto with = run(true, 1);
-  const auto without = run(false, 1);
+  // Even with every record first transmitted after the start: the receiver ran before and holds
+  // the ephemerides of what it tracks.
+  const auto with = run(true, 1, {}, nullptr, nominal_transmitted_late());
+  const auto without = run(false, 1, {}, nullptr, nominal_transmitted_late());
   int tracked = 0;
   for (const auto& s : without[0].satellites) {
     const SatelliteObservation* w = find(with[0], s.satellite);
