@@ -149,16 +149,18 @@ void report_rays(benchmark::State& state, int rays_per_iteration, int blocked) {
   state.counters["blocked_share"] = static_cast<double>(blocked) / rays_per_iteration;
 }
 
+// details:1 = EmbreeScene::trace (nearest hit with point and normal), details:0 =
+// trace_line_of_sight (blocked by what, or the vegetation crossed).
 void trace_batches(benchmark::State& state, const City& city) {
-  EmbreeSceneOptions options;
-  options.blocking_details = state.range(0) != 0;
-  auto scene = EmbreeScene::build(city.world, options);
+  const bool details = state.range(0) != 0;
+  auto scene = EmbreeScene::build(city.world);
   if (!scene.ok()) return state.SkipWithError(scene.error().message.c_str());
   int blocked = 0;
   for (auto _ : state) {
     blocked = 0;
     for (std::size_t b = 0; b < city.batches.size(); ++b) {
-      const auto out = (*scene)->trace(city.origins[b], city.batches[b]);
+      const auto out = details ? (*scene)->trace(city.origins[b], city.batches[b])
+                               : (*scene)->trace_line_of_sight(city.origins[b], city.batches[b]);
       for (const auto& o : out) blocked += o.blocked ? 1 : 0;
       benchmark::DoNotOptimize(out.data());
     }
@@ -322,12 +324,14 @@ double thread_cpu_s() {
 }
 
 // The goal figure in one run, robust to a loaded machine: each iteration traces every batch
-// through EmbreeScene::trace, then through raw rtcOccluded1 on the same triangles (same scene
+// through EmbreeScene::trace (details:1) or trace_line_of_sight (details:0), then through raw rtcOccluded1 on the same triangles (same scene
 // flags), then raw rtcIntersect1 (the raw query that finds what details report), and reports
 // api_over_raw = rtcOccluded1 time / API time (goal >= 0.7) and api_over_raw_intersect.
+// convex:0 traces convex vegetation volumes as triangles (EmbreeSceneOptions), for comparison.
 void api_over_raw(benchmark::State& state, const City& city) {
+  const bool details = state.range(0) != 0;
   EmbreeSceneOptions options;
-  options.blocking_details = state.range(0) != 0;
+  options.convex_vegetation_volumes = state.range(1) != 0;
   auto scene = EmbreeScene::build(city.world, options);
   if (!scene.ok()) return state.SkipWithError(scene.error().message.c_str());
   const RawEmbree raw(city.world);
@@ -345,7 +349,8 @@ void api_over_raw(benchmark::State& state, const City& city) {
     api_blocked = 0;
     through_vegetation = 0;
     for (std::size_t b = 0; b < city.batches.size(); ++b) {
-      const auto out = (*scene)->trace(city.origins[b], city.batches[b]);
+      const auto out = details ? (*scene)->trace(city.origins[b], city.batches[b])
+                               : (*scene)->trace_line_of_sight(city.origins[b], city.batches[b]);
       for (const auto& o : out) {
         api_blocked += o.blocked ? 1 : 0;
         through_vegetation += o.vegetation_path_m > 0.0 ? 1 : 0;
@@ -380,7 +385,7 @@ void api_over_raw(benchmark::State& state, const City& city) {
 }
 
 void BM_ApiOverRawOccluded(benchmark::State& state) { api_over_raw(state, plain_city()); }
-BENCHMARK(BM_ApiOverRawOccluded)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
+BENCHMARK(BM_ApiOverRawOccluded)->Unit(benchmark::kMillisecond)->ArgsProduct({{1, 0}, {1}})->ArgNames({"details", "convex"});
 
 
 // The citysim world of ../shared/data (Gazebo's simple_city.world with its models: terrain,
@@ -424,9 +429,13 @@ void BM_CitysimApiOverRawOccluded(benchmark::State& state) {
   state.counters["movable"] = static_cast<double>(stats.movable_objects);
   state.counters["vegetation"] = static_cast<double>(stats.vegetation_objects);
   state.counters["triangles"] = static_cast<double>(stats.triangles);
+  state.counters["convex_vegetation"] = static_cast<double>(stats.convex_vegetation_objects);
   api_over_raw(state, city);
 }
-BENCHMARK(BM_CitysimApiOverRawOccluded)->Unit(benchmark::kMillisecond)->Arg(1)->Arg(0)->ArgName("details");
+BENCHMARK(BM_CitysimApiOverRawOccluded)
+    ->Unit(benchmark::kMillisecond)
+    ->ArgsProduct({{1, 0}, {1, 0}})
+    ->ArgNames({"details", "convex"});
 
 // Moving one truck between epochs in the full city: new instance transform and a top-level commit.
 void BM_SetObjectPose(benchmark::State& state) {

@@ -366,7 +366,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       outcomes.reserve(path_sets.size());
       for (const PathSet& set : path_sets) outcomes.push_back(set.direct);
     } else {
-      outcomes = world_->trace(world_frame_.from_ecef(rx_m), directions);
+      outcomes = world_->trace_line_of_sight(world_frame_.from_ecef(rx_m), directions);
     }
   }
 

@@ -72,6 +72,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     options.geo_origin = frame;
     options.material_rules = rules;
     options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
+    options.vegetation_hull_tolerance_m = w.vegetation_hull_tolerance_m.value_or(world::kDefaultVegetationHullToleranceM);
     auto sdf = world::load_sdf_world(*w.sdf, options);
     if (!sdf) return sdf.error();
     if (!sdf->geo_origin) {
@@ -132,6 +133,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     if (m.kind == "ground") options.default_material.material_class = MaterialClass::kGround;
     options.material_rules = rules;
     options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
+    options.vegetation_hull_tolerance_m = w.vegetation_hull_tolerance_m.value_or(world::kDefaultVegetationHullToleranceM);
     options.name = m.name;
     auto mesh = world::load_mesh_world(m.file, *frame, options);
     if (!mesh) return mesh.error().with_context("world.meshes");

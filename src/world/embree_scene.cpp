@@ -6,16 +6,22 @@
 // every movable object is a scene of its own with an instance in the top level: a new pose then
 // rebuilds only the top-level structure over a handful of instances, not the static BVH.
 //
-// One Embree query per ray. Without vegetation: rtcIntersect1 (closest hit, for the details) or
-// rtcOccluded1 (visibility only). With vegetation: rtcIntersect1 in the main scene, where an
-// intersection filter on the vegetation geometries records each crossing and rejects it, so the
-// traversal goes on to the closest opaque hit and meets every vegetation crossing before it.
+// Vegetation. A closed convex volume (a tree crown as a convex hull: the common case) is one Embree
+// user primitive per horizontal slab of it; a ray entering one only notes the volume, and the part
+// of the ray inside is then computed exactly from the volume's face planes (ConvexVolume). Other
+// vegetation volumes are triangles with a filter that records each crossing and rejects it, so the
+// traversal goes on.
 //
-// Whether the origin lies inside a vegetation volume is decided once per batch (all rays of a batch
-// share the origin) in a second, vegetation-only scene: the number of crossings of a closed volume
-// along a ray to infinity is odd from inside, whatever the mesh's winding; three rays vote. Each
-// ray's pieces inside a volume then follow from that state and its crossings before the first
-// opaque hit.
+// One Embree query per ray: rtcIntersect1 for trace() (the closest opaque hit, every vegetation
+// crossing before it), rtcOccluded1 for trace_line_of_sight() (any opaque hit ends the ray; a free
+// ray meets all its vegetation on the way).
+//
+// Whether the origin lies inside a vegetation volume traced as triangles is decided once per batch
+// (all rays of a batch share the origin) in a second scene of those volumes only: the number of
+// crossings of a closed volume along a ray to infinity is odd from inside, whatever the mesh's
+// winding; three rays vote. Each ray's pieces inside a volume then follow from that state and its
+// crossings before the first opaque hit. Convex volumes need no vote: their exact chord starts
+// inside.
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -24,7 +30,10 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <tuple>
+#include <unordered_map>
 #include <type_traits>
+#include <utility>
 
 #include "skytrace/world/scene.hpp"
 
@@ -48,11 +57,16 @@ struct VegetationCrossing {
   bool facing_ray = false;  // the triangle's winding normal points against the ray
 };
 
-// The filter receives a pointer to the RTCIntersectContext given to rtcIntersect1; this struct
-// starts with it so the filter reaches the crossings of the current ray (on the caller's stack).
+// The filter and the convex-volume callbacks receive a pointer to the RTCIntersectContext given to
+// the query; this struct starts with it so they reach the current ray's records (on the caller's
+// stack).
 struct VegetationContext {
   RTCIntersectContext base;
-  std::vector<VegetationCrossing>* crossings;
+  std::vector<VegetationCrossing>* crossings;       // triangle crossings of non-convex volumes
+  std::vector<std::uint32_t>* convex_candidates;  // convex volumes whose bounds the ray entered
+  // Occlusion queries: the opaque hit that ended the ray (any on the path, not the nearest).
+  unsigned blocker_instance = kInvalidId;
+  unsigned blocker_geometry = kInvalidId;
 };
 static_assert(std::is_standard_layout_v<VegetationContext>);
 
@@ -76,11 +90,364 @@ void record_vegetation_crossing(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// Occlusion queries: notes which opaque object ended the ray (the hit is accepted).
+void record_blocker(const RTCFilterFunctionNArguments* args) {
+  auto* context = reinterpret_cast<VegetationContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    context->blocker_instance = RTCHitN_instID(args->hit, args->N, i, 0);
+    context->blocker_geometry = RTCHitN_geomID(args->hit, args->N, i);
+  }
+}
+
 // The plane of a triangle in double precision (object frame): normal . x = offset_m. One compact
 // record per triangle, so that refining a hit costs one memory access, not four.
 struct TrianglePlane {
   Eigen::Vector3d normal;  // unit, along the winding's normal
   double offset_m = 0.0;
+};
+
+// Convex vegetation volumes (tree crowns as convex hulls, the common case) are not traced as
+// triangles: each is one Embree user primitive (its bounding box) and the part of a ray inside it
+// is computed exactly, in double, from its face planes. A ray through a tree then costs one box
+// test and one callback instead of a triangle traversal with a filter call per face it crosses.
+struct ConvexVolumes {
+  std::vector<std::uint32_t> object_of_primitive;  // primID -> index in objects
+  std::vector<Eigen::AlignedBox3d> bounds_m;       // per primID, frame of the Embree geometry
+};
+
+void convex_volume_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto* volumes = static_cast<const ConvexVolumes*>(args->geometryUserPtr);
+  const Eigen::AlignedBox3d& box = volumes->bounds_m[args->primID];
+  // Rounded outwards by a margin, so that float traversal never misses a ray grazing the volume.
+  const double margin_m = 1e-4 * std::max(1.0, box.diagonal().norm());
+  args->bounds_o->lower_x = static_cast<float>(box.min().x() - margin_m);
+  args->bounds_o->lower_y = static_cast<float>(box.min().y() - margin_m);
+  args->bounds_o->lower_z = static_cast<float>(box.min().z() - margin_m);
+  args->bounds_o->upper_x = static_cast<float>(box.max().x() + margin_m);
+  args->bounds_o->upper_y = static_cast<float>(box.max().y() + margin_m);
+  args->bounds_o->upper_z = static_cast<float>(box.max().z() + margin_m);
+}
+
+// Both queries only note the volume as a candidate; it never ends the ray (vegetation does not
+// block). The exact part inside is computed later, once per volume and ray.
+void note_convex_candidate(const int* valid, unsigned count, RTCIntersectContext* base, const void* user, unsigned primitive) {
+  bool any_valid = false;
+  for (unsigned i = 0; i < count; ++i) any_valid = any_valid || valid[i] != 0;
+  if (!any_valid) return;
+  const auto* context = reinterpret_cast<const VegetationContext*>(base);
+  context->convex_candidates->push_back(static_cast<const ConvexVolumes*>(user)->object_of_primitive[primitive]);
+}
+void convex_volume_intersect(const RTCIntersectFunctionNArguments* args) {
+  note_convex_candidate(args->valid, args->N, args->context, args->geometryUserPtr, args->primID);
+}
+void convex_volume_occluded(const RTCOccludedFunctionNArguments* args) {
+  note_convex_candidate(args->valid, args->N, args->context, args->geometryUserPtr, args->primID);
+}
+
+// The face planes of a closed convex mesh, facing outwards (normal . x <= offset_m inside), or
+// nothing when the mesh is not closed (every edge in exactly two triangles) or not convex (a vertex
+// outside a face plane) or flat. Coplanar faces give one plane.
+std::vector<TrianglePlane> convex_volume_planes(const std::vector<Eigen::Vector3d>& vertices_m,
+                                                const std::vector<Eigen::Vector3i>& triangles,
+                                                const std::vector<TrianglePlane>& triangle_planes) {
+  if (triangles.size() < 4 || vertices_m.empty()) return {};
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(3 * triangles.size());
+  for (const auto& tri : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = tri[k];
+      const int b = tri[(k + 1) % 3];
+      edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < edges.size(); i += 2) {
+    const bool pair = i + 1 < edges.size() && edges[i] == edges[i + 1];
+    const bool triple = i + 2 < edges.size() && edges[i] == edges[i + 2];
+    if (!pair || triple) return {};
+  }
+  Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
+  Eigen::AlignedBox3d box;
+  for (const auto& v : vertices_m) {
+    centroid_m += v;
+    box.extend(v);
+  }
+  centroid_m /= static_cast<double>(vertices_m.size());
+  // Vertices are float in the world model: faces of a hull of float points bend by ~1e-7 relative.
+  const double tolerance_m = 1e-6 * std::max(1.0, box.diagonal().norm());
+  std::vector<TrianglePlane> planes;
+  planes.reserve(triangle_planes.size());
+  for (TrianglePlane plane : triangle_planes) {
+    const double centroid_side_m = plane.normal.dot(centroid_m) - plane.offset_m;
+    if (std::abs(centroid_side_m) <= tolerance_m) return {};  // flat, or the centroid on a face
+    if (centroid_side_m > 0.0) {
+      plane.normal = -plane.normal;
+      plane.offset_m = -plane.offset_m;
+    }
+    for (const auto& v : vertices_m) {
+      if (plane.normal.dot(v) - plane.offset_m > tolerance_m) return {};
+    }
+    planes.push_back(plane);
+  }
+  std::sort(planes.begin(), planes.end(), [](const TrianglePlane& x, const TrianglePlane& y) {
+    return std::tie(x.normal.x(), x.normal.y(), x.normal.z(), x.offset_m) <
+           std::tie(y.normal.x(), y.normal.y(), y.normal.z(), y.offset_m);
+  });
+  std::vector<TrianglePlane> unique;
+  for (const auto& plane : planes) {
+    if (!unique.empty() && unique.back().normal.dot(plane.normal) > 1.0 - 1e-12 &&
+        std::abs(unique.back().offset_m - plane.offset_m) <= tolerance_m) {
+      continue;
+    }
+    unique.push_back(plane);
+  }
+  return unique;
+}
+
+// Eight floats processed at once (GCC vector extensions: SSE pairs by default, one AVX register
+// in the avx2 and avx512f clones of the kernel below).
+using FloatLanes = float __attribute__((vector_size(32)));
+using IntLanes = std::int32_t __attribute__((vector_size(32)));
+// The same in memory with the alignment of a float: loads are unaligned (as cheap on current
+// CPUs), so that standard containers can hold them.
+using StoredFloatLanes = float __attribute__((vector_size(32), aligned(4)));
+constexpr int kLanes = 8;
+
+// Eight face planes of a convex volume in float, relative to the volume's centre (so that float
+// keeps ~1e-6 m over a tree-sized volume). Padding planes (zero normal, offset 1) never bind.
+struct PlaneLanes {
+  StoredFloatLanes nx, ny, nz, offset_m;
+};
+
+// The faces that bound the part of a ray inside a convex volume: the entering face with the
+// largest distance and the leaving face with the smallest (-1: none), found in float over all
+// faces at once; false when the ray runs parallel to a face outside it. Branch-free, so that the
+// many rays that only graze a volume's bounding box cost a few dozen vector operations.
+__attribute__((target_clones("avx512f", "avx2", "default"))) bool binding_faces(
+    const PlaneLanes* chunks, std::size_t chunk_count, const float origin_m[3], const float direction[3],
+    int& entry_face, int& exit_face) {
+  constexpr float kFar = 3.0e38F;
+  const FloatLanes ox = FloatLanes{} + origin_m[0];
+  const FloatLanes oy = FloatLanes{} + origin_m[1];
+  const FloatLanes oz = FloatLanes{} + origin_m[2];
+  const FloatLanes dx = FloatLanes{} + direction[0];
+  const FloatLanes dy = FloatLanes{} + direction[1];
+  const FloatLanes dz = FloatLanes{} + direction[2];
+  FloatLanes best_entry = FloatLanes{} - kFar;
+  FloatLanes best_exit = FloatLanes{} + kFar;
+  IntLanes entry_index = IntLanes{} - 1;
+  IntLanes exit_index = IntLanes{} - 1;
+  IntLanes parallel_outside = IntLanes{};
+  IntLanes index = {0, 1, 2, 3, 4, 5, 6, 7};
+  // The first faces are spread over all directions (ConvexVolume::from_faces): alone they bound a
+  // coarse polytope around the volume, so most rays that miss are known to miss after them.
+  constexpr std::size_t kCoarseChunks = 2;
+  for (std::size_t c = 0; c < chunk_count; ++c, index += kLanes) {
+    if (c > 0 && c <= kCoarseChunks) {
+      float entry_m = -kFar;
+      float exit_m = kFar;
+      bool outside = false;
+      for (int k = 0; k < kLanes; ++k) {
+        entry_m = std::max(entry_m, best_entry[k]);
+        exit_m = std::min(exit_m, best_exit[k]);
+        outside = outside || parallel_outside[k] != 0;
+      }
+      if (outside || entry_m > exit_m) return false;
+    }
+    const FloatLanes nx = chunks[c].nx;
+    const FloatLanes ny = chunks[c].ny;
+    const FloatLanes nz = chunks[c].nz;
+    const FloatLanes offset_m = chunks[c].offset_m;
+    const FloatLanes inside_m = offset_m - (nx * ox + ny * oy + nz * oz);  // >= 0: inner side
+    const FloatLanes rate = nx * dx + ny * dy + nz * dz;
+    const FloatLanes t_m = inside_m / rate;  // +-inf or NaN where rate == 0, masked out below
+    const IntLanes better_entry = (rate < 0.0F) & (t_m > best_entry);
+    const IntLanes better_exit = (rate > 0.0F) & (t_m < best_exit);
+    best_entry = better_entry ? t_m : best_entry;
+    entry_index = better_entry ? index : entry_index;
+    best_exit = better_exit ? t_m : best_exit;
+    exit_index = better_exit ? index : exit_index;
+    parallel_outside |= (rate == 0.0F) & (inside_m < 0.0F);
+  }
+  float entry_m = -kFar;
+  float exit_m = kFar;
+  entry_face = -1;
+  exit_face = -1;
+  bool outside = false;
+  for (int k = 0; k < kLanes; ++k) {
+    if (entry_index[k] >= 0 && best_entry[k] > entry_m) {
+      entry_m = best_entry[k];
+      entry_face = entry_index[k];
+    }
+    if (exit_index[k] >= 0 && best_exit[k] < exit_m) {
+      exit_m = best_exit[k];
+      exit_face = exit_index[k];
+    }
+    outside = outside || parallel_outside[k] != 0;
+  }
+  return !outside;
+}
+
+// A convex vegetation volume: its outward face planes (normal . x <= offset_m inside) in double,
+// the same in float lanes relative to its centre, and its bounding box (frame of its geometry:
+// world for static objects, object for movable ones).
+struct ConvexVolume {
+  std::vector<TrianglePlane> faces;
+  std::vector<PlaneLanes> lanes;
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+  Eigen::AlignedBox3d bounds_m;
+
+  [[nodiscard]] bool empty() const { return faces.empty(); }
+
+  static ConvexVolume from_faces(std::vector<TrianglePlane> faces, const Eigen::AlignedBox3d& bounds_m) {
+    ConvexVolume volume;
+    // Farthest-point order on the sphere of normals: each next face is the one whose normal is
+    // farthest from all faces before it, so any first few faces bound the volume from all sides.
+    for (std::size_t next = 1; next < faces.size(); ++next) {
+      std::size_t best = next;
+      double best_closeness = std::numeric_limits<double>::infinity();
+      for (std::size_t candidate = next; candidate < faces.size(); ++candidate) {
+        double closeness = -1.0;
+        for (std::size_t chosen = 0; chosen < next; ++chosen) {
+          closeness = std::max(closeness, faces[candidate].normal.dot(faces[chosen].normal));
+        }
+        if (closeness < best_closeness) {
+          best_closeness = closeness;
+          best = candidate;
+        }
+      }
+      std::swap(faces[next], faces[best]);
+    }
+    volume.faces = std::move(faces);
+    volume.bounds_m = bounds_m;
+    volume.centre_m = bounds_m.center();
+    const std::size_t chunks = (volume.faces.size() + kLanes - 1) / kLanes;
+    volume.lanes.resize(chunks);
+    for (std::size_t c = 0; c < chunks; ++c) {
+      PlaneLanes& lanes = volume.lanes[c];
+      for (int k = 0; k < kLanes; ++k) {
+        const std::size_t face = c * kLanes + static_cast<std::size_t>(k);
+        if (face < volume.faces.size()) {
+          const TrianglePlane& plane = volume.faces[face];
+          lanes.nx[k] = static_cast<float>(plane.normal.x());
+          lanes.ny[k] = static_cast<float>(plane.normal.y());
+          lanes.nz[k] = static_cast<float>(plane.normal.z());
+          lanes.offset_m[k] = static_cast<float>(plane.offset_m - plane.normal.dot(volume.centre_m));
+        } else {
+          lanes.nx[k] = lanes.ny[k] = lanes.nz[k] = 0.0F;
+          lanes.offset_m[k] = 1.0F;
+        }
+      }
+    }
+    return volume;
+  }
+
+  // The part [entry_m, exit_m] of the line origin + t direction inside the volume (frame of the
+  // volume); false when the line misses it. Entry is negative when the origin is inside. The
+  // binding faces are found in float, their distances computed in double.
+  bool chord(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double& entry_m, double& exit_m) const {
+    const Eigen::Vector3d relative_m = origin - centre_m;
+    const float origin_f[3] = {static_cast<float>(relative_m.x()), static_cast<float>(relative_m.y()),
+                               static_cast<float>(relative_m.z())};
+    const float direction_f[3] = {static_cast<float>(direction.x()), static_cast<float>(direction.y()),
+                                  static_cast<float>(direction.z())};
+    int entry_face = -1;
+    int exit_face = -1;
+    if (!binding_faces(lanes.data(), lanes.size(), origin_f, direction_f, entry_face, exit_face)) return false;
+    auto distance_m = [&](int face) {
+      const TrianglePlane& plane = faces[static_cast<std::size_t>(face)];
+      return (plane.offset_m - plane.normal.dot(origin)) / plane.normal.dot(direction);
+    };
+    entry_m = entry_face >= 0 ? distance_m(entry_face) : -std::numeric_limits<double>::infinity();
+    exit_m = exit_face >= 0 ? distance_m(exit_face) : std::numeric_limits<double>::infinity();
+    return entry_m <= exit_m;
+  }
+};
+
+// Bounding boxes of a convex mesh cut into horizontal slabs: a tree crown narrows towards its top
+// (and a trunk-less hull towards its base), so the boxes of its slabs hold much less empty space
+// than one box, and fewer rays that miss the crown reach its exact test. Each box bounds the part of
+// the volume within its slab: the vertices in it and the points where edges cross its planes.
+std::vector<Eigen::AlignedBox3d> slab_bounds(const std::vector<Eigen::Vector3d>& vertices_m,
+                                             const std::vector<Eigen::Vector3i>& triangles) {
+  constexpr int kSlabs = 4;
+  Eigen::AlignedBox3d whole;
+  for (const auto& v : vertices_m) whole.extend(v);
+  const double bottom_m = whole.min().z();
+  const double height_m = whole.max().z() - bottom_m;
+  if (!(height_m > 0.0)) return {whole};
+  std::vector<Eigen::AlignedBox3d> slabs(kSlabs);
+  auto slab_of = [&](double z_m) {
+    return std::clamp(static_cast<int>((z_m - bottom_m) / height_m * kSlabs), 0, kSlabs - 1);
+  };
+  for (const auto& v : vertices_m) slabs[static_cast<std::size_t>(slab_of(v.z()))].extend(v);
+  for (const auto& tri : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d& a = vertices_m[static_cast<std::size_t>(tri[k])];
+      const Eigen::Vector3d& b = vertices_m[static_cast<std::size_t>(tri[(k + 1) % 3])];
+      for (int cut = 1; cut < kSlabs; ++cut) {
+        const double z_m = bottom_m + height_m * cut / kSlabs;
+        if ((a.z() - z_m) * (b.z() - z_m) > 0.0 || a.z() == b.z()) continue;
+        const Eigen::Vector3d point = a + (b - a) * ((z_m - a.z()) / (b.z() - a.z()));
+        slabs[static_cast<std::size_t>(cut - 1)].extend(point);
+        slabs[static_cast<std::size_t>(cut)].extend(point);
+      }
+    }
+  }
+  std::vector<Eigen::AlignedBox3d> kept;
+  for (const auto& box : slabs) {
+    if (!box.isEmpty()) kept.push_back(box);
+  }
+  return kept;
+}
+
+// The convex volumes of the meshes of a world, one per distinct mesh (Gazebo worlds place the same
+// tree model many times). Meshes that are not closed and convex get nullptr.
+class ConvexShapes {
+ public:
+  std::shared_ptr<const ConvexVolume> shape_of(const TriangleMesh& mesh) {
+    std::size_t key = mesh.vertices_m.size() * 1000003U + mesh.triangles.size();
+    for (const auto& v : mesh.vertices_m) key = key * 31U + std::hash<float>{}(v.x() + 3.0F * v.y() + 7.0F * v.z());
+    auto& bucket = shapes_[key];
+    for (const auto& [known, volume] : bucket) {
+      if (same_mesh(*known, mesh)) return volume;
+    }
+    std::vector<Eigen::Vector3d> vertices_m;
+    vertices_m.reserve(mesh.vertices_m.size());
+    for (const auto& v : mesh.vertices_m) vertices_m.push_back(v.cast<double>());
+    std::vector<Eigen::Vector3i> triangles;
+    std::vector<TrianglePlane> planes;
+    Eigen::AlignedBox3d bounds_m;
+    for (const auto& v : vertices_m) bounds_m.extend(v);
+    for (const auto& tri : mesh.triangles) {
+      const Eigen::Vector3d& p0 = vertices_m[static_cast<std::size_t>(tri[0])];
+      const Eigen::Vector3d& p1 = vertices_m[static_cast<std::size_t>(tri[1])];
+      const Eigen::Vector3d& p2 = vertices_m[static_cast<std::size_t>(tri[2])];
+      if (triangle_is_degenerate(p0, p1, p2)) continue;
+      triangles.push_back(tri);
+      const Eigen::Vector3d normal = (p1 - p0).cross(p2 - p0).normalized();
+      planes.push_back(TrianglePlane{normal, normal.dot(p0)});
+    }
+    auto faces = convex_volume_planes(vertices_m, triangles, planes);
+    std::shared_ptr<const ConvexVolume> volume;
+    if (!faces.empty()) volume = std::make_shared<const ConvexVolume>(ConvexVolume::from_faces(std::move(faces), bounds_m));
+    bucket.emplace_back(&mesh, volume);
+    return volume;
+  }
+
+ private:
+  static bool same_mesh(const TriangleMesh& a, const TriangleMesh& b) {
+    if (a.vertices_m.size() != b.vertices_m.size() || a.triangles.size() != b.triangles.size()) return false;
+    for (std::size_t i = 0; i < a.vertices_m.size(); ++i) {
+      if (a.vertices_m[i] != b.vertices_m[i]) return false;
+    }
+    for (std::size_t i = 0; i < a.triangles.size(); ++i) {
+      if (a.triangles[i] != b.triangles[i]) return false;
+    }
+    return true;
+  }
+  std::unordered_map<std::size_t, std::vector<std::pair<const TriangleMesh*, std::shared_ptr<const ConvexVolume>>>> shapes_;
 };
 
 struct SceneObject {
@@ -94,6 +461,14 @@ struct SceneObject {
   std::vector<Eigen::Vector3i> triangles;  // non-degenerate only; the index is Embree's primID
   std::size_t triangle_count = 0;
   std::vector<TrianglePlane> planes;  // per Embree primID
+  // A convex vegetation volume, traced as a user primitive (ConvexVolumes), not as triangles:
+  // its shape in the frame of the world model's mesh (shared by all objects with the same mesh, so
+  // that a forest of one tree model keeps one set of faces in cache), the transform into that frame,
+  // and its bounding box in the frame of the Embree geometry. nullptr otherwise.
+  std::shared_ptr<const ConvexVolume> volume;
+  Eigen::Isometry3d volume_from_world = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::AlignedBox3d> volume_slab_bounds_m;  // one user primitive each
+  std::unique_ptr<ConvexVolumes> own_volume;  // movable convex volumes: their user geometry's data
   RTCGeometry geometry = nullptr;     // during the build only
   RTCScene own_scene = nullptr;       // movable objects: their scene, instanced in the layers
 };
@@ -122,7 +497,13 @@ std::string device_error_text(RTCError code) {
 // Unit direction of a valid ray; false for a non-finite origin or a non-finite or zero direction.
 bool unit_direction(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, Eigen::Vector3d& unit) {
   if (!origin.allFinite() || !direction.allFinite()) return false;
-  const double norm = direction.norm();
+  // Callers mostly pass unit vectors already: no square root and division for those.
+  const double squared_norm = direction.squaredNorm();
+  if (std::abs(squared_norm - 1.0) <= 4.0 * std::numeric_limits<double>::epsilon()) {
+    unit = direction;
+    return true;
+  }
+  const double norm = std::sqrt(squared_norm);
   if (!(norm > 0.0) || !std::isfinite(norm)) return false;
   unit = direction / norm;
   return true;
@@ -195,10 +576,24 @@ struct DeviceHandle {
 }  // namespace
 
 struct EmbreeScene::Impl {
+  // What one batch of queries keeps on the stack: the recording context and what it records.
+  struct QueryState {
+    Eigen::Vector3f origin_f = Eigen::Vector3f::Zero();
+    std::vector<VegetationCrossing> crossings;
+    std::vector<std::uint32_t> convex_candidates;
+    std::vector<std::uint32_t> around;  // vegetation volumes (traced as triangles) around the origin
+    VegetationContext context{};
+  };
+  template <typename Answer>
+  std::vector<RayOutcome> for_each_ray(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
+                                       Answer answer) const;
+
   DeviceHandle device_handle;  // first: released after everything else
   RTCDevice device = nullptr;
   Layer main;
-  Layer vegetation;  // vegetation only, for the test of the origin inside a volume
+  Layer vegetation;  // vegetation traced as triangles only, for the test of the origin inside a volume
+  ConvexVolumes static_volumes;  // static convex vegetation volumes (one user geometry in `main`)
+  bool has_vegetation = false;
   std::vector<SceneObject> objects;
   SceneStats stats;
   EmbreeSceneOptions options;
@@ -226,9 +621,32 @@ struct EmbreeScene::Impl {
     return scene;
   }
 
-  // The committed triangle geometry of an object (world frame for static objects), and for a
-  // movable object its own committed scene.
-  void make_geometry(SceneObject& object) const {
+  // The committed user geometry of convex volumes (one primitive each).
+  RTCGeometry new_convex_geometry(ConvexVolumes& volumes) const {
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(volumes.object_of_primitive.size()));
+    rtcSetGeometryUserData(geometry, &volumes);
+    rtcSetGeometryBoundsFunction(geometry, convex_volume_bounds, &volumes);
+    rtcSetGeometryIntersectFunction(geometry, convex_volume_intersect);
+    rtcSetGeometryOccludedFunction(geometry, convex_volume_occluded);
+    rtcCommitGeometry(geometry);
+    return geometry;
+  }
+
+  // The committed Embree geometry of an object (world frame for static objects), and for a movable
+  // object its own committed scene. Static convex volumes share one user geometry (made in build).
+  void make_geometry(SceneObject& object, std::uint32_t index) const {
+    if (object.volume != nullptr) {
+      if (object.is_static) return;
+      object.own_volume = std::make_unique<ConvexVolumes>();
+      object.own_volume->object_of_primitive.assign(object.volume_slab_bounds_m.size(), index);
+      object.own_volume->bounds_m = object.volume_slab_bounds_m;
+      object.geometry = new_convex_geometry(*object.own_volume);
+      object.own_scene = new_scene(false);
+      rtcAttachGeometry(object.own_scene, object.geometry);
+      rtcCommitScene(object.own_scene);
+      return;
+    }
     RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
         geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), object.vertices_m.size()));
@@ -246,7 +664,12 @@ struct EmbreeScene::Impl {
         }
       }
     }
-    if (object.material.is_vegetation()) rtcSetGeometryIntersectFilterFunction(geometry, record_vegetation_crossing);
+    if (object.material.is_vegetation()) {
+      rtcSetGeometryIntersectFilterFunction(geometry, record_vegetation_crossing);
+      rtcSetGeometryOccludedFilterFunction(geometry, record_vegetation_crossing);
+    } else {
+      rtcSetGeometryOccludedFilterFunction(geometry, record_blocker);
+    }
     rtcCommitGeometry(geometry);
     object.geometry = geometry;
     if (!object.is_static) {
@@ -267,8 +690,10 @@ struct EmbreeScene::Impl {
 
   // Builds a layer of the objects for which `wanted` is true (their geometries already made).
   template <typename Wanted>
-  void build_layer(Layer& layer, Wanted wanted) const {
+  // `static_convex`: the shared user geometry of the static convex volumes, or nullptr.
+  void build_layer(Layer& layer, Wanted wanted, RTCGeometry static_convex) const {
     bool has_movable = false;
+    layer.empty = static_convex == nullptr;
     for (const auto& object : objects) {
       if (object.triangle_count == 0 || !wanted(object)) continue;
       layer.empty = false;
@@ -281,9 +706,11 @@ struct EmbreeScene::Impl {
       layer.static_scene = new_scene(false);
       static_target = layer.static_scene;
     }
+    if (static_convex != nullptr) rtcAttachGeometry(static_target, static_convex);
     for (std::size_t index = 0; index < objects.size(); ++index) {
       const SceneObject& object = objects[index];
       if (object.triangle_count == 0 || !wanted(object)) continue;
+      if (object.is_static && object.volume != nullptr) continue;  // in static_convex
       if (object.is_static) {
         map_id(layer.object_of_static_geometry, rtcAttachGeometry(static_target, object.geometry), index);
         continue;
@@ -371,9 +798,11 @@ struct EmbreeScene::Impl {
     std::vector<std::uint32_t> inside;
     if (vegetation.empty) return inside;
     std::vector<VegetationCrossing> crossings;
+    std::vector<std::uint32_t> no_convex_volumes;  // none in this layer
     VegetationContext context{};
     rtcInitIntersectContext(&context.base);
     context.crossings = &crossings;
+    context.convex_candidates = &no_convex_volumes;
     std::vector<std::pair<std::uint32_t, int>> votes;  // object, number of rays with odd crossings
     const Eigen::Vector3f origin_f = origin.cast<float>();
     for (const auto& direction : kInsideTestDirections) {
@@ -403,11 +832,34 @@ struct EmbreeScene::Impl {
     return inside;
   }
 
+  // The part of a ray inside a convex volume before stop_m (m).
+  double convex_path_m(const SceneObject& object, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                       double stop_m) const {
+    double entry_m = 0.0;
+    double exit_m = 0.0;
+    const bool crosses = object.volume->chord(object.volume_from_world * origin,
+                                              object.volume_from_world.linear() * direction, entry_m, exit_m);
+    if (!crosses) return 0.0;
+    return std::max(0.0, std::min(exit_m, stop_m) - std::max(entry_m, 0.0));
+  }
+
   // Adds the vegetation met by one ray before `stop_m` (the first opaque hit, or infinity), from
-  // its crossings and the volumes around the origin.
+  // its crossings of volumes traced as triangles, the volumes of those around the origin, and the
+  // convex volumes whose bounds it entered.
   void add_vegetation(std::vector<VegetationCrossing>& crossings, const std::vector<std::uint32_t>& around,
-                      const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double stop_m,
-                      RayOutcome& outcome) const {
+                      std::vector<std::uint32_t>& convex_candidates, const Eigen::Vector3d& origin,
+                      const Eigen::Vector3d& direction, double stop_m, RayOutcome& outcome) const {
+    if (!convex_candidates.empty()) {
+      // A primitive may be met more than once by one traversal (Embree may split references).
+      std::sort(convex_candidates.begin(), convex_candidates.end());
+      convex_candidates.erase(std::unique(convex_candidates.begin(), convex_candidates.end()), convex_candidates.end());
+      for (const std::uint32_t index : convex_candidates) {
+        const double length_m = convex_path_m(objects[index], origin, direction, stop_m);
+        outcome.vegetation_path_m += length_m;
+        outcome.vegetation_attenuation_db += length_m * objects[index].material.attenuation_db_per_m;
+      }
+    }
+    if (crossings.empty() && around.empty()) return;
     // Crossings found before the traversal met the closest opaque hit may lie beyond it.
     std::erase_if(crossings, [&](const VegetationCrossing& c) { return !(c.t_m <= stop_m * (1.0 + 1e-6) + 1e-6); });
     const std::size_t kept = sort_crossings(main, crossings, origin, direction);
@@ -460,6 +912,7 @@ Result<std::unique_ptr<EmbreeScene>> EmbreeScene::build(const WorldModel& world,
                                                    device_error_text(rtcGetDeviceError(nullptr)));
   }
   impl->objects.reserve(world.objects.size());
+  ConvexShapes convex_shapes;
   for (const auto& source : world.objects) {
     SceneObject object;
     object.name = source.name;
@@ -490,17 +943,41 @@ Result<std::unique_ptr<EmbreeScene>> EmbreeScene::build(const WorldModel& world,
       object.planes.push_back(TrianglePlane{normal, normal.dot(p0)});
     }
     object.triangle_count = object.triangles.size();
+    if (object.material.is_vegetation() && options.convex_vegetation_volumes && object.triangle_count > 0) {
+      object.volume = convex_shapes.shape_of(source.mesh);
+      if (object.volume != nullptr) {
+        object.volume_from_world = object.pose.inverse();
+        object.volume_slab_bounds_m = slab_bounds(object.vertices_m, object.triangles);
+      }
+    }
     ++impl->stats.objects;
     if (!object.is_static) ++impl->stats.movable_objects;
     if (object.material.is_vegetation()) ++impl->stats.vegetation_objects;
+    if (object.volume != nullptr) ++impl->stats.convex_vegetation_objects;
     impl->stats.triangles += object.triangle_count;
     impl->objects.push_back(std::move(object));
   }
-  for (auto& object : impl->objects) {
-    if (object.triangle_count > 0) impl->make_geometry(object);
+  RTCGeometry static_convex = nullptr;
+  for (std::size_t index = 0; index < impl->objects.size(); ++index) {
+    SceneObject& object = impl->objects[index];
+    if (object.triangle_count == 0) continue;
+    impl->make_geometry(object, static_cast<std::uint32_t>(index));
+    impl->has_vegetation = impl->has_vegetation || object.material.is_vegetation();
+    if (object.is_static && object.volume != nullptr) {
+      for (const auto& box : object.volume_slab_bounds_m) {
+        impl->static_volumes.object_of_primitive.push_back(static_cast<std::uint32_t>(index));
+        impl->static_volumes.bounds_m.push_back(box);
+      }
+    }
   }
-  impl->build_layer(impl->main, [](const SceneObject&) { return true; });
-  impl->build_layer(impl->vegetation, [](const SceneObject& object) { return object.material.is_vegetation(); });
+  if (!impl->static_volumes.object_of_primitive.empty()) static_convex = impl->new_convex_geometry(impl->static_volumes);
+  impl->build_layer(impl->main, [](const SceneObject&) { return true; }, static_convex);
+  // The inside-a-volume vote is only needed for volumes traced as triangles.
+  impl->build_layer(
+      impl->vegetation,
+      [](const SceneObject& object) { return object.material.is_vegetation() && object.volume == nullptr; },
+      nullptr);
+  if (static_convex != nullptr) rtcReleaseGeometry(static_convex);
   // The layers hold the geometries now; our copies of the meshes are no longer needed.
   for (auto& object : impl->objects) {
     if (object.geometry != nullptr) rtcReleaseGeometry(object.geometry);
@@ -523,6 +1000,7 @@ Status EmbreeScene::set_object_pose(const std::string& name, const Eigen::Isomet
     SceneObject& object = impl.objects[index];
     if (object.name != name || object.is_static) continue;
     object.pose = pose;
+    object.volume_from_world = pose.inverse();
     for (Layer* layer : {&impl.main, &impl.vegetation}) {
       if (layer->instance_of_object.empty() || layer->instance_of_object[index] == kInvalidId) continue;
       RTCGeometry instance = rtcGetGeometry(layer->top, layer->instance_of_object[index]);
@@ -541,54 +1019,79 @@ Status EmbreeScene::set_object_pose(const std::string& name, const Eigen::Isomet
 
 SceneStats EmbreeScene::stats() const { return impl_->stats; }
 
+// Both queries: every ray with its outcome, where `answer` casts the valid ones (unit direction),
+// with the recording context and the vegetation volumes around the origin ready.
+template <typename Answer>
+std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& origin_m,
+                                                        const std::vector<Eigen::Vector3d>& directions,
+                                                        Answer answer) const {
+  std::vector<RayOutcome> outcomes(directions.size());
+  const bool answerable = !main.empty && origin_m.allFinite();
+  QueryState state;
+  if (answerable) {
+    state.origin_f = origin_m.cast<float>();
+    if (!vegetation.empty) state.crossings.reserve(32);
+    if (!static_volumes.object_of_primitive.empty()) state.convex_candidates.reserve(16);
+    rtcInitIntersectContext(&state.context.base);
+    state.context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // every ray of a batch leaves the same point
+    state.context.crossings = &state.crossings;
+    state.context.convex_candidates = &state.convex_candidates;
+    state.around = vegetation_around(origin_m);
+  }
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    Eigen::Vector3d direction;
+    if (!unit_direction(origin_m, directions[i], direction)) {
+      outcomes[i].blocked = true;
+      outcomes[i].blocking_object = std::string(kInvalidRayObject);
+      continue;
+    }
+    if (!answerable) continue;  // an empty world: free
+    state.crossings.clear();
+    state.convex_candidates.clear();
+    answer(state, direction, outcomes[i]);
+  }
+  return outcomes;
+}
+
 std::vector<RayOutcome> EmbreeScene::trace(const Eigen::Vector3d& origin_m,
                                            const std::vector<Eigen::Vector3d>& directions) const {
   const Impl& impl = *impl_;
-  std::vector<RayOutcome> outcomes(directions.size());
-  if (impl.main.empty || !origin_m.allFinite()) {
-    for (std::size_t i = 0; i < directions.size(); ++i) {
-      Eigen::Vector3d unit;
-      if (!unit_direction(origin_m, directions[i], unit)) {
-        outcomes[i].blocked = true;
-        outcomes[i].blocking_object = std::string(kInvalidRayObject);
-      }
-    }
-    return outcomes;
-  }
-  const Eigen::Vector3f origin_f = origin_m.cast<float>();
-  std::vector<VegetationCrossing> crossings;
-  if (!impl.vegetation.empty) crossings.reserve(32);
-  VegetationContext context{};
-  rtcInitIntersectContext(&context.base);
-  context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // every ray of a batch leaves the same point
-  context.crossings = &crossings;
-  const bool with_vegetation = !impl.vegetation.empty;
-  const std::vector<std::uint32_t> around = impl.vegetation_around(origin_m);
-
-  for (std::size_t i = 0; i < directions.size(); ++i) {
-    RayOutcome& outcome = outcomes[i];
-    Eigen::Vector3d direction;
-    if (!unit_direction(origin_m, directions[i], direction)) {
-      outcome.blocked = true;
-      outcome.blocking_object = std::string(kInvalidRayObject);
-      continue;
-    }
+  return impl.for_each_ray(origin_m, directions, [&](Impl::QueryState& state, const Eigen::Vector3d& direction,
+                                                     RayOutcome& outcome) {
     RTCRayHit ray_hit;
-    init_ray(ray_hit, origin_f, direction);
-    if (!with_vegetation && !impl.options.blocking_details) {
-      rtcOccluded1(impl.main.top, &context.base, &ray_hit.ray);
-      outcome.blocked = ray_hit.ray.tfar < 0.0F;  // Embree's mark of an occluded ray
-      continue;
-    }
-    crossings.clear();
-    rtcIntersect1(impl.main.top, &context.base, &ray_hit);
+    init_ray(ray_hit, state.origin_f, direction);
+    rtcIntersect1(impl.main.top, &state.context.base, &ray_hit);
     if (ray_hit.hit.geomID != kInvalidId) impl.describe_blocking(ray_hit, origin_m, direction, outcome);
-    if (!crossings.empty() || !around.empty()) {
-      impl.add_vegetation(crossings, around, origin_m, direction, outcome.blocked ? outcome.blocking_distance_m : kInfinity,
+    if (!state.crossings.empty() || !state.around.empty() || !state.convex_candidates.empty()) {
+      impl.add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction,
+                          outcome.blocked ? outcome.blocking_distance_m : kInfinity, outcome);
+    }
+  });
+}
+
+std::vector<RayOutcome> EmbreeScene::trace_line_of_sight(const Eigen::Vector3d& origin_m,
+                                                         const std::vector<Eigen::Vector3d>& directions) const {
+  const Impl& impl = *impl_;
+  return impl.for_each_ray(origin_m, directions, [&](Impl::QueryState& state, const Eigen::Vector3d& direction,
+                                                     RayOutcome& outcome) {
+    // One occlusion query: it stops at the first opaque hit it finds and meets all the vegetation
+    // of a free ray on its way.
+    RTCRayHit ray_hit;
+    init_ray(ray_hit, state.origin_f, direction);
+    state.context.blocker_instance = kInvalidId;
+    state.context.blocker_geometry = kInvalidId;
+    rtcOccluded1(impl.main.top, &state.context.base, &ray_hit.ray);
+    if (ray_hit.ray.tfar < 0.0F) {  // Embree's mark of an occluded ray
+      outcome.blocked = true;
+      const SceneObject& blocker =
+          impl.objects[impl.main.object_index(state.context.blocker_instance, state.context.blocker_geometry)];
+      outcome.blocking_object = blocker.name;
+      outcome.blocking_material = blocker.material.material_class;
+    } else if (!state.crossings.empty() || !state.around.empty() || !state.convex_candidates.empty()) {
+      impl.add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction, kInfinity,
                           outcome);
     }
-  }
-  return outcomes;
+  });
 }
 
 }  // namespace skytrace::world

@@ -91,7 +91,11 @@ std::uint64_t edge_key(int a, int b) {
 
 }  // namespace
 
-Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) {
+namespace {
+
+// The incremental hull. tolerance_m = 0: every point, in order. tolerance_m > 0: the point farthest
+// outside the current hull goes in next, until none is farther out than the tolerance.
+Result<TriangleMesh> hull_of(const std::vector<Eigen::Vector3f>& points_m, double tolerance_m) {
   // Distinct points in double precision.
   std::vector<Eigen::Vector3d> p;
   {
@@ -168,8 +172,32 @@ Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) {
 
   std::vector<int> visible;
   std::unordered_set<std::uint64_t> visible_edges;
-  for (int i = 0; i < static_cast<int>(p.size()); ++i) {
-    if (i == i0 || i == i1 || i == i2 || i == i3) continue;
+  std::vector<bool> used(p.size(), false);
+  for (int i : {i0, i1, i2, i3}) used[static_cast<std::size_t>(i)] = true;
+  // The next point to insert: the next one in order, or the farthest outside (none: -1).
+  int next_in_order = 0;
+  const auto next_point = [&]() -> int {
+    if (tolerance_m <= 0.0) {
+      while (next_in_order < static_cast<int>(p.size()) && used[static_cast<std::size_t>(next_in_order)]) ++next_in_order;
+      return next_in_order < static_cast<int>(p.size()) ? next_in_order : -1;
+    }
+    int farthest = -1;
+    double farthest_m = tolerance_m;
+    for (int i = 0; i < static_cast<int>(p.size()); ++i) {
+      if (used[static_cast<std::size_t>(i)]) continue;
+      for (const HullFace& face : faces) {
+        if (!face.alive) continue;
+        const double outside_m = face.normal.dot(at(i)) - face.offset;
+        if (outside_m > farthest_m) {
+          farthest_m = outside_m;
+          farthest = i;
+        }
+      }
+    }
+    return farthest;
+  };
+  for (int i = next_point(); i >= 0; i = next_point()) {
+    used[static_cast<std::size_t>(i)] = true;
     visible.clear();
     for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
       const HullFace& face = faces[static_cast<std::size_t>(f)];
@@ -210,6 +238,16 @@ Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) {
     mesh.triangles.push_back(triangle);
   }
   return mesh;
+}
+
+}  // namespace
+
+Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m) { return hull_of(points_m, 0.0); }
+
+TriangleMesh simplify_convex_hull(const TriangleMesh& hull, double tolerance_m) {
+  if (!(tolerance_m > 0.0)) return hull;
+  auto simpler = hull_of(hull.vertices_m, tolerance_m);
+  return simpler.ok() ? std::move(*simpler) : hull;
 }
 
 Result<std::vector<MeshPart>> read_mesh_file(const std::filesystem::path& path, UpAxis up_axis) {
@@ -326,7 +364,7 @@ Result<WorldModel> load_mesh_world(const std::filesystem::path& path, const GeoO
                                  ")");
         continue;
       }
-      object.mesh = std::move(*hull);
+      object.mesh = simplify_convex_hull(*hull, options.vegetation_hull_tolerance_m);
     }
     world.objects.push_back(std::move(object));
   }

@@ -336,6 +336,11 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
   return out;
 }
 
+std::vector<RayOutcome> PropagationScene::trace_line_of_sight(const Eigen::Vector3d& origin_m,
+                                                              const std::vector<Eigen::Vector3d>& directions) const {
+  return scene_->trace_line_of_sight(origin_m, directions);
+}
+
 std::vector<RayOutcome> PropagationScene::trace(const Eigen::Vector3d& origin_m,
                                                 const std::vector<Eigen::Vector3d>& directions) const {
   return scene_->trace(origin_m, directions);

@@ -663,6 +663,7 @@ Result<GrayImage> read_gray_image(const fs::path& path) {
 struct MeshEntry {
   Result<TriangleMesh> mesh = TriangleMesh{};
   std::optional<Result<TriangleMesh>> hull;
+  std::map<double, TriangleMesh> simplified_hulls;  // by tolerance in the mesh's own units
 };
 
 // What an object inherits from its enclosing models.
@@ -1223,7 +1224,13 @@ class SdfWalker {
            ": vegetation skipped, its mesh has no volume: " + entry.hull->error().message);
       return false;
     }
-    object.mesh = **entry.hull;
+    // The tolerance holds in the world: in the mesh's units it shrinks with the largest scale.
+    const double tolerance_m = options_.vegetation_hull_tolerance_m / static_cast<double>(shape.scale.maxCoeff());
+    auto simplified = entry.simplified_hulls.find(tolerance_m);
+    if (simplified == entry.simplified_hulls.end()) {
+      simplified = entry.simplified_hulls.emplace(tolerance_m, simplify_convex_hull(**entry.hull, tolerance_m)).first;
+    }
+    object.mesh = simplified->second;
     scale_mesh(object.mesh, shape.scale);
     return true;
   }

@@ -40,7 +40,7 @@ Result<std::vector<double>> sky_mask_elevation_deg(const PathQuery& query, const
       directions.push_back(enu_direction(static_cast<double>(a) * azimuth_step_deg, sample_elevation_deg(k)));
     }
   }
-  const std::vector<RayOutcome> coarse = query.trace(origin_m, directions);
+  const std::vector<RayOutcome> coarse = query.trace_line_of_sight(origin_m, directions);
   std::vector<double> mask_deg(azimuth_count, low_deg);
   std::vector<double> blocked_deg(azimuth_count, 0.0);
   std::vector<double> free_deg(azimuth_count, 0.0);
@@ -73,7 +73,7 @@ Result<std::vector<double>> sky_mask_elevation_deg(const PathQuery& query, const
       directions.push_back(
           enu_direction(static_cast<double>(a) * azimuth_step_deg, 0.5 * (blocked_deg[a] + free_deg[a])));
     }
-    const std::vector<RayOutcome> step = query.trace(origin_m, directions);
+    const std::vector<RayOutcome> step = query.trace_line_of_sight(origin_m, directions);
     for (std::size_t j = 0; j < open.size(); ++j) {
       const std::size_t a = open[j];
       const double middle_deg = 0.5 * (blocked_deg[a] + free_deg[a]);

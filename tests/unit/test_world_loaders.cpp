@@ -376,6 +376,38 @@ TEST(WorldHull, EveryPointIsInsideTheHullOfASphereCloud) {
   EXPECT_GT(signed_volume_m3(hull), 0.9 * sphere);
 }
 
+TEST(WorldHull, SimplifiedHullStaysWithinTheTolerance) {
+  // A 2 m sphere of 300 points: its hull has hundreds of faces; within 5 cm far fewer are needed.
+  std::mt19937 random(11);
+  std::normal_distribution<float> g(0.0F, 1.0F);
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < 300; ++i) points.push_back(Eigen::Vector3f(g(random), g(random), g(random)).normalized() * 2.0F);
+  const auto hull = convex_hull(points).value();
+  constexpr double kToleranceM = 0.05;
+  const TriangleMesh simple = simplify_convex_hull(hull, kToleranceM);
+  EXPECT_TRUE(is_closed_consistent(simple));
+  EXPECT_LT(simple.triangles.size(), hull.triangles.size() / 2);
+  // Every vertex of the original within the tolerance outside the simplified hull, and the
+  // simplified one inside the original (its vertices are a subset).
+  double worst_outside_m = 0.0;
+  for (const auto& t : simple.triangles) {
+    const Eigen::Vector3d a = simple.vertices_m[static_cast<std::size_t>(t[0])].cast<double>();
+    const Eigen::Vector3d n = (simple.vertices_m[static_cast<std::size_t>(t[1])].cast<double>() - a)
+                                  .cross(simple.vertices_m[static_cast<std::size_t>(t[2])].cast<double>() - a)
+                                  .normalized();
+    for (const auto& p : hull.vertices_m) worst_outside_m = std::max(worst_outside_m, n.dot(p.cast<double>() - a));
+  }
+  EXPECT_LE(worst_outside_m, kToleranceM + 1e-6);
+  EXPECT_GT(worst_outside_m, 0.5 * kToleranceM);  // it did use the tolerance
+  EXPECT_LT(signed_volume_m3(simple), signed_volume_m3(hull));
+  EXPECT_GT(signed_volume_m3(simple), 0.95 * signed_volume_m3(hull));
+  // No tolerance, or a box (every corner matters): unchanged.
+  EXPECT_EQ(simplify_convex_hull(hull, 0.0).triangles.size(), hull.triangles.size());
+  std::vector<Eigen::Vector3f> corners;
+  for (int i = 0; i < 8; ++i) corners.emplace_back((i & 1) != 0 ? 2.0F : 0.0F, (i & 2) != 0 ? 3.0F : 0.0F, (i & 4) != 0 ? 4.0F : 0.0F);
+  EXPECT_EQ(simplify_convex_hull(convex_hull(corners).value(), kToleranceM).vertices_m.size(), 8U);
+}
+
 TEST(WorldHull, FlatPointsAreAnError) {
   EXPECT_FALSE(convex_hull({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0.5F, 0.5F, 0}}).ok());
   EXPECT_FALSE(convex_hull({{0, 0, 0}, {1, 0, 0}}).ok());

@@ -2,10 +2,12 @@
 // and EmbreeScene (float, BVH) against BruteForceScene (every triangle in double) on random rays.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <optional>
 #include <numbers>
 #include <thread>
@@ -284,11 +286,24 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
   const Scenes scenes(random_world.world);
   ASSERT_TRUE(scenes.embree && scenes.brute);
   EXPECT_EQ(scenes.embree->stats().triangles, 1500U + 30U * 12U);
-  // The same world without blocking details (with vegetation the closest hit is still needed).
-  EmbreeSceneOptions visibility_only;
-  visibility_only.blocking_details = false;
-  auto visibility = EmbreeScene::build(random_world.world, visibility_only);
-  ASSERT_TRUE(visibility.ok());
+  EXPECT_EQ(scenes.embree->stats().convex_vegetation_objects, 15U);  // the boxes are convex volumes
+  // The same world with its vegetation boxes traced as triangles (the general method).
+  EmbreeSceneOptions as_triangles;
+  as_triangles.convex_vegetation_volumes = false;
+  auto triangles = EmbreeScene::build(random_world.world, as_triangles);
+  ASSERT_TRUE(triangles.ok());
+  EXPECT_EQ((*triangles)->stats().convex_vegetation_objects, 0U);
+  // Each opaque object alone, to check that a line-of-sight blocker really is on the ray.
+  std::map<std::string, BruteForceScene> alone;
+  for (const auto& object : random_world.world.objects) {
+    if (object.material.is_vegetation()) continue;
+    WorldModel single;
+    single.objects.push_back(object);
+    auto scene = BruteForceScene::build(single);
+    ASSERT_TRUE(scene.ok());
+    alone.emplace(object.name, std::move(*scene));
+  }
+  int other_blocker = 0;
   RandomStream random(stream_key(20240611, {2}));
   int rays = 0, excluded = 0, blocked = 0, with_vegetation = 0;
   double worst_distance_m = 0.0, worst_vegetation_m = 0.0;
@@ -298,7 +313,8 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
     for (int i = 0; i < 48; ++i) directions.push_back(unit_vector(random));
     const auto fast = scenes.embree->trace(origin, directions);
     const auto reference = scenes.brute->trace(origin, directions);
-    const auto quick = (*visibility)->trace(origin, directions);
+    const auto general = (*triangles)->trace(origin, directions);
+    const auto line_of_sight = scenes.embree->trace_line_of_sight(origin, directions);
     for (std::size_t i = 0; i < directions.size(); ++i) {
       ++rays;
       if (grazes_an_edge(random_world, origin, directions[i], 1e-6)) {
@@ -308,9 +324,21 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
       SCOPED_TRACE(::testing::Message() << "origin " << origin.transpose() << " direction "
                                         << directions[i].transpose());
       ASSERT_EQ(fast[i].blocked, reference[i].blocked);
-      ASSERT_EQ(quick[i].blocked, reference[i].blocked);
-      EXPECT_NEAR(quick[i].vegetation_path_m, reference[i].vegetation_path_m, 1e-4);
-      EXPECT_EQ(quick[i].blocking_object, fast[i].blocking_object);
+      ASSERT_EQ(general[i].blocked, reference[i].blocked);
+      ASSERT_EQ(line_of_sight[i].blocked, reference[i].blocked);
+      EXPECT_NEAR(general[i].vegetation_path_m, reference[i].vegetation_path_m, 1e-4);
+      EXPECT_EQ(general[i].blocking_object, reference[i].blocking_object);
+      if (line_of_sight[i].blocked) {
+        // Any opaque object on the ray; no vegetation reported behind it.
+        const auto it = alone.find(line_of_sight[i].blocking_object);
+        ASSERT_NE(it, alone.end()) << line_of_sight[i].blocking_object;
+        EXPECT_TRUE(it->second.trace(origin, {directions[i]}).front().blocked) << line_of_sight[i].blocking_object;
+        EXPECT_EQ(line_of_sight[i].vegetation_path_m, 0.0);
+        other_blocker += line_of_sight[i].blocking_object != reference[i].blocking_object ? 1 : 0;
+      } else {
+        EXPECT_NEAR(line_of_sight[i].vegetation_path_m, reference[i].vegetation_path_m, 1e-4);
+        EXPECT_NEAR(line_of_sight[i].vegetation_attenuation_db, 2.0 * reference[i].vegetation_path_m, 2e-4);
+      }
       if (fast[i].blocked) {
         ++blocked;
         EXPECT_EQ(fast[i].blocking_object, reference[i].blocking_object);
@@ -334,6 +362,7 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
   EXPECT_GT(blocked, rays / 5);
   EXPECT_LT(blocked, rays * 4 / 5);
   EXPECT_GT(with_vegetation, rays / 20);
+  EXPECT_GT(other_blocker, 0);  // the test sees rays whose first-found blocker is not the nearest
   RecordProperty("rays", rays);
   RecordProperty("excluded_grazing", excluded);
   std::cout << "random rays: " << rays << " compared, " << excluded << " grazing excluded, " << blocked
@@ -341,14 +370,12 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
             << worst_distance_m << " m, worst vegetation path difference " << worst_vegetation_m << " m\n";
 }
 
-TEST(WorldScene, VisibilityOnlyIsAnOcclusionTest) {
-  // Without vegetation and without details a blocked ray says only "blocked", and says it for the
-  // same rays as the reference.
+TEST(WorldScene, LineOfSightIsAnOcclusionTest) {
+  // Without vegetation the line-of-sight query blocks the same rays as the reference, names the
+  // blocker and its material, and fills no geometry.
   RandomWorld random_world = make_random_world(99);
   std::erase_if(random_world.world.objects, [](const WorldObject& o) { return o.material.is_vegetation(); });
-  EmbreeSceneOptions visibility_only;
-  visibility_only.blocking_details = false;
-  auto quick = EmbreeScene::build(random_world.world, visibility_only);
+  auto quick = EmbreeScene::build(random_world.world);
   auto brute = BruteForceScene::build(random_world.world);
   ASSERT_TRUE(quick.ok() && brute.ok());
   RandomStream random(stream_key(99, {2}));
@@ -357,12 +384,18 @@ TEST(WorldScene, VisibilityOnlyIsAnOcclusionTest) {
     const Eigen::Vector3d origin = uniform_vector(random, 60.0);
     std::vector<Eigen::Vector3d> directions;
     for (int i = 0; i < 50; ++i) directions.push_back(unit_vector(random));
-    const auto fast = (*quick)->trace(origin, directions);
+    const auto fast = (*quick)->trace_line_of_sight(origin, directions);
     const auto reference = brute->trace(origin, directions);
     for (std::size_t i = 0; i < directions.size(); ++i) {
       if (grazes_an_edge(random_world, origin, directions[i], 1e-6)) continue;
       EXPECT_EQ(fast[i].blocked, reference[i].blocked);
-      EXPECT_TRUE(fast[i].blocking_object.empty());
+      if (fast[i].blocked) {
+        const auto object = std::find_if(random_world.world.objects.begin(), random_world.world.objects.end(),
+                                         [&](const WorldObject& o) { return o.name == fast[i].blocking_object; });
+        ASSERT_NE(object, random_world.world.objects.end()) << fast[i].blocking_object;
+        EXPECT_EQ(fast[i].blocking_material, object->material.material_class);
+        EXPECT_EQ(fast[i].blocking_distance_m, 0.0);
+      }
       blocked += fast[i].blocked ? 1 : 0;
     }
   }

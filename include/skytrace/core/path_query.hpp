@@ -106,6 +106,16 @@ class PathQuery {
   [[nodiscard]] virtual std::vector<RayOutcome> trace(const Eigen::Vector3d& origin_m,
                                                       const std::vector<Eigen::Vector3d>& directions) const = 0;
 
+  // The line-of-sight question alone, all a receiver without multipath asks: blocked, with
+  // blocking_object and blocking_material naming an opaque object on the line (with several, any
+  // one of them; distance, point and normal are not filled and blocked rays report no
+  // vegetation), or free, with the vegetation crossed. Scenes that answer it faster than trace()
+  // override it; this default is trace().
+  [[nodiscard]] virtual std::vector<RayOutcome> trace_line_of_sight(const Eigen::Vector3d& origin_m,
+                                                                    const std::vector<Eigen::Vector3d>& directions) const {
+    return trace(origin_m, directions);
+  }
+
   // Every path per direction. This default knows only the direct ray; world::PropagationScene
   // adds reflections and diffraction.
   [[nodiscard]] virtual std::vector<PathSet> paths(const Eigen::Vector3d& origin_m,

@@ -107,6 +107,7 @@ struct WorldSettings {
   std::vector<MaterialRuleSetting> materials;
   std::vector<MovingModelSetting> moving;
   std::optional<double> vegetation_attenuation_db_per_m;  // default of vegetation no rule sets
+  std::optional<double> vegetation_hull_tolerance_m;      // simplification of vegetation hulls
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
   [[nodiscard]] bool any() const { return sdf || osm || !meshes.empty(); }

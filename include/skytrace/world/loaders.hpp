@@ -108,6 +108,14 @@ struct WorldSummary {
 // Convex hull of points (incremental, double precision); errors for fewer than 4 points or points
 // that are all in one plane. Used to turn open vegetation meshes (leaf cards) into closed volumes.
 [[nodiscard]] Result<TriangleMesh> convex_hull(const std::vector<Eigen::Vector3f>& points_m);
+// The convex hull of a subset of a convex mesh's vertices, built farthest vertex first until every
+// vertex of the original lies within `tolerance_m` of it (so the whole original hull does). Tree crowns of a hundred faces become a few dozen,
+// which the scene traces faster; the volume shrinks by at most the tolerance at any point.
+// tolerance_m <= 0 returns the mesh unchanged.
+[[nodiscard]] TriangleMesh simplify_convex_hull(const TriangleMesh& hull, double tolerance_m);
+// Default of that tolerance for vegetation hulls: a few centimetres on crowns metres wide, well
+// below what a per-metre foliage attenuation can resolve.
+inline constexpr double kDefaultVegetationHullToleranceM = 0.05;
 
 using Ring2 = std::vector<Eigen::Vector2d>;
 // A polygon with holes (either orientation; rings are open, a repeated closing point is ignored).
@@ -158,7 +166,9 @@ struct MeshLoadOptions {
   ObjectKind default_kind = ObjectKind::kBuilding;
   Material default_material{};
   std::vector<MaterialRule> material_rules;
-  // Vegetation nodes become their convex hull (closed volumes, as the scene requires).
+  // Vegetation nodes become their convex hull (closed volumes, as the scene requires), simplified
+  // within this distance (simplify_convex_hull; 0 keeps every hull vertex).
+  double vegetation_hull_tolerance_m = kDefaultVegetationHullToleranceM;
   double vegetation_attenuation_db_per_m = kDefaultVegetationAttenuationDbPerM;
   // One object per node (names "file/node"), or the whole file as one object (name "file").
   bool split_by_node = true;
@@ -201,6 +211,8 @@ struct SdfLoadOptions {
   // Vegetation meshes become their convex hull (closed, as the scene requires); false keeps them
   // as they are (only correct for meshes that are already closed volumes).
   bool vegetation_convex_hull = true;
+  // The hulls simplified within this distance (simplify_convex_hull); 0 keeps every hull vertex.
+  double vegetation_hull_tolerance_m = kDefaultVegetationHullToleranceM;
   double vegetation_attenuation_db_per_m = kDefaultVegetationAttenuationDbPerM;
   // A static model counts as a building when no name says what it is but its objects are at least
   // this tall and cover at least this much ground (bounding box).

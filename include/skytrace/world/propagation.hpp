@@ -91,13 +91,14 @@ struct DiffractionEdge {
 // direction (an edge must pass within ~1.4 m of the ray 30 m away to cost the direct signal anything).
 class PropagationScene final : public PathQuery {
  public:
-  // `scene` must answer for the same world (it does the ray casting); blocking details are
-  // needed (EmbreeSceneOptions::blocking_details, the default).
+  // `scene` must answer for the same world (it does the ray casting).
   [[nodiscard]] static Result<std::unique_ptr<PropagationScene>> build(const WorldModel& world,
                                                                        std::shared_ptr<const PathQuery> scene);
 
   [[nodiscard]] std::vector<RayOutcome> trace(const Eigen::Vector3d& origin_m,
                                               const std::vector<Eigen::Vector3d>& directions) const override;
+  [[nodiscard]] std::vector<RayOutcome> trace_line_of_sight(const Eigen::Vector3d& origin_m,
+                                                            const std::vector<Eigen::Vector3d>& directions) const override;
   [[nodiscard]] std::vector<PathSet> paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                            const PathSearchSettings& settings) const override;
 

@@ -59,21 +59,21 @@ struct SceneStats {
   std::size_t objects = 0;
   std::size_t movable_objects = 0;
   std::size_t vegetation_objects = 0;
+  std::size_t convex_vegetation_objects = 0;  // EmbreeScene: traced as exact convex volumes
   std::size_t triangles = 0;             // used by the scene
   std::size_t degenerate_triangles = 0;  // skipped
 };
 
 struct EmbreeSceneOptions {
-  // false: in a world without vegetation, a blocked ray reports only `blocked` (blocking_object
-  // empty, other fields zero), so that a ray costs one Embree occlusion test, the cheapest query
-  // (about 1.4 times faster than the closest hit in a dense city). For receivers without
-  // multipath, which need only line of sight. With vegetation the closest opaque hit is needed
-  // anyway (the vegetation path stops there) and is reported.
-  bool blocking_details = true;
+  // true: closed convex vegetation volumes (tree crowns as convex hulls) are traced as one Embree
+  // user primitive each, the path inside computed exactly from their face planes; false: as
+  // triangles, like any other vegetation volume (the general method, kept for comparison).
+  bool convex_vegetation_volumes = true;
 };
 
-// The Embree 3 scene: one Embree query per ray (closest hit, or occlusion test, see
-// EmbreeSceneOptions); vegetation crossings are collected by a filter during that same query.
+// The Embree 3 scene: one Embree query per ray, a closest hit for trace() and an occlusion test
+// for trace_line_of_sight(); the vegetation met is recorded during that same query (crossings of
+// volumes traced as triangles by a filter, convex volumes as user primitives, their paths exact).
 // Static objects are one triangle geometry each; each movable object (is_static == false) is its
 // own Embree scene, instanced in the top level, and the static geometry then sits in one child
 // scene instanced once, so that set_object_pose() only rebuilds the top level (a few microseconds).
@@ -90,6 +90,9 @@ class EmbreeScene final : public PathQuery {
 
   [[nodiscard]] std::vector<RayOutcome> trace(const Eigen::Vector3d& origin_m,
                                               const std::vector<Eigen::Vector3d>& directions) const override;
+  // One occlusion test per ray (Embree's cheapest query): see PathQuery::trace_line_of_sight.
+  [[nodiscard]] std::vector<RayOutcome> trace_line_of_sight(const Eigen::Vector3d& origin_m,
+                                                            const std::vector<Eigen::Vector3d>& directions) const override;
 
   // Moves a movable object (is_static == false in the world model) to a new pose in the world
   // frame. Errors: unknown name, a static object, a non-finite pose.
