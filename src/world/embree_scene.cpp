@@ -108,9 +108,10 @@ struct TrianglePlane {
 };
 
 // Convex vegetation volumes (tree crowns as convex hulls, the common case) are not traced as
-// triangles: each is one Embree user primitive (its bounding box) and the part of a ray inside it
-// is computed exactly, in double, from its face planes. A ray through a tree then costs one box
-// test and one callback instead of a triangle traversal with a filter call per face it crosses.
+// triangles: each is a few Embree user primitives (the boxes of its horizontal slabs) and the part
+// of a ray inside it is computed exactly, in double, from its face planes. A ray through a tree
+// then costs a few box tests and callbacks instead of a triangle traversal with a filter call per
+// face it crosses.
 struct ConvexVolumes {
   std::vector<std::uint32_t> object_of_primitive;  // primID -> index in objects
   std::vector<Eigen::AlignedBox3d> bounds_m;       // per primID, frame of the Embree geometry
@@ -494,9 +495,9 @@ std::string device_error_text(RTCError code) {
   }
 }
 
-// Unit direction of a valid ray; false for a non-finite origin or a non-finite or zero direction.
-bool unit_direction(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, Eigen::Vector3d& unit) {
-  if (!origin.allFinite() || !direction.allFinite()) return false;
+// Unit direction of a ray; false for a non-finite or zero direction.
+inline bool unit_direction(const Eigen::Vector3d& direction, Eigen::Vector3d& unit) {
+  if (!direction.allFinite()) return false;
   // Callers mostly pass unit vectors already: no square root and division for those.
   const double squared_norm = direction.squaredNorm();
   if (std::abs(squared_norm - 1.0) <= 4.0 * std::numeric_limits<double>::epsilon()) {
@@ -1026,7 +1027,8 @@ std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& o
                                                         const std::vector<Eigen::Vector3d>& directions,
                                                         Answer answer) const {
   std::vector<RayOutcome> outcomes(directions.size());
-  const bool answerable = !main.empty && origin_m.allFinite();
+  const bool origin_finite = origin_m.allFinite();
+  const bool answerable = !main.empty && origin_finite;
   QueryState state;
   if (answerable) {
     state.origin_f = origin_m.cast<float>();
@@ -1040,7 +1042,7 @@ std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& o
   }
   for (std::size_t i = 0; i < directions.size(); ++i) {
     Eigen::Vector3d direction;
-    if (!unit_direction(origin_m, directions[i], direction)) {
+    if (!origin_finite || !unit_direction(directions[i], direction)) {
       outcomes[i].blocked = true;
       outcomes[i].blocking_object = std::string(kInvalidRayObject);
       continue;
