@@ -1,5 +1,6 @@
 #include "skytrace/core/time.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <charconv>
@@ -289,23 +290,79 @@ int GnssTime::day_of_year(TimeScale scale) const {
          1;
 }
 
-std::string GnssTime::to_iso8601(TimeScale scale, int decimals) const {
-  CalendarTime c = to_calendar(scale);
-  // Round the seconds for display without producing "60.000" outside a leap second.
-  const double scale_factor = std::pow(10.0, decimals);
-  double rounded = std::round(c.second * scale_factor) / scale_factor;
-  const double limit = (c.second >= 60.0) ? 61.0 : 60.0;
-  if (rounded >= limit) {
-    GnssTime shifted = *this + (limit - c.second);
-    return shifted.to_iso8601(scale, decimals);
+namespace {
+
+constexpr int kMaxDecimals = 15;  // 1e15 units of a second still fit an int64 many times over
+
+int clamp_decimals(int decimals) { return std::clamp(decimals, 0, kMaxDecimals); }
+
+std::int64_t pow10(int decimals) {
+  std::int64_t p = 1;
+  for (int i = 0; i < decimals; ++i) p *= 10;
+  return p;
+}
+
+// The instant rounded to units of 10^-decimals s: whole GPST seconds and the count of units in
+// [0, 10^decimals). Rounding the fraction alone is rounding the whole value (the whole seconds are
+// exact); a fraction that rounds to a full second carries into the whole seconds.
+struct RoundedSeconds {
+  std::int64_t whole_s;
+  std::int64_t units;
+};
+
+RoundedSeconds round_seconds(std::int64_t whole_s, double fraction_s, int decimals) {
+  const std::int64_t per_second = pow10(decimals);
+  std::int64_t units = std::llround(fraction_s * static_cast<double>(per_second));
+  if (units >= per_second) {
+    units -= per_second;
+    ++whole_s;
   }
+  return {whole_s, units};
+}
+
+}  // namespace
+
+GnssTime GnssTime::rounded_to(int decimals) const {
+  decimals = clamp_decimals(decimals);
+  const RoundedSeconds r = round_seconds(whole_s_, fraction_s_, decimals);
+  GnssTime t;
+  t.whole_s_ = r.whole_s;
+  t.fraction_s_ = static_cast<double>(r.units) / static_cast<double>(pow10(decimals));
+  return t;
+}
+
+RoundedCalendarTime GnssTime::to_rounded_calendar(TimeScale scale, int decimals) const {
+  decimals = clamp_decimals(decimals);
+  // Round first on the continuous timeline, then split the whole second into calendar fields with
+  // integer arithmetic only: the carry runs through minute, hour, day, month and year by itself.
+  // Every scale is GPST shifted by whole seconds, so this rounding is the same in every scale. A
+  // leap second of UTC / GLONASST is a whole GPST second of its own: an instant that rounds into
+  // it shows second 60 (a real 23:59:60), one that rounds past it shows 00:00:00 of the next day.
+  const RoundedSeconds r = round_seconds(whole_s_, fraction_s_, decimals);
+  const UtcView view = to_scale_count(from_gpst_seconds(r.whole_s), scale);
+  const std::int64_t days = floor_div(view.count_s, kSecondsPerDay);
+  const std::int64_t sod = view.count_s - days * kSecondsPerDay;
+  const CivilDate date = civil_from_days(days + kGpsEpochDaysSinceUnix);
+  RoundedCalendarTime c;
+  c.year = date.year;
+  c.month = date.month;
+  c.day = date.day;
+  c.hour = static_cast<int>(sod / 3600);
+  c.minute = static_cast<int>((sod % 3600) / 60);
+  c.second = static_cast<int>(sod % 60) + (view.in_leap_second ? 1 : 0);
+  c.fraction = r.units;
+  c.decimals = decimals;
+  return c;
+}
+
+std::string GnssTime::to_iso8601(TimeScale scale, int decimals) const {
+  const RoundedCalendarTime c = to_rounded_calendar(scale, decimals);
   char buf[64];
-  if (decimals > 0) {
-    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%0*.*f", c.year, c.month, c.day, c.hour,
-                  c.minute, decimals + 3, decimals, rounded);
-  } else {
-    std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d", c.year, c.month, c.day, c.hour,
-                  c.minute, static_cast<int>(rounded));
+  int n = std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d", c.year, c.month, c.day, c.hour, c.minute,
+                        c.second);
+  if (c.decimals > 0 && n > 0) {
+    std::snprintf(buf + n, sizeof buf - static_cast<size_t>(n), ".%0*lld", c.decimals,
+                  static_cast<long long>(c.fraction));
   }
   return buf;
 }

@@ -28,8 +28,11 @@ std::string csv_field(const std::string& text) {
 const char* fix_csv_header() { return kFixCsvHeader; }
 
 std::string fix_csv_row(const positioning::PositionFix& fix) {
-  const WeekTow week_tow = fix.receiver_time.to_week_tow(TimeScale::kGpst);
-  std::string row = fmt::format("{},{},{:.3f},{},{},", fix.receiver_time.to_iso8601(TimeScale::kGpst, 3), week_tow.week,
+  // Rounded to 1 ms before the split into calendar, week and seconds of week: 604799.9996 s is
+  // second 0.000 of the next week, never 604800.000 of this one.
+  const GnssTime time = fix.receiver_time.rounded_to(3);
+  const WeekTow week_tow = time.to_week_tow(TimeScale::kGpst);
+  std::string row = fmt::format("{},{},{:.3f},{},{},", time.to_iso8601(TimeScale::kGpst, 3), week_tow.week,
                                 week_tow.tow_s, positioning::to_string(fix.type), fix.satellites_used);
   std::string rejected;
   for (const auto& use : fix.satellites) {

@@ -21,18 +21,16 @@ GnssSystem reporting_system(GnssSystem system) {
 // hhmmss.ss and the calendar of the instant rounded to 10 ms (UTC).
 struct UtcStamp {
   std::string hhmmss;
-  CalendarTime calendar;
+  RoundedCalendarTime calendar;
 };
 
 UtcStamp utc_stamp(const GnssTime& t) {
-  // Round on the GPST timeline first so that 59.999 carries into the minute.
-  const std::int64_t centi = std::llround(t.fraction_s() * 100.0);
-  const GnssTime rounded = GnssTime::from_gpst_seconds(t.whole_seconds(), static_cast<double>(centi) / 100.0);
+  // Rounded to 10 ms on the continuous timeline first, then split, so that 59.995 s carries into
+  // the minute, hour and date (ZDA, RMC); second 60 only inside a real UTC leap second.
   UtcStamp stamp;
-  stamp.calendar = rounded.to_calendar(TimeScale::kUtc);
-  const auto centiseconds = static_cast<int>(std::llround(stamp.calendar.second * 100.0));
-  stamp.hhmmss = fmt::format("{:02d}{:02d}{:02d}.{:02d}", stamp.calendar.hour, stamp.calendar.minute,
-                             centiseconds / 100, centiseconds % 100);
+  stamp.calendar = t.to_rounded_calendar(TimeScale::kUtc, 2);
+  const RoundedCalendarTime& c = stamp.calendar;
+  stamp.hhmmss = fmt::format("{:02d}{:02d}{:02d}.{:02d}", c.hour, c.minute, c.second, c.fraction);
   return stamp;
 }
 

@@ -288,16 +288,6 @@ double time_step_s(double span_s) {
   return std::ceil(span_s / 8.0 / 604800.0) * 604800.0;
 }
 
-std::string time_label(double time_s, double step_s, double span_s) {
-  const auto whole_s = static_cast<std::int64_t>(std::floor(time_s));
-  const auto calendar = GnssTime::from_gpst_seconds(whole_s, time_s - static_cast<double>(whole_s)).to_calendar(TimeScale::kGpst);
-  const int second = static_cast<int>(std::floor(calendar.second + 1e-6));
-  if (step_s >= 86400.0) return fmt::format("{:04}-{:02}-{:02}", calendar.year, calendar.month, calendar.day);
-  if (span_s > 86400.0) return fmt::format("{:02}-{:02} {:02}:{:02}", calendar.month, calendar.day, calendar.hour, calendar.minute);
-  if (std::fmod(step_s, 60.0) == 0.0) return fmt::format("{:02}:{:02}", calendar.hour, calendar.minute);
-  return fmt::format("{:02}:{:02}:{:02}", calendar.hour, calendar.minute, second);
-}
-
 std::string line_chart(std::string_view id, std::string_view title, std::string_view y_label, const ChartFrame& frame,
                        const std::vector<Series>& series, const std::vector<LegendEntry>& legend, double y_step) {
   const double total_width = frame.left + frame.width + 150.0;
@@ -328,7 +318,7 @@ std::string line_chart(std::string_view id, std::string_view title, std::string_
     svg += fmt::format(R"(<line x1="{0}" y1="{1}" x2="{0}" y2="{2}"/>)", num(x), num(frame.top), num(frame.top + frame.height));
     svg += "\n";
     tick_labels += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">{}</text>)", num(x),
-                               num(frame.top + frame.height + 16.0), escape(time_label(time_s, step_s, span_s)));
+                               num(frame.top + frame.height + 16.0), escape(detail::time_axis_label(time_s, step_s, span_s)));
     tick_labels += "\n";
   }
   svg += "</g>\n<g class=\"tick-labels\" fill=\"#333333\">\n" + tick_labels;
@@ -640,5 +630,21 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
   out += "</body>\n</html>\n";
   return out;
 }
+
+namespace detail {
+
+std::string time_axis_label(double time_s, double step_s, double span_s) {
+  // Rounded to the second on the timeline first, then split: 23:59:59.9999995 is the next day's
+  // 00:00:00 (and 00:00 or its date), never 23:59:60.
+  const auto whole_s = static_cast<std::int64_t>(std::floor(time_s));
+  const RoundedCalendarTime calendar = GnssTime::from_gpst_seconds(whole_s, time_s - static_cast<double>(whole_s))
+                                           .to_rounded_calendar(TimeScale::kGpst, 0);
+  if (step_s >= 86400.0) return fmt::format("{:04}-{:02}-{:02}", calendar.year, calendar.month, calendar.day);
+  if (span_s > 86400.0) return fmt::format("{:02}-{:02} {:02}:{:02}", calendar.month, calendar.day, calendar.hour, calendar.minute);
+  if (std::fmod(step_s, 60.0) == 0.0) return fmt::format("{:02}:{:02}", calendar.hour, calendar.minute);
+  return fmt::format("{:02}:{:02}:{:02}", calendar.hour, calendar.minute, calendar.second);
+}
+
+}  // namespace detail
 
 }  // namespace skytrace::io

@@ -67,7 +67,7 @@ bool format_f14_3(double value, char* out) {
 
 namespace {
 
-constexpr double kSecondsPerTick = 1e-7;  // RINEX epoch resolution (F11.7 / F13.7)
+constexpr int kEpochDecimals = 7;  // RINEX epoch resolution 1e-7 s (F11.7 / F13.7)
 
 // An epoch split into the fields of a RINEX epoch line, seconds in 1e-7 s ticks.
 struct EpochFields {
@@ -76,14 +76,12 @@ struct EpochFields {
 };
 
 EpochFields epoch_fields(const GnssTime& t, TimeScale scale) {
-  // Round on the continuous timeline first so that 59.99999999 s carries into the next minute.
-  const double rounded_fraction = std::round(t.fraction_s() / kSecondsPerTick) * kSecondsPerTick;
-  const GnssTime rounded = GnssTime::from_gpst_seconds(t.whole_seconds(), rounded_fraction);
-  const CalendarTime c = rounded.to_calendar(scale);
-  const double whole_second = std::floor(c.second);
+  // Rounded to 1e-7 s on the continuous timeline first, then split (exact integers), so that
+  // 59.99999996 s carries into the next minute, hour, day, month and year; second 60 only inside a
+  // real leap second of GLONASST.
+  const RoundedCalendarTime c = t.to_rounded_calendar(scale, kEpochDecimals);
   return EpochFields{c.year, c.month, c.day, c.hour, c.minute,
-                     static_cast<long long>(whole_second) * 10000000LL +
-                         std::llround((c.second - whole_second) / kSecondsPerTick)};
+                     static_cast<long long>(c.second) * 10000000LL + static_cast<long long>(c.fraction)};
 }
 
 std::optional<std::string_view> rinex_time_system_label(TimeScale scale) {

@@ -21,8 +21,9 @@ std::int64_t round_to(double value, double unit) { return std::llround(value / u
 
 // ---- time fields --------------------------------------------------------------------------------
 
-std::int64_t milliseconds_since_gps_epoch(const GnssTime& t) {
-  return t.whole_seconds() * 1000 + std::llround(t.fraction_s() * 1000.0);
+// Milliseconds of GPST since the GPS epoch of an instant already rounded to 1 ms (rounded_to(3)).
+std::int64_t milliseconds_since_gps_epoch(const GnssTime& rounded) {
+  return rounded.whole_seconds() * 1000 + std::llround(rounded.fraction_s() * 1000.0);
 }
 
 constexpr std::int64_t kWeek_ms = 604'800'000;
@@ -31,13 +32,17 @@ constexpr std::int64_t kDay_ms = 86'400'000;
 std::int64_t positive_mod(std::int64_t a, std::int64_t m) { return ((a % m) + m) % m; }
 
 // DF004/DF248/DF427/DF428 or, for GLONASS, DF416 day of week (3 bits) and DF034 ms of day (27 bits).
+// The time is rounded to 1 ms on the continuous timeline first; the week, day and leap-second
+// offset are then taken from the rounded instant (604799.9996 s is millisecond 0 of the next week,
+// and the end of a leap second is 00:00:00.000 UTC with the new GPS - UTC).
 std::uint32_t msm_epoch_field(GnssSystem system, const GnssTime& t) {
-  const std::int64_t ms = milliseconds_since_gps_epoch(t);
+  const GnssTime rounded = t.rounded_to(3);
+  const std::int64_t ms = milliseconds_since_gps_epoch(rounded);
   switch (system) {
     case GnssSystem::kBeiDou: return static_cast<std::uint32_t>(positive_mod(ms - 14'000, kWeek_ms));
     case GnssSystem::kGlonass: {
       // GLONASS time = UTC + 3 h; GPS weeks start on Sunday like DF416's day 0.
-      const std::int64_t glonass_ms = ms - static_cast<std::int64_t>(gps_minus_utc_s(t)) * 1000 + 10'800'000;
+      const std::int64_t glonass_ms = ms - static_cast<std::int64_t>(gps_minus_utc_s(rounded)) * 1000 + 10'800'000;
       const std::int64_t of_week = positive_mod(glonass_ms, kWeek_ms);
       return static_cast<std::uint32_t>(((of_week / kDay_ms) << 27) | (of_week % kDay_ms));
     }

@@ -53,16 +53,15 @@ std::string format_utc_now() {
   return buffer;
 }
 
-// The record epoch "G05 2020 06 25 00 00 00" in the given time scale, rounded to the second
-// (navigation epochs are whole seconds; rounding first avoids writing 59.9999 as 59).
+// The record epoch "G05 2020 06 25 00 00 00" in the given time scale, rounded to the second on the
+// timeline first (navigation epochs are whole seconds; 59.6 s carries into the next minute, hour,
+// day, month and year; second 60 only inside a real leap second of UTC for GLONASS records).
 std::string epoch_field(const SatelliteId& satellite, const GnssTime& t, TimeScale scale) {
-  const GnssTime rounded =
-      GnssTime::from_gpst_seconds(t.whole_seconds() + (t.fraction_s() >= 0.5 ? 1 : 0));
-  const CalendarTime c = rounded.to_calendar(scale);
+  const RoundedCalendarTime c = t.to_rounded_calendar(scale, 0);
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%c%02d %04d %02d %02d %02d %02d %02d",
                 system_letter(satellite.system), static_cast<int>(satellite.number), c.year,
-                c.month, c.day, c.hour, c.minute, static_cast<int>(c.second));
+                c.month, c.day, c.hour, c.minute, c.second);
   return buffer;
 }
 
@@ -251,8 +250,10 @@ void write_klobuchar(std::string& out, const char* alpha_name, const char* beta_
 void write_time_correction(std::string& out, const TimeSystemCorrection& c) {
   // Reference time as seconds of week and week: BDT weeks for BeiDou corrections, GPS weeks for
   // the rest (RINEX 3.04 table A5: GAL, QZS, IRN and SBAS weeks are aligned to GPS).
+  // Rounded to the second before the split into week and seconds of week, so that 604799.6 s
+  // becomes second 0 of the next week rather than second 604800.
   const bool beidou = c.type.rfind("BD", 0) == 0;
-  const WeekTow wt = c.reference_time.to_week_tow(beidou ? TimeScale::kBdt : TimeScale::kGpst);
+  const WeekTow wt = c.reference_time.rounded_to(0).to_week_tow(beidou ? TimeScale::kBdt : TimeScale::kGpst);
   int week = wt.week;
   long sow = std::lround(wt.tow_s);
   if (c.reference_time == GnssTime{}) {  // not given (e.g. GLUT): RINEX writes zeros

@@ -242,9 +242,11 @@ std::string rinex_creation_date(const Scenario& s) {
                          utc.tm_hour, utc.tm_min, utc.tm_sec);
     }
   }
-  const CalendarTime c = s.time.start.to_calendar(TimeScale::kUtc);
-  return fmt::format("{:04d}{:02d}{:02d} {:02d}{:02d}{:02d} UTC", c.year, c.month, c.day, c.hour, c.minute,
-                     static_cast<int>(std::floor(c.second)));
+  // The second the start falls in (a date stamp: truncated, not rounded), split with integer
+  // fields: a start a hair before midnight stays 235959, never 235960 (60 only in a leap second).
+  const RoundedCalendarTime c =
+      GnssTime::from_gpst_seconds(s.time.start.whole_seconds()).to_rounded_calendar(TimeScale::kUtc, 0);
+  return fmt::format("{:04d}{:02d}{:02d} {:02d}{:02d}{:02d} UTC", c.year, c.month, c.day, c.hour, c.minute, c.second);
 }
 
 int signal_strength_indicator(double cn0_dbhz) {

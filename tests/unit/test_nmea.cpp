@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "skytrace/io/nmea.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace::io {
 namespace {
@@ -148,6 +149,75 @@ TEST(Nmea, GsvSplitsIntoSentencesOfFourSatellites) {
   ASSERT_EQ(sentences.size(), 3U);
   EXPECT_EQ(sentences[0].substr(0, 17), "$GPGSV,3,1,09,01,");
   EXPECT_EQ(sentences[2].substr(0, 17), "$GPGSV,3,3,09,09,");
+}
+
+// Comma-separated fields of a sentence without '$' and the checksum.
+std::vector<std::string> fields_of(const std::string& sentence) {
+  const std::string body = sentence.substr(1, sentence.find('*') - 1);
+  std::vector<std::string> fields;
+  size_t start = 0;
+  for (size_t comma = body.find(','); comma != std::string::npos; comma = body.find(',', start)) {
+    fields.push_back(body.substr(start, comma - start));
+    start = comma + 1;
+  }
+  fields.push_back(body.substr(start));
+  return fields;
+}
+
+// Time (hhmmss.ss) and date of GGA, RMC (ddmmyy) and ZDA (dd, mm, yyyy) of a fix at `t`.
+struct NmeaTimes {
+  std::string gga_time, rmc_time, rmc_date, zda_time, zda_date;
+};
+
+NmeaTimes nmea_times(const GnssTime& t) {
+  auto fix = esbc_like_fix();
+  fix.time = fix.receiver_time = t;
+  NmeaTimes out;
+  for (const auto& s : nmea_epoch(fix)) {
+    const auto f = fields_of(s);
+    if (f[0] == "GNGGA") out.gga_time = f[1];
+    if (f[0] == "GNRMC") {
+      out.rmc_time = f[1];
+      out.rmc_date = f[9];
+    }
+    if (f[0] == "GNZDA") {
+      out.zda_time = f[1];
+      out.zda_date = f[4] + "-" + f[3] + "-" + f[2];
+    }
+  }
+  return out;
+}
+
+TEST(Nmea, TimeRoundedToHundredthsCarriesIntoMinuteHourDayMonthAndYear) {
+  for (const auto& b : test::time_boundaries()) {
+    const std::string next(b.next);  // UTC
+    const std::string hhmmss = next.substr(11, 2) + next.substr(14, 2) + next.substr(17, 2) + ".00";
+    const std::string ddmmyy = next.substr(8, 2) + next.substr(5, 2) + next.substr(2, 2);
+    auto fractions = test::fractions_rounding_up(2);
+    fractions.push_back(0.995);  // 59.995 s: never "60.00"
+    for (const double fraction : fractions) {
+      const NmeaTimes got = nmea_times(test::boundary_time(b, TimeScale::kUtc, fraction));
+      EXPECT_EQ(got.gga_time, hhmmss) << b.name << ", fraction " << fraction;
+      EXPECT_EQ(got.rmc_time, hhmmss) << b.name << ", fraction " << fraction;
+      EXPECT_EQ(got.rmc_date, ddmmyy) << b.name << ", fraction " << fraction;
+      EXPECT_EQ(got.zda_time, hhmmss) << b.name << ", fraction " << fraction;
+      EXPECT_EQ(got.zda_date, next.substr(0, 10)) << b.name << ", fraction " << fraction;
+    }
+    const NmeaTimes below = nmea_times(test::boundary_time(b, TimeScale::kUtc, 0.994));
+    EXPECT_EQ(below.gga_time.substr(4), "59.99") << b.name;
+    EXPECT_EQ(below.zda_date, std::string(b.last_second).substr(0, 10)) << b.name;
+  }
+}
+
+TEST(Nmea, TimeShowsSecond60OnlyInsideARealLeapSecond) {
+  const GnssTime before_leap = GnssTime::parse_iso8601("2016-12-31T23:59:59", TimeScale::kUtc).value();
+  NmeaTimes got = nmea_times(before_leap + 0.996);
+  EXPECT_EQ(got.zda_time, "235960.00");
+  EXPECT_EQ(got.zda_date, "2016-12-31");
+  got = nmea_times(before_leap + 1.996);  // the end of the leap second 23:59:60
+  EXPECT_EQ(got.zda_time, "000000.00");
+  EXPECT_EQ(got.zda_date, "2017-01-01");
+  EXPECT_EQ(got.rmc_date, "010117");
 }
 
 }  // namespace

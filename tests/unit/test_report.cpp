@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "skytrace/io/report.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace::io {
 namespace {
@@ -318,6 +319,39 @@ TEST(Report, OutOfOrderSamplesAreCountedAndReported) {
   builder.add(sample(60, "G01", 40.0, 40.0, "tracked"));
   EXPECT_EQ(builder.ignored_samples(), 2U);
   EXPECT_NE(builder.html(ReportMeta{}).find("2 samples out of time order"), std::string::npos);
+}
+
+TEST(Report, StartAndEndRoundedToTheSecondCarryIntoMinuteHourDayMonthAndYear) {
+  const auto builder = crossing_builder();
+  for (const auto& b : test::time_boundaries()) {
+    for (const double fraction : test::fractions_rounding_up(0)) {
+      ReportMeta meta = crossing_meta();
+      meta.start = test::boundary_time(b, TimeScale::kGpst, fraction);
+      meta.end = meta.start + 3600.0;
+      const std::string end_text = (GnssTime::parse_iso8601(b.next, TimeScale::kGpst).value() + 3600.0).to_iso8601(TimeScale::kGpst, 0);
+      const auto html = builder.html(meta);
+      EXPECT_NE(html.find(std::string("&#183; ") + b.next + " to " + end_text + " GPST &#183;"), std::string::npos)
+          << b.name << ", fraction 1 - " << 1.0 - fraction;
+      EXPECT_EQ(html.find(":60 "), std::string::npos) << b.name;
+    }
+  }
+}
+
+TEST(Report, TimeAxisLabelsRoundedToTheSecondCarryIntoMinuteHourDayMonthAndYear) {
+  for (const auto& b : test::time_boundaries()) {
+    const GnssTime last = GnssTime::parse_iso8601(b.last_second, TimeScale::kGpst).value();
+    const std::string next(b.next);
+    for (const double fraction : {0.6, 0.9999995}) {
+      const double time_s = static_cast<double>(last.whole_seconds()) + fraction;
+      EXPECT_EQ(detail::time_axis_label(time_s, 1.0, 600.0), next.substr(11, 8)) << b.name << ", fraction " << fraction;
+      EXPECT_EQ(detail::time_axis_label(time_s, 60.0, 3600.0), next.substr(11, 5)) << b.name << ", fraction " << fraction;
+      EXPECT_EQ(detail::time_axis_label(time_s, 3600.0, 172800.0), next.substr(5, 5) + " " + next.substr(11, 5))
+          << b.name << ", fraction " << fraction;
+      EXPECT_EQ(detail::time_axis_label(time_s, 86400.0, 604800.0), next.substr(0, 10)) << b.name << ", fraction " << fraction;
+    }
+    EXPECT_EQ(detail::time_axis_label(static_cast<double>(last.whole_seconds()), 1.0, 600.0),
+              std::string(b.last_second).substr(11, 8));
+  }
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "test_support.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace::orbits {
 namespace {
@@ -467,6 +468,70 @@ TEST(RinexNavWriter, EveryLineFitsEightyColumns) {
   const auto second = split_lines(text).at(1);
   EXPECT_EQ(second.substr(56, 3), "UTC");
   EXPECT_EQ(second.substr(48, 1), " ");
+}
+
+// "YYYY-MM-DDThh:mm:ss" as a record epoch writes it after the satellite ("2024 05 05 00 00 00").
+std::string record_epoch(const std::string& iso) {
+  return iso.substr(0, 4) + " " + iso.substr(5, 2) + " " + iso.substr(8, 2) + " " + iso.substr(11, 2) + " " +
+         iso.substr(14, 2) + " " + iso.substr(17, 2);
+}
+
+TEST(RinexNavWriter, RecordEpochRoundedToTheSecondCarriesIntoMinuteHourDayMonthYearAndWeek) {
+  for (const auto& b : test::time_boundaries()) {
+    for (const double fraction : test::fractions_rounding_up(0)) {
+      NavigationData data;
+      KeplerEphemeris g = gps_g01();
+      g.toc = test::boundary_time(b, TimeScale::kGpst, fraction);  // GPS epochs in GPST
+      KeplerEphemeris c = beidou_c05();
+      c.toc = test::boundary_time(b, TimeScale::kBdt, fraction);  // BeiDou epochs in BDT
+      GlonassEphemeris r = glonass_r01();
+      r.toe = test::boundary_time(b, TimeScale::kUtc, fraction);  // GLONASS epochs in UTC
+      data.kepler = {g, c};
+      data.glonass = {r};
+      const auto text = format_rinex3_nav(data, fixed_options());
+      const std::string expected = record_epoch(b.next);
+      for (const char* id : {"G01 ", "C05 ", "R01 "}) {
+        const auto lines = record(text, id, 1);
+        ASSERT_EQ(lines.size(), 1u) << id << b.name;
+        EXPECT_EQ(lines[0].substr(4, 19), expected) << id << b.name << ", fraction " << fraction;
+      }
+    }
+  }
+}
+
+TEST(RinexNavWriter, GlonassRecordEpochKeepsARealLeapSecond) {
+  NavigationData data;
+  GlonassEphemeris r = glonass_r01();
+  r.toe = GnssTime::parse_iso8601("2016-12-31T23:59:59.7", TimeScale::kUtc).value();
+  data.glonass = {r};
+  auto lines = record(format_rinex3_nav(data, fixed_options()), "R01 ", 1);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].substr(4, 19), "2016 12 31 23 59 60");
+  data.glonass[0].toe = GnssTime::parse_iso8601("2016-12-31T23:59:60.7", TimeScale::kUtc).value();
+  lines = record(format_rinex3_nav(data, fixed_options()), "R01 ", 1);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].substr(4, 19), "2017 01 01 00 00 00");
+}
+
+TEST(RinexNavWriter, TimeSystemCorrectionReferenceRoundedAtTheWeekEnd) {
+  // The reference time is written as whole seconds of week and week: rounding 604799.6 s up must
+  // give second 0 of the next week, never second 604800 of this one.
+  for (const double fraction : test::fractions_rounding_up(0)) {
+    NavigationData data;
+    data.kepler = {gps_g01()};
+    data.time_corrections.push_back(
+        {"GAGP", 2.3574102670e-09, 0.0, GnssTime::from_week_tow(TimeScale::kGpst, 2312, 604799.0) + fraction, ""});
+    data.time_corrections.push_back(
+        {"BDUT", -2.793967723846e-09, 0.0, GnssTime::from_week_tow(TimeScale::kBdt, 956, 604799.0) + fraction, ""});
+    data.time_corrections.push_back(
+        {"GPUT", 1e-9, 0.0, GnssTime::from_week_tow(TimeScale::kGpst, 2312, 345599.0) + fraction, ""});
+    std::vector<std::string> found;
+    for (const auto& line : split_lines(format_rinex3_nav(data, fixed_options()))) {
+      if (line.find("TIME SYSTEM CORR") != std::string::npos) found.push_back(line.substr(0, 4) + line.substr(38, 12));
+    }
+    EXPECT_EQ(found, (std::vector<std::string>{"GAGP      0 2313", "BDUT      0  957", "GPUT 345600 2312"}))
+        << "fraction " << fraction;
+  }
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "skytrace/io/rinex_obs.hpp"
 #include "test_support.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace::io {
 namespace {
@@ -316,6 +317,75 @@ TEST(RinexObsWriter, GlonassTimeSystemEpochsAreUtcPlusThreeHours) {
   EXPECT_EQ(read->header.time_system, TimeScale::kGlonasst);
   ASSERT_EQ(read->epochs.size(), 1u);
   EXPECT_NEAR(read->epochs[0].time - kT0, 0.0, 1e-9);
+}
+
+// ------------------------------------------------------------------ epochs at boundaries
+// "YYYY-MM-DDThh:mm:ss" as the epoch line writes it ("> 2024 05 03 00 00  0.0000000").
+std::string epoch_line_prefix(const std::string& iso) {
+  return "> " + iso.substr(0, 4) + " " + iso.substr(5, 2) + " " + iso.substr(8, 2) + " " + iso.substr(11, 2) + " " +
+         iso.substr(14, 2) + " " + (iso[17] == '0' ? std::string(" ") + iso[18] : iso.substr(17, 2)) + ".0000000  0  1";
+}
+
+// "YYYY-MM-DDThh:mm:ss" as TIME OF FIRST OBS writes it (5I6, F13.7).
+std::string header_time(const std::string& iso) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%6d%6d%6d%6d%6d%13.7f", std::stoi(iso.substr(0, 4)), std::stoi(iso.substr(5, 2)),
+                std::stoi(iso.substr(8, 2)), std::stoi(iso.substr(11, 2)), std::stoi(iso.substr(14, 2)),
+                std::stod(iso.substr(17, 2)));
+  return buf;
+}
+
+TEST(RinexObsWriter, EpochRoundedToF11_7CarriesIntoMinuteHourDayMonthYearAndWeek) {
+  const auto dir = test::make_temp_dir("rinex_obs_boundaries");
+  for (const TimeScale scale : {TimeScale::kGpst, TimeScale::kGlonasst}) {
+    for (const double fraction : test::fractions_rounding_up(7)) {
+      ObservationHeader h = two_system_header(3.04);
+      if (scale == TimeScale::kGlonasst) h.observation_types.erase(GnssSystem::kGps);
+      h.time_system = scale;
+      std::vector<ObservationEpoch> epochs;
+      for (const auto& b : test::time_boundaries()) {
+        ObservationEpoch e;
+        e.time = test::boundary_time(b, scale, fraction);
+        e.satellites.push_back({SatelliteId{GnssSystem::kGlonass, 1}, {val(20000000.0)}});
+        epochs.push_back(e);
+      }
+      const auto path = dir / "boundaries.rnx";
+      ASSERT_TRUE(write_rinex_obs(path, h, epochs).ok());
+      const std::string text = read_all(path);
+      for (const auto& b : test::time_boundaries()) {
+        EXPECT_NE(text.find(epoch_line_prefix(b.next) + "\n"), std::string::npos)
+            << b.name << ", " << to_string(scale) << ", fraction 1 - " << 1.0 - fraction << ": expected "
+            << epoch_line_prefix(b.next);
+      }
+      EXPECT_EQ(text.find(" 60.0000000"), std::string::npos) << text;
+      const auto& boundaries = test::time_boundaries();
+      EXPECT_NE(text.find(header_time(boundaries.front().next) + "     " + (scale == TimeScale::kGpst ? "GPS" : "GLO") +
+                          "         TIME OF FIRST OBS"),
+                std::string::npos);
+      EXPECT_NE(text.find(header_time(boundaries.back().next) + "     " + (scale == TimeScale::kGpst ? "GPS" : "GLO") +
+                          "         TIME OF LAST OBS"),
+                std::string::npos);
+    }
+  }
+}
+
+TEST(RinexObsWriter, EpochInsideTheLeapSecondKeepsSecond60InGlonassTime) {
+  // GLONASST has UTC's leap seconds: 2017-01-01T02:59:60 GLONASST is real; just before it rounds
+  // into it, just before its end rounds into 03:00:00.
+  const auto dir = test::make_temp_dir("rinex_obs_leap");
+  ObservationHeader h = two_system_header(3.04);
+  h.observation_types.erase(GnssSystem::kGps);
+  h.time_system = TimeScale::kGlonasst;
+  const GnssTime leap = GnssTime::parse_iso8601("2017-01-01T02:59:60", TimeScale::kGlonasst).value();
+  std::vector<ObservationEpoch> epochs(2);
+  epochs[0].time = leap - 1.0 + (1.0 - 4e-8);
+  epochs[1].time = leap + (1.0 - 4e-8);
+  for (auto& e : epochs) e.satellites.push_back({SatelliteId{GnssSystem::kGlonass, 1}, {val(20000000.0)}});
+  const auto path = dir / "leap.rnx";
+  ASSERT_TRUE(write_rinex_obs(path, h, epochs).ok());
+  const std::string text = read_all(path);
+  EXPECT_NE(text.find("> 2017 01 01 02 59 60.0000000  0  1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("> 2017 01 01 03 00  0.0000000  0  1\n"), std::string::npos) << text;
 }
 
 // ------------------------------------------------------------------ overflow

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <vector>
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/io/rtcm3.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace::io {
 namespace {
@@ -401,6 +403,70 @@ TEST(Rtcm3, EphemerisMessageSizes) {
   EXPECT_EQ(r.get_unsigned(7), (3 * 3600 + 15 * 60) / 900U);  // tb
   EXPECT_NEAR(r.get_sign_magnitude(24) * std::ldexp(1.0, -20) * 1e3, 1234.5, std::ldexp(1.0, -21) * 1e3);
   EXPECT_NEAR(r.get_sign_magnitude(27) * std::ldexp(1.0, -11) * 1e3, 1.2e7, std::ldexp(1.0, -12) * 1e3);
+}
+
+// MSM7 epoch time fields (message number -> DF004 / DF427 / DF416+DF034) of one epoch at t.
+std::map<int, std::uint32_t> msm_epoch_fields(const GnssTime& t) {
+  RtcmEpoch epoch;
+  epoch.time = t;
+  epoch.satellites.push_back({SatelliteId::parse("G05").value(), 0, {signal_obs("G1C", 2.1e7, 1.1e8, 100.0, 45.0, 100.0)}});
+  epoch.satellites.push_back({SatelliteId::parse("R07").value(), -2, {signal_obs("R1C", 2.0e7, 1.0e8, 100.0, 45.0, 100.0)}});
+  epoch.satellites.push_back({SatelliteId::parse("C11").value(), 0, {signal_obs("C2I", 2.2e7, 1.1e8, 100.0, 45.0, 100.0)}});
+  Msm7Encoder encoder(17);
+  const auto frames = encoder.encode(epoch);
+  std::map<int, std::uint32_t> out;
+  if (!frames.ok()) {
+    ADD_FAILURE() << frames.error().message;
+    return out;
+  }
+  for (const auto& bytes : *frames) {
+    for (const auto& frame : rtcm3_split_frames(bytes)) {
+      int number = 0, multiple = 0;
+      std::uint32_t field = 0;
+      std::vector<int> extended;
+      decode_msm7(frame.message, &number, &field, &multiple, &extended);
+      out[number] = field;
+    }
+  }
+  return out;
+}
+
+// The expected epoch fields of a whole-second instant: GPS and BeiDou milliseconds of their week,
+// GLONASS day of week << 27 | milliseconds of the Moscow day.
+std::map<int, std::uint32_t> expected_epoch_fields(const GnssTime& whole_second) {
+  const WeekTow gps = whole_second.to_week_tow(TimeScale::kGpst);
+  const WeekTow bdt = whole_second.to_week_tow(TimeScale::kBdt);
+  const WeekTow glo = whole_second.to_week_tow(TimeScale::kGlonasst);
+  const auto glo_s = static_cast<std::uint32_t>(glo.tow_s);
+  return {{1077, static_cast<std::uint32_t>(gps.tow_s) * 1000U},
+          {1087, ((glo_s / 86400U) << 27) | ((glo_s % 86400U) * 1000U)},
+          {1127, static_cast<std::uint32_t>(bdt.tow_s) * 1000U}};
+}
+
+TEST(Rtcm3, MsmEpochTimeRoundedToMillisecondsCarriesIntoTheNextWeekAndDay) {
+  for (const auto& b : test::time_boundaries()) {
+    const GnssTime next = GnssTime::parse_iso8601(b.next, TimeScale::kGpst).value();
+    for (const double fraction : test::fractions_rounding_up(3)) {
+      EXPECT_EQ(msm_epoch_fields(test::boundary_time(b, TimeScale::kGpst, fraction)), expected_epoch_fields(next))
+          << b.name << ", fraction 1 - " << 1.0 - fraction;
+    }
+  }
+  // GPS week end: millisecond 0 of the next week; BeiDou's week ends 14 s later; the Moscow day
+  // (UTC + 3 h) ends at 21:00 UTC.
+  const GnssTime gps_week_end = GnssTime::from_week_tow(TimeScale::kGpst, 2312, 604799.9996);
+  EXPECT_EQ(msm_epoch_fields(gps_week_end).at(1077), 0U);
+  EXPECT_EQ(msm_epoch_fields(GnssTime::from_week_tow(TimeScale::kBdt, 956, 604799.9996)).at(1127), 0U);
+  const GnssTime moscow_midnight = GnssTime::parse_iso8601("2024-05-02T20:59:59.9996", TimeScale::kUtc).value();
+  EXPECT_EQ(msm_epoch_fields(moscow_midnight).at(1087), 5U << 27);  // Friday 00:00:00.000 Moscow time
+}
+
+TEST(Rtcm3, GlonassEpochRoundedAcrossTheEndOfALeapSecond) {
+  // 2016-12-31T23:59:60.9996 UTC rounds to 2017-01-01T00:00:00.000 UTC (GPS - UTC now 18 s), which
+  // is Sunday 03:00:00.000 Moscow time. The offset must be taken at the rounded instant.
+  const GnssTime leap = GnssTime::parse_iso8601("2016-12-31T23:59:60", TimeScale::kUtc).value();
+  for (const double fraction : test::fractions_rounding_up(3)) {
+    EXPECT_EQ(msm_epoch_fields(leap + fraction).at(1087), 10'800'000U) << "fraction 1 - " << 1.0 - fraction;
+  }
 }
 
 }  // namespace

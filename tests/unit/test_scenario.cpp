@@ -1,8 +1,15 @@
 // Scenario files: the contract scenarios parse unchanged; bad input names key path and line.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <optional>
+
 #include "skytrace/sim/scenario.hpp"
+#include "skytrace/sim/setup.hpp"
 #include "test_support.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -122,6 +129,48 @@ TEST(Scenario, ContractScenariosParseUnchanged) {
     ++parsed;
   }
   EXPECT_GE(parsed, 6);
+}
+
+// summary.json's configuration.time.start (scenario_to_json): the start in the scenario's own
+// scale with 3 decimals, rounded on the timeline first.
+TEST(Scenario, JsonStartTimeRoundedToMillisecondsCarriesIntoMinuteHourDayMonthAndYear) {
+  Scenario s = parse(kMinimal).value();
+  for (const TimeScale scale : {TimeScale::kGpst, TimeScale::kUtc}) {
+    s.time.scale = scale;
+    for (const auto& b : test::time_boundaries()) {
+      for (const double fraction : test::fractions_rounding_up(3)) {
+        s.time.start = test::boundary_time(b, scale, fraction);
+        const auto j = nlohmann::json::parse(scenario_to_json(s));
+        EXPECT_EQ(j["time"]["start"].get<std::string>(), test::with_zero_decimals(b.next, 3))
+            << b.name << ", " << to_string(scale) << ", fraction 1 - " << 1.0 - fraction;
+      }
+    }
+  }
+  // Inside the leap second of 2016 the UTC start keeps second 60.
+  s.time.scale = TimeScale::kUtc;
+  s.time.start = GnssTime::parse_iso8601("2016-12-31T23:59:59.9996", TimeScale::kUtc).value();
+  EXPECT_EQ(nlohmann::json::parse(scenario_to_json(s))["time"]["start"].get<std::string>(), "2016-12-31T23:59:60.000");
+}
+
+// The RINEX "PGM / RUN BY / DATE" date of a run (obs.rnx, nav.rnx) without SOURCE_DATE_EPOCH: the
+// scenario start in UTC, to the second below (it is a date stamp, not a rounded epoch).
+TEST(Scenario, RinexCreationDateNeverShowsSecond60) {
+  std::optional<std::string> saved;
+  if (const char* v = std::getenv("SOURCE_DATE_EPOCH")) saved = v;
+  unsetenv("SOURCE_DATE_EPOCH");
+  Scenario s = parse(kMinimal).value();
+  for (const auto& b : test::time_boundaries()) {
+    const std::string last(b.last_second);
+    const std::string expected = last.substr(0, 4) + last.substr(5, 2) + last.substr(8, 2) + " " + last.substr(11, 2) +
+                                 last.substr(14, 2) + last.substr(17, 2) + " UTC";
+    for (const double fraction : {0.5, 1.0 - 1e-10, std::nextafter(1.0, 0.0)}) {
+      s.time.start = test::boundary_time(b, TimeScale::kUtc, fraction);
+      EXPECT_EQ(rinex_creation_date(s), expected) << b.name << ", fraction 1 - " << 1.0 - fraction;
+    }
+  }
+  s.time.start = GnssTime::parse_iso8601("2016-12-31T23:59:60.5", TimeScale::kUtc).value();
+  EXPECT_EQ(rinex_creation_date(s), "20161231 235960 UTC");
+  if (saved) setenv("SOURCE_DATE_EPOCH", saved->c_str(), 1);
 }
 
 }  // namespace

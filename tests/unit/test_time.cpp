@@ -1,7 +1,11 @@
 // GNSS time scales: conversions, leap seconds, week numbering and rollover.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <string>
+
 #include "skytrace/core/time.hpp"
+#include "time_boundaries.hpp"
 
 namespace skytrace {
 namespace {
@@ -133,6 +137,102 @@ TEST(GnssTime, ParseErrors) {
   EXPECT_NE(r.error().message.find("2020-02-30"), std::string::npos);
   EXPECT_FALSE(parse_time_scale("XYZ").ok());
   EXPECT_EQ(parse_time_scale("gps").value(), TimeScale::kGpst);
+}
+
+// ---- printing: rounding carries through minute, hour, day, month, year (truth.csv once showed
+// 2024-05-02T23:59:60.000000 for a true time 0.1 ns before midnight)
+
+TEST(GnssTimeIso8601, RoundingUpCarriesIntoTheNextMinuteHourDayMonthAndYear) {
+  for (const auto& b : test::time_boundaries()) {
+    for (const TimeScale scale : {TimeScale::kGpst, TimeScale::kUtc, TimeScale::kBdt, TimeScale::kGlonasst}) {
+      for (const int decimals : {0, 1, 3, 6, 7, 9}) {
+        for (const double fraction : test::fractions_rounding_up(decimals)) {
+          const GnssTime t = test::boundary_time(b, scale, fraction);
+          EXPECT_EQ(t.to_iso8601(scale, decimals), test::with_zero_decimals(b.next, decimals))
+              << b.name << ", " << to_string(scale) << ", " << decimals << " decimals, fraction 1 - "
+              << 1.0 - fraction;
+        }
+      }
+    }
+  }
+}
+
+TEST(GnssTimeIso8601, JustBelowTheRoundingStepStaysInTheLastSecond) {
+  for (const auto& b : test::time_boundaries()) {
+    const GnssTime t = test::boundary_time(b, TimeScale::kGpst, 0.9999994);
+    EXPECT_EQ(t.to_iso8601(TimeScale::kGpst, 6), std::string(b.last_second) + ".999999") << b.name;
+    EXPECT_EQ(t.to_iso8601(TimeScale::kGpst, 0), b.next) << b.name;
+    EXPECT_EQ(test::boundary_time(b, TimeScale::kGpst, 0.4999).to_iso8601(TimeScale::kGpst, 0), b.last_second)
+        << b.name;
+  }
+}
+
+TEST(GnssTimeIso8601, SixtyOnlyInsideARealLeapSecond) {
+  // 2016-12-31 ended with the leap second 23:59:60 UTC (02:59:60 GLONASST on 2017-01-01).
+  const GnssTime before_leap = parse("2016-12-31T23:59:59", TimeScale::kUtc);
+  const GnssTime leap = parse("2016-12-31T23:59:60", TimeScale::kUtc);
+  for (const double fraction : test::fractions_rounding_up(6)) {
+    EXPECT_EQ((before_leap + fraction).to_iso8601(TimeScale::kUtc, 6), "2016-12-31T23:59:60.000000");
+    EXPECT_EQ((before_leap + fraction).to_iso8601(TimeScale::kGlonasst, 6), "2017-01-01T02:59:60.000000");
+    EXPECT_EQ((leap + fraction).to_iso8601(TimeScale::kUtc, 6), "2017-01-01T00:00:00.000000");
+    EXPECT_EQ((leap + fraction).to_iso8601(TimeScale::kGlonasst, 6), "2017-01-01T03:00:00.000000");
+    // The same instants in GPST have no leap second: 00:00:16 and 00:00:17.
+    EXPECT_EQ((before_leap + fraction).to_iso8601(TimeScale::kGpst, 6), "2017-01-01T00:00:17.000000");
+    EXPECT_EQ((leap + fraction).to_iso8601(TimeScale::kGpst, 6), "2017-01-01T00:00:18.000000");
+  }
+  EXPECT_EQ((leap + 0.9999994).to_iso8601(TimeScale::kUtc, 6), "2016-12-31T23:59:60.999999");
+  EXPECT_EQ((leap + 0.5).to_iso8601(TimeScale::kUtc, 0), "2017-01-01T00:00:00");
+  EXPECT_EQ((before_leap + 0.5).to_iso8601(TimeScale::kUtc, 0), "2016-12-31T23:59:60");
+  // A year end without a leap second: no 60.
+  EXPECT_EQ((parse("2017-12-31T23:59:59", TimeScale::kUtc) + std::nextafter(1.0, 0.0)).to_iso8601(TimeScale::kUtc, 6),
+            "2018-01-01T00:00:00.000000");
+}
+
+TEST(GnssTimeRounding, RoundedToCarriesIntoTheWholeSeconds) {
+  const GnssTime t = parse("2024-05-04T23:59:59", TimeScale::kGpst);
+  const GnssTime next = parse("2024-05-05T00:00:00", TimeScale::kGpst);
+  for (const int decimals : {0, 3, 7, 15}) {
+    for (const double fraction : test::fractions_rounding_up(decimals)) {
+      const GnssTime r = (t + fraction).rounded_to(decimals);
+      EXPECT_EQ(r, next) << decimals << " decimals, fraction 1 - " << 1.0 - fraction;
+      EXPECT_EQ(r.to_week_tow(TimeScale::kGpst).week, 2313);
+      EXPECT_EQ(r.to_week_tow(TimeScale::kGpst).tow_s, 0.0);
+    }
+  }
+  const GnssTime down = (t + 0.1234564).rounded_to(6);
+  EXPECT_EQ(down.whole_seconds(), t.whole_seconds());
+  EXPECT_DOUBLE_EQ(down.fraction_s(), 0.123456);
+  EXPECT_DOUBLE_EQ((t + 0.1234565001).rounded_to(6).fraction_s(), 0.123457);
+  // Out-of-range decimals are clamped to 0..15.
+  EXPECT_EQ((t + 0.6).rounded_to(-2), next);
+  EXPECT_EQ((t + 0.25).rounded_to(40).fraction_s(), 0.25);
+}
+
+TEST(GnssTimeRounding, RoundedCalendarFieldsAreExactIntegers) {
+  for (const auto& b : test::time_boundaries()) {
+    const RoundedCalendarTime c = test::boundary_time(b, TimeScale::kGpst, 1.0 - 4e-8).to_rounded_calendar(TimeScale::kGpst, 7);
+    char text[32];
+    std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d", c.year, c.month, c.day, c.hour, c.minute, c.second);
+    EXPECT_EQ(std::string(text), b.next) << b.name;
+    EXPECT_EQ(c.fraction, 0);
+    EXPECT_EQ(c.decimals, 7);
+    const RoundedCalendarTime below =
+        test::boundary_time(b, TimeScale::kGpst, 1.0 - 6e-8).to_rounded_calendar(TimeScale::kGpst, 7);
+    EXPECT_EQ(below.second, 59) << b.name;
+    EXPECT_EQ(below.fraction, 9999999) << b.name;
+  }
+  // The leap second is a second of its own in UTC: 23:59:60 rounds into it and out of it.
+  const GnssTime leap = parse("2016-12-31T23:59:60", TimeScale::kUtc);
+  const RoundedCalendarTime in = (leap - 0.3).to_rounded_calendar(TimeScale::kUtc, 0);
+  EXPECT_EQ(in.day, 31);
+  EXPECT_EQ(in.second, 60);
+  const RoundedCalendarTime out = (leap + 0.7).to_rounded_calendar(TimeScale::kUtc, 0);
+  EXPECT_EQ(out.year, 2017);
+  EXPECT_EQ(out.month, 1);
+  EXPECT_EQ(out.day, 1);
+  EXPECT_EQ(out.hour, 0);
+  EXPECT_EQ(out.minute, 0);
+  EXPECT_EQ(out.second, 0);
 }
 
 }  // namespace

@@ -27,6 +27,9 @@ enum class TimeScale {
 [[nodiscard]] Result<TimeScale> parse_time_scale(std::string_view name);
 
 // A civil date and time of day in some time scale. second may be 60.x inside a UTC leap second.
+// second is a double: an instant within an ulp (~7e-15 s) of the end of a minute may read 60.0,
+// and printing it with fewer decimals rounds it up without a carry. Text formats therefore take
+// GnssTime::to_rounded_calendar, never this with printf rounding.
 struct CalendarTime {
   int year = 1980;
   int month = 1;
@@ -34,6 +37,20 @@ struct CalendarTime {
   int hour = 0;
   int minute = 0;
   double second = 0.0;
+};
+
+// A calendar reading for printing: the instant rounded to 10^-decimals s on the continuous
+// timeline first, then split, so that a carry runs through minute, hour, day, month and year
+// (23:59:59.9999996 with 6 decimals is 00:00:00.000000 of the next day). All fields exact integers.
+struct RoundedCalendarTime {
+  int year = 1980;
+  int month = 1;
+  int day = 6;
+  int hour = 0;
+  int minute = 0;
+  int second = 0;              // 0-59; 60 only inside a real leap second of UTC or GLONASST
+  std::int64_t fraction = 0;   // in units of 10^-decimals s: [0, 10^decimals)
+  int decimals = 0;            // 0-15
 };
 
 struct WeekTow {
@@ -64,7 +81,16 @@ class GnssTime {
   [[nodiscard]] WeekTow to_week_tow(TimeScale scale) const;
   [[nodiscard]] CalendarTime to_calendar(TimeScale scale) const;
   [[nodiscard]] int day_of_year(TimeScale scale) const;
-  // ISO 8601 text in the given scale with the given number of decimals of the second.
+  // The instant rounded to the nearest multiple of 10^-decimals s (decimals clamped to 0-15; halves
+  // away from zero), the carry going into the whole seconds. Every scale differs from GPST by whole
+  // seconds, so this is the same rounding in every scale. Round with this before taking a week and
+  // time of week or calendar fields that are printed with `decimals` decimals.
+  [[nodiscard]] GnssTime rounded_to(int decimals) const;
+  // Calendar fields of rounded_to(decimals) in the given scale (see RoundedCalendarTime).
+  [[nodiscard]] RoundedCalendarTime to_rounded_calendar(TimeScale scale, int decimals) const;
+  // ISO 8601 text in the given scale with the given number of decimals of the second (0-15),
+  // rounded on the timeline first (to_rounded_calendar). UTC and GLONASST show second 60 only
+  // inside a real leap second.
   [[nodiscard]] std::string to_iso8601(TimeScale scale, int decimals = 3) const;
 
   GnssTime& operator+=(double dt_s);

@@ -121,4 +121,11 @@ class ReportBuilder {
   size_t ignored_samples_ = 0;
 };
 
+namespace detail {
+// Label of a time-axis tick at time_s (seconds of GPST since the GPS epoch, as the charts count):
+// the date when step_s is a day or more, "MM-DD hh:mm" over spans above a day, "hh:mm" for whole-
+// minute steps, else "hh:mm:ss". The time is rounded to the second before it is split.
+[[nodiscard]] std::string time_axis_label(double time_s, double step_s, double span_s);
+}  // namespace detail
+
 }  // namespace skytrace::io
