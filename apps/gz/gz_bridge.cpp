@@ -297,6 +297,7 @@ Status run_bridge(const BridgeOptions& options, const std::atomic<bool>& stop) {
   live_options.pose_timeout_s = options.pose_timeout_s;
   auto session = sim::LiveSession::create(*scenario, live_options);
   if (!session) return session.error();
+  for (const auto& warning : (*session)->resources().warnings) spdlog::warn("skytrace gz: {}", warning);
   Bridge bridge(options, std::move(*session), start);
   if (auto st = bridge.connect(); !st) return st;
   if (!options.quiet) {

@@ -221,6 +221,7 @@ double Receiver::time_s_of_gps(int gps_week, double gps_tow_s) const {
 }
 
 std::string Receiver::scenario_name() const { return impl_->session->scenario().name; }
+std::vector<std::string> Receiver::warnings() const { return impl_->session->resources().warnings; }
 double Receiver::scenario_duration_s() const { return impl_->session->scenario().time.duration_s; }
 
 }  // namespace skytrace::live

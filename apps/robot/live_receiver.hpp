@@ -111,6 +111,8 @@ class Receiver {
   // Seconds after the start time of a GPST week and time of week (message time tags).
   [[nodiscard]] double time_s_of_gps(int gps_week, double gps_tow_s) const;
   [[nodiscard]] std::string scenario_name() const;
+  // Warnings from loading the scenario (e.g. satellites the precise products lack), for the log.
+  [[nodiscard]] std::vector<std::string> warnings() const;
   [[nodiscard]] double scenario_duration_s() const;
 
  private:

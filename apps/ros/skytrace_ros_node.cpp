@@ -374,6 +374,7 @@ int run(int argc, char** argv) {
     ROS_FATAL("%s (from ~scenario, ~start_time, ~start_time_scale)", problem.c_str());
     return kExitInput;
   }
+  for (const auto& warning : receiver->warnings()) ROS_WARN("skytrace: %s", warning.c_str());
   Node node(config, std::move(receiver));
   if (!node.open_rinex()) return kExitOutput;
   ROS_INFO("skytrace: scenario %s, %.3g Hz, antenna pose from %s", config.scenario.c_str(), config.rate_hz,

@@ -296,6 +296,7 @@ int serve(const ServeArgs& args) {
   auto session = sim::LiveSession::create(*scenario);
   if (!session) return report_error(session.error());
   sim::LiveSession& live = **session;
+  for (const auto& warning : live.resources().warnings) std::cerr << "skytrace serve: warning: " << warning << "\n";
 
   std::unique_ptr<TcpBroadcaster> nmea_tcp, rtcm_tcp;
   std::unique_ptr<PseudoTerminal> pty;

@@ -194,6 +194,39 @@ double nominal_spacing_s(const std::vector<ClockSample>& samples) {
   return static_cast<double>(best_ms) / 1000.0;
 }
 
+// Spans of [from, to] in which works(t) is false. Probes at from, at every grid time inside
+// (from, to) (grid sorted), at to, and halfway between consecutive probes; a span runs from the
+// last probe that worked before it (or from) to the first one after it (or to).
+template <typename Works>
+std::vector<PreciseEphemerides::Span> failing_spans(const std::vector<GnssTime>& grid, const GnssTime& from,
+                                                    const GnssTime& to, Works works) {
+  std::vector<GnssTime> knots{from};
+  auto inside = std::lower_bound(grid.begin(), grid.end(), from);
+  for (; inside != grid.end() && *inside < to; ++inside) {
+    if (*inside - knots.back() > kSameTime_s) knots.push_back(*inside);
+  }
+  if (to - knots.back() > kSameTime_s) knots.push_back(to);
+  std::vector<PreciseEphemerides::Span> gaps;
+  GnssTime last_working = from;
+  bool in_gap = false;
+  auto visit = [&](const GnssTime& t) {
+    const bool ok = works(t);
+    if (!ok && !in_gap) {
+      in_gap = true;
+    } else if (ok && in_gap) {
+      gaps.push_back({last_working, t});
+      in_gap = false;
+    }
+    if (ok) last_working = t;
+  };
+  for (size_t k = 0; k < knots.size(); ++k) {
+    visit(knots[k]);
+    if (k + 1 < knots.size()) visit(knots[k] + 0.5 * (knots[k + 1] - knots[k]));
+  }
+  if (in_gap) gaps.push_back({last_working, to});
+  return gaps;
+}
+
 }  // namespace
 
 Result<PreciseEphemerides> PreciseEphemerides::create(Sp3Data orbits, std::optional<RinexClockData> clocks,
@@ -441,6 +474,48 @@ Result<SatelliteState> PreciseEphemerides::state(const SatelliteId& satellite, c
   const Eigen::Vector3d v_inertial = s.velocity_mps + omega_cross(r);
   s.relativistic_drift_s_per_s = -2.0 * (v_inertial.squaredNorm() - constants::kGmGps_m3ps2 / r.norm()) / c2;
   return s;
+}
+
+PreciseEphemerides::Span PreciseEphemerides::orbit_span() const {
+  return {orbits_.epochs.front(), orbits_.epochs.back()};
+}
+
+std::optional<PreciseEphemerides::Span> PreciseEphemerides::clock_file_span() const {
+  if (!clocks_ || clock_interval_s_.empty()) return std::nullopt;
+  return Span{clock_first_, clock_last_};
+}
+
+PreciseEphemerides::Coverage PreciseEphemerides::coverage(const SatelliteId& satellite, const GnssTime& from,
+                                                          const GnssTime& to) const {
+  Coverage c;
+  const auto* series = orbits_.series(satellite);
+  c.in_orbits = series != nullptr && std::any_of(series->begin(), series->end(),
+                                                 [](const Sp3Record& r) { return r.has_position; });
+  const std::vector<ClockSample>* samples = clocks_ ? clocks_->series(satellite) : nullptr;
+  const bool file_clocks = samples != nullptr && !samples->empty();
+  const bool sp3_clocks = (!clocks_ || options_.sp3_clock_fallback) && series != nullptr &&
+                          std::any_of(series->begin(), series->end(), [](const Sp3Record& r) { return r.has_clock; });
+  c.in_clocks = file_clocks || sp3_clocks;
+  if (!c.in_orbits) {
+    c.orbit_gaps.push_back({from, to});
+  } else {
+    c.orbit_gaps = failing_spans(orbits_.epochs, from, to, [&](const GnssTime& t) { return orbit(satellite, t).ok(); });
+  }
+  if (!c.in_clocks) {
+    c.clock_gaps.push_back({from, to});
+  } else {
+    std::vector<GnssTime> grid;
+    if (file_clocks) {
+      for (const ClockSample& sample : *samples) grid.push_back(sample.time);
+    }
+    if (sp3_clocks) {
+      const size_t own = grid.size();
+      grid.insert(grid.end(), orbits_.epochs.begin(), orbits_.epochs.end());
+      std::inplace_merge(grid.begin(), grid.begin() + static_cast<long>(own), grid.end());
+    }
+    c.clock_gaps = failing_spans(grid, from, to, [&](const GnssTime& t) { return clock(satellite, t).ok(); });
+  }
+  return c;
 }
 
 std::vector<SatelliteId> PreciseEphemerides::satellites() const {

@@ -275,14 +275,20 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const GnssTime evaluation_time = epoch.true_time - guess_s;
     evaluate_record(*record, evaluation_time, glonass_orbits_);
     bool precise_truth = false;
-    if (truth_orbits_ != nullptr) {
+    if (truth_orbits_ != nullptr && settings_.broadcast_truth.count(sat) == 0) {
       // Precise products as the truth: the signals come from the precise orbit and clock, while
-      // the broadcast record stays the one a receiver decodes (nav.rnx, group delays).
-      // Satellites the product lacks (a G/R/E product has no BeiDou) keep the broadcast truth.
-      if (auto precise = truth_orbits_->state(sat, evaluation_time)) {
-        record->state = *precise;
-        precise_truth = true;
+      // the broadcast record stays the one a receiver decodes (nav.rnx, group delays). Satellites
+      // the products lack or cannot serve over the run (a G/R/E product has no BeiDou) were put in
+      // broadcast_truth before the run; for the others a time without products is an error (a live
+      // session stepped beyond them), never a switch to the broadcast truth.
+      auto precise = truth_orbits_->state(sat, evaluation_time);
+      if (!precise) {
+        return make_error(ErrorCode::kOutOfRange,
+                          "precise truth at epoch " + tag.to_iso8601(TimeScale::kGpst, 0) + " GPST: " +
+                              precise.error().message);
       }
+      record->state = *precise;
+      precise_truth = true;
     }
     const orbits::SatelliteState& at_guess = record->state;
     const Eigen::Vector3d& r0 = at_guess.position_m;

@@ -477,6 +477,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
 
   {
     io::ReportMeta meta;
+    meta.warnings = resources->warnings;
     meta.scenario_name = s.name;
     meta.receiver_name = receivers.front().settings->name;
     meta.start = s.time.start;
@@ -497,7 +498,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       meta.summary_rows.emplace_back("world", w.name + " (" + std::to_string(w.objects) + " objects, " +
                                                   std::to_string(w.buildings) + " buildings, " + std::to_string(w.trees) +
                                                   " trees)");
-      meta.warnings = w.warnings;
+      meta.warnings.insert(meta.warnings.end(), w.warnings.begin(), w.warnings.end());
       auto start_position = receivers.front().kinematics->at(s.time.start);
       if (start_position) {
         constexpr double kMaskStep_deg = 2.0;
@@ -526,8 +527,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
                   {"trees", w.trees},     {"triangles", w.triangles}, {"warnings", w.warnings},
                   {"origin", {w.frame.origin.latitude_deg, w.frame.origin.longitude_deg, w.frame.origin.height_m}},
                   {"heading_deg", w.frame.heading_deg}};
-    summary.warnings = w.warnings;
   }
+  summary.warnings = resources->warnings;
+  if (world) summary.warnings.insert(summary.warnings.end(), world->warnings.begin(), world->warnings.end());
+  if (resources->precise_coverage) {
+    nlohmann::json precise = nlohmann::json::parse(resources->precise_coverage->to_json());
+    precise["orbits"] = nlohmann::json::array();
+    for (const auto& f : s.ephemeris.precise_orbits) precise["orbits"].push_back(f.filename().string());
+    precise["clocks"] = nlohmann::json::array();
+    for (const auto& f : s.ephemeris.precise_clocks) precise["clocks"].push_back(f.filename().string());
+    j["precise_truth"] = precise;
+  }
+  j["warnings"] = summary.warnings;
   j["configuration"] = nlohmann::json::parse(scenario_to_json(s));
   if (auto st = write_file_atomically(staging->file("summary.json"), j.dump(2) + "\n"); !st) return st.error();
 

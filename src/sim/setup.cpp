@@ -1,6 +1,7 @@
 #include "skytrace/sim/setup.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -30,7 +31,149 @@ std::pair<GnssTime, GnssTime> navigation_span(const orbits::NavigationData& nav)
   return {first.value_or(GnssTime{}), last.value_or(GnssTime{})};
 }
 
+// "2021-04-28 19:30:00" (GPST, whole seconds).
+std::string gpst_text(const GnssTime& t) {
+  std::string text = t.to_iso8601(TimeScale::kGpst, 0);
+  if (text.size() > 10 && text[10] == 'T') text[10] = ' ';
+  return text;
+}
+
+// "2021-04-28 19:30:00 to 20:30:00": the second date only when it differs from the first, the first
+// only when it differs from `reference` (when given).
+std::string span_text(const GnssTime& a, const GnssTime& b, const std::optional<GnssTime>& reference = std::nullopt) {
+  const std::string first = gpst_text(a), second = gpst_text(b);
+  auto date = [](const std::string& text) { return text.substr(0, 10); };
+  auto clock = [](const std::string& text) { return text.size() > 11 ? text.substr(11) : text; };
+  const bool same_day_as_reference = reference && date(gpst_text(*reference)) == date(first);
+  return (same_day_as_reference ? clock(first) : first) + " to " +
+         (date(first) == date(second) ? clock(second) : second);
+}
+
+std::string file_names(const std::vector<std::filesystem::path>& files) {
+  std::string names;
+  for (const auto& f : files) names += (names.empty() ? "" : ", ") + f.filename().string();
+  return names;
+}
+
+// "COD0MGX...CLK covers " / "A.SP3, B.SP3 cover ".
+std::string files_cover(const std::vector<std::filesystem::path>& files) {
+  return file_names(files) + (files.size() == 1 ? " covers " : " cover ");
+}
+
+std::string spans_text(const std::vector<orbits::PreciseEphemerides::Span>& spans) {
+  std::string text;
+  for (const auto& span : spans) text += (text.empty() ? "" : ", ") + span_text(span.first, span.last);
+  return text;
+}
+
 }  // namespace
+
+std::set<SatelliteId> PreciseTruthCoverage::broadcast_truth() const {
+  std::set<SatelliteId> out;
+  for (const auto& [sat, c] : lacking) out.insert(sat);
+  for (const auto& [sat, c] : gaps) out.insert(sat);
+  return out;
+}
+
+std::vector<std::string> PreciseTruthCoverage::warnings() const {
+  std::vector<std::string> out;
+  if (!lacking.empty()) {
+    std::string list;
+    for (const auto& [sat, c] : lacking) {
+      list += (list.empty() ? "" : " ") + sat.to_string();
+      if (c.in_orbits != c.in_clocks) list += c.in_orbits ? " (no clock)" : " (no orbit)";
+    }
+    out.push_back(fmt::format("the precise products lack {} satellite{} of the navigation data, which keep{} the "
+                              "broadcast truth: {}",
+                              lacking.size(), lacking.size() == 1 ? "" : "s", lacking.size() == 1 ? "s" : "", list));
+  }
+  if (!gaps.empty()) {
+    std::string list;
+    for (const auto& [sat, c] : gaps) {
+      std::string what;
+      if (!c.orbit_gaps.empty()) what += "orbit " + spans_text(c.orbit_gaps);
+      if (!c.clock_gaps.empty()) what += (what.empty() ? "" : "; ") + std::string("clock ") + spans_text(c.clock_gaps);
+      list += (list.empty() ? "" : ", ") + sat.to_string() + " (" + what + " GPST)";
+    }
+    out.push_back(fmt::format("the precise products cannot serve {} satellite{} over the whole run, which keep{} "
+                              "the broadcast truth for all of it: {}",
+                              gaps.size(), gaps.size() == 1 ? "" : "s", gaps.size() == 1 ? "s" : "", list));
+  }
+  return out;
+}
+
+std::string PreciseTruthCoverage::to_json() const {
+  auto spans = [](const std::vector<orbits::PreciseEphemerides::Span>& list) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& span : list) out.push_back({gpst_text(span.first), gpst_text(span.last)});
+    return out;
+  };
+  nlohmann::json j;
+  j["checked_from"] = from.to_iso8601(TimeScale::kGpst, 1);
+  j["checked_to"] = to.to_iso8601(TimeScale::kGpst, 1);
+  nlohmann::json broadcast = nlohmann::json::array();
+  for (const SatelliteId& sat : broadcast_truth()) broadcast.push_back(sat.to_string());
+  j["broadcast_truth_satellites"] = broadcast;
+  nlohmann::json lacking_json = nlohmann::json::object();
+  for (const auto& [sat, c] : lacking) {
+    lacking_json[sat.to_string()] = {{"in_orbits", c.in_orbits}, {"in_clocks", c.in_clocks}};
+  }
+  j["lacking"] = lacking_json;
+  nlohmann::json gaps_json = nlohmann::json::object();
+  for (const auto& [sat, c] : gaps) {
+    gaps_json[sat.to_string()] = {{"orbit", spans(c.orbit_gaps)}, {"clock", spans(c.clock_gaps)}};
+  }
+  j["gaps"] = gaps_json;
+  return j.dump();
+}
+
+Result<PreciseTruthCoverage> check_precise_coverage(const Scenario& s, const orbits::BroadcastEphemerides& eph,
+                                                    const orbits::PreciseEphemerides& precise, const GnssTime& start,
+                                                    const GnssTime& end) {
+  constexpr double kTolerance_s = 1e-6;
+  auto check_span = [&](const char* key, const std::vector<std::filesystem::path>& files,
+                        const orbits::PreciseEphemerides::Span& span) -> Status {
+    if (span.first - start <= kTolerance_s && end - span.last <= kTolerance_s) return Ok{};
+    return make_error(ErrorCode::kOutOfRange,
+                      fmt::format("ephemeris.{}: {}{} GPST; the run needs {} GPST (give the neighbouring days' "
+                                  "files as well, or shorten the run)",
+                                  key, files_cover(files), span_text(span.first, span.last),
+                                  span_text(start, end, span.first)));
+  };
+  if (auto st = check_span("precise_orbits", s.ephemeris.precise_orbits, precise.orbit_span()); !st) return st.error();
+  if (const auto clocks = precise.clock_file_span()) {
+    if (auto st = check_span("precise_clocks", s.ephemeris.precise_clocks, *clocks); !st) return st.error();
+  } else {
+    const auto& data = precise.orbits();
+    const bool any_clock = std::any_of(data.records.begin(), data.records.end(), [](const auto& series) {
+      return std::any_of(series.begin(), series.end(), [](const orbits::Sp3Record& r) { return r.has_clock; });
+    });
+    if (!any_clock) {
+      return make_error(ErrorCode::kNotFound,
+                        fmt::format("ephemeris.precise_orbits: {} {} no satellite clock and no "
+                                    "ephemeris.precise_clocks file is given",
+                                    file_names(s.ephemeris.precise_orbits),
+                                    s.ephemeris.precise_orbits.size() == 1 ? "holds" : "hold"));
+    }
+  }
+  std::set<GnssSystem> systems;
+  for (const auto& r : s.receivers) {
+    for (const auto& signal : r.signals) systems.insert(signal.system);
+  }
+  PreciseTruthCoverage out;
+  out.from = start - kTransmissionLead_s;
+  out.to = end;
+  for (const SatelliteId& sat : eph.satellites()) {
+    if (systems.count(sat.system) == 0) continue;
+    auto c = precise.coverage(sat, out.from, out.to);
+    if (!c.in_orbits || !c.in_clocks) {
+      out.lacking.emplace(sat, std::move(c));
+    } else if (!c.complete()) {
+      out.gaps.emplace(sat, std::move(c));
+    }
+  }
+  return out;
+}
 
 Result<orbits::NavigationData> load_navigation(const Scenario& s) {
   if (s.ephemeris.nominal) return orbits::make_nominal_constellation(s.time.start, s.time.duration_s);
@@ -103,8 +246,15 @@ Result<ScenarioResources> prepare_resources(const Scenario& s) {
     if (!created) return created.error();
     r.precise = std::make_unique<orbits::PreciseEphemerides>(std::move(*created));
   }
-  if (auto coverage = check_coverage(s, *r.ephemerides, s.time.start, s.time.start + s.time.duration_s); !coverage) {
+  const GnssTime end = s.time.start + s.time.duration_s;
+  if (auto coverage = check_coverage(s, *r.ephemerides, s.time.start, end); !coverage) {
     return coverage.error();
+  }
+  if (r.precise) {
+    auto precise_coverage = check_precise_coverage(s, *r.ephemerides, *r.precise, s.time.start, end);
+    if (!precise_coverage) return precise_coverage.error();
+    r.precise_coverage = std::move(*precise_coverage);
+    for (auto& warning : r.precise_coverage->warnings()) r.warnings.push_back(std::move(warning));
   }
   return r;
 }
@@ -186,6 +336,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.path_search.radius_m = s.models.multipath_radius_m;
   g.path_search.max_reflection_order = s.models.multipath_order;
   g.path_search.diffraction = s.models.diffraction;
+  if (resources.precise_coverage) g.broadcast_truth = resources.precise_coverage->broadcast_truth();
   auto generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), *resources.ephemerides,
                                                                     std::move(kinematics), resources.precise.get());
   if (resources.world) generator->set_world(resources.world->scene.get(), resources.world->frame);

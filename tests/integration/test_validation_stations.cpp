@@ -4,8 +4,9 @@
 // 10 degrees. Limits: overlap >= 95 % both ways, pseudorange p68 <= 2.0 m, Doppler p68 <= 0.10
 // m/s, epoch-differenced phase p68 <= 1 cm, C/N0 mean absolute difference <= 2.5 dB-Hz.
 // What physics cannot meet here is asserted at its measured size, so that it cannot grow unseen:
-// the phase at both stations (the real ionosphere's 30-s changes that Klobuchar does not follow;
-// at NYA1 also the GPS IIR clocks' short-term noise, absent from broadcast clocks).
+// the phase at NYA1 (the real ionosphere's 30-s changes that Klobuchar does not follow, and the
+// GPS IIR clocks' short-term noise, absent from broadcast clocks). SLAC, simulated over the hour
+// its precise clocks cover, meets every limit.
 // NYA1 also checks the NetR9's output rule (tracking.output_requires_ephemeris): rising satellites
 // appear only once their first record has been transmitted (docs/validation.md).
 #include <gtest/gtest.h>
@@ -159,9 +160,12 @@ TEST_F(ValidationStations, SlacNetR9WithEsbcConstants) {
                                     {"real/slac_2021118/brdc1180.21n"}, "G1C");
   if (rows.empty()) GTEST_SKIP() << "SLAC data absent (../shared/data beside the checkout)";
   ASSERT_EQ(rows.size(), 1u);
-  // RINEX 2.11 without Doppler; measured phase 0.0114 m.
+  // RINEX 2.11 without Doppler. The run is 19:30-20:30, the hour CODE's clock file covers: phase
+  // 0.0083 m, the acceptance limit holds (0.0114 m over 19:00-21:00, when the half hours outside the
+  // clock file silently had broadcast truth).
   EXPECT_EQ(rows.at("G1C").at("doppler_mps").at("count").get<int>(), 0);
-  check(rows.at("G1C"), false, Limits{0.95, 0.013});
+  EXPECT_GT(rows.at("G1C").at("phase_difference_m").at("count").get<int>(), 1000);
+  check(rows.at("G1C"), false, Limits{0.95, 0.01});
 }
 
 }  // namespace

@@ -677,6 +677,52 @@ TEST(PreciseInterpolation, ClocksFromSp3AndFromClockFile) {
   EXPECT_EQ(without->clock(kG01, kT0 + 100.0).error().code, ErrorCode::kNotFound);
 }
 
+TEST(PreciseInterpolation, CoverageFindsWhereOrbitsAndClocksCannotBeFormed) {
+  const double interval_s = 900.0;
+  Sp3Data data = synthetic_sp3(kT0, 30, interval_s, 0.0);
+  data.records[0][15].has_position = false;
+  RinexClockData clocks;
+  auto& samples = clocks.satellite_clocks[kG01];
+  for (int k = 0; k <= 200; ++k) {
+    if (k == 50 || k == 100 || k == 101) continue;  // one sample bridged, two not
+    samples.push_back({kT0 + 30.0 * k, 2e-4, -1.0});
+  }
+  auto source = PreciseEphemerides::create(data, clocks);
+  ASSERT_TRUE(source.ok());
+  EXPECT_EQ(source->orbit_span().first, kT0);
+  EXPECT_DOUBLE_EQ(source->orbit_span().last - kT0, 29 * interval_s);
+  ASSERT_TRUE(source->clock_file_span().has_value());
+  EXPECT_DOUBLE_EQ(source->clock_file_span()->last - kT0, 6000.0);
+
+  // From a fraction of a second before the data (extrapolated) to 100 s past the clock file's end.
+  const auto c = source->coverage(kG01, kT0 - 0.2, kT0 + 6100.0);
+  EXPECT_TRUE(c.in_orbits);
+  EXPECT_TRUE(c.in_clocks);
+  EXPECT_FALSE(c.complete());
+  EXPECT_TRUE(c.orbit_gaps.empty());
+  // Clock: the two missing samples, and beyond one interval after the file's last sample, each
+  // between the last and the first times that work.
+  ASSERT_EQ(c.clock_gaps.size(), 2u);
+  EXPECT_DOUBLE_EQ(c.clock_gaps[0].first - kT0, 99 * 30.0);
+  EXPECT_DOUBLE_EQ(c.clock_gaps[0].last - kT0, 102 * 30.0);
+  EXPECT_DOUBLE_EQ(c.clock_gaps[1].first - kT0, 6000.0);
+  EXPECT_DOUBLE_EQ(c.clock_gaps[1].last - kT0, 6100.0);
+  // Orbit: the intervals next to the missing sample (beyond the clock file, the clock fails throughout).
+  const auto later = source->coverage(kG01, kT0 + 10 * interval_s, kT0 + 20 * interval_s);
+  ASSERT_EQ(later.orbit_gaps.size(), 1u);
+  EXPECT_DOUBLE_EQ(later.orbit_gaps[0].first - kT0, 14 * interval_s);
+  EXPECT_DOUBLE_EQ(later.orbit_gaps[0].last - kT0, 16 * interval_s);
+  ASSERT_EQ(later.clock_gaps.size(), 1u);
+  EXPECT_DOUBLE_EQ(later.clock_gaps[0].last - later.clock_gaps[0].first, 10 * interval_s);
+  // A span the products serve entirely, and a satellite they lack.
+  EXPECT_TRUE(source->coverage(kG01, kT0 - 0.2, kT0 + 2000.0).complete());
+  const auto other = source->coverage(SatelliteId{GnssSystem::kGps, 2}, kT0, kT0 + 600.0);
+  EXPECT_FALSE(other.in_orbits);
+  EXPECT_FALSE(other.in_clocks);
+  ASSERT_EQ(other.orbit_gaps.size(), 1u);
+  EXPECT_DOUBLE_EQ(other.orbit_gaps[0].last - other.orbit_gaps[0].first, 600.0);
+}
+
 TEST(PreciseInterpolation, RelativisticTermAndItsRate) {
   // Eccentric orbit: -2 r.v / c^2 swings by +-2 e sqrt(GM a) / c^2 = +-45.8 ns at e = 0.02.
   const double interval_s = 900.0, eccentricity = 0.02;

@@ -197,6 +197,30 @@ class PreciseEphemerides final : public SatelliteStateSource {
   [[nodiscard]] Result<Clock> clock(const SatelliteId& satellite, const GnssTime& t) const;
 
   [[nodiscard]] Result<SatelliteState> state(const SatelliteId& satellite, const GnssTime& t) const override;
+
+  // First and last SP3 epoch, and first and last sample of the clock file (any satellite; nullopt
+  // without a clock file), on the GPST timeline.
+  struct Span {
+    GnssTime first;
+    GnssTime last;
+  };
+  [[nodiscard]] Span orbit_span() const;
+  [[nodiscard]] std::optional<Span> clock_file_span() const;
+
+  // Where, within [from, to], orbit() or clock() of a satellite fail: spans between the last time
+  // that works and the next (clamped to [from, to]), found by evaluating at every sample time of
+  // the products in the span and halfway between consecutive ones, plus at from and to (whether a
+  // value can be formed changes only at sample times; at the ends of the data the one interval of
+  // extrapolation the interpolation allows counts as served). in_orbits / in_clocks: whether the
+  // products hold the satellite at all (a satellite they lack fails over all of [from, to]).
+  struct Coverage {
+    bool in_orbits = false;
+    bool in_clocks = false;
+    std::vector<Span> orbit_gaps;
+    std::vector<Span> clock_gaps;
+    [[nodiscard]] bool complete() const { return orbit_gaps.empty() && clock_gaps.empty(); }
+  };
+  [[nodiscard]] Coverage coverage(const SatelliteId& satellite, const GnssTime& from, const GnssTime& to) const;
   // Satellites with positions (and, with a clock file and no fallback, with clock samples).
   [[nodiscard]] std::vector<SatelliteId> satellites() const override;
   [[nodiscard]] std::string_view name() const override { return "precise"; }

@@ -67,6 +67,10 @@ struct GeneratorSettings {
   // turned into code, phase, Doppler and C/N0 errors (receiver/multipath.hpp).
   bool multipath = false;
   PathSearchSettings path_search;
+  // With precise truth (truth_orbits): satellites that keep the broadcast truth (the products lack
+  // them, or cannot serve all of the run: sim::check_precise_coverage). For every other satellite a
+  // time the products cannot serve is an error of observe(), never a silent switch of truth.
+  std::set<SatelliteId> broadcast_truth;
 };
 
 enum class SatelliteStatus {
@@ -152,7 +156,8 @@ struct EpochObservations {
 class ObservationGenerator {
  public:
   // `truth_orbits`, when given (precise products), supplies the orbits and clocks the signals come
-  // from; the broadcast ephemerides remain what the receiver decodes. Both must outlive the generator.
+  // from, except for the satellites of settings.broadcast_truth; the broadcast ephemerides remain
+  // what the receiver decodes. Both must outlive the generator.
   ObservationGenerator(GeneratorSettings settings, const orbits::BroadcastEphemerides& ephemerides,
                        std::shared_ptr<const KinematicsSource> kinematics,
                        const orbits::SatelliteStateSource* truth_orbits = nullptr);

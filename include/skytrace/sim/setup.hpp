@@ -5,8 +5,12 @@
 
 #include <Eigen/Core>
 
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "skytrace/atmosphere/ionosphere.hpp"
 #include "skytrace/core/error.hpp"
@@ -21,18 +25,52 @@
 
 namespace skytrace::sim {
 
+// What the precise products (ephemeris.precise_orbits / precise_clocks) give over a run, per
+// satellite of the receivers' systems in the navigation data.
+struct PreciseTruthCoverage {
+  GnssTime from;  // span of transmission times checked: the run's start minus kTransmissionLead_s
+  GnssTime to;    // the run's end
+  // Satellites the products lack altogether (no orbit or no clock samples at all), and satellites
+  // they hold but cannot serve over all of [from, to] (missing epochs, gaps); both keep the broadcast
+  // truth for the whole run, so that no signal switches between two truths.
+  std::map<SatelliteId, orbits::PreciseEphemerides::Coverage> lacking;
+  std::map<SatelliteId, orbits::PreciseEphemerides::Coverage> gaps;
+  [[nodiscard]] std::set<SatelliteId> broadcast_truth() const;
+  // One warning line each for the lacking satellites and for those with gaps (none when empty).
+  [[nodiscard]] std::vector<std::string> warnings() const;
+  // summary.json's "precise_truth" object.
+  [[nodiscard]] std::string to_json() const;
+};
+
+// The signals of an epoch left the satellites up to this long before it: 0.14 s of flight time
+// (BeiDou GEO/IGSO), plus the receiver clock offset (within a millisecond). The products must serve
+// the run's span extended by this at its start.
+inline constexpr double kTransmissionLead_s = 0.2;
+
 struct ScenarioResources {
   std::optional<LoadedWorld> world;
   std::unique_ptr<orbits::BroadcastEphemerides> ephemerides;
   std::unique_ptr<orbits::PreciseEphemerides> precise;             // signal truth when given
+  std::optional<PreciseTruthCoverage> precise_coverage;            // with precise: over the scenario's span
   std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;  // nullptr: none
+  std::vector<std::string> warnings;                               // for the user (run: stderr, summary)
 };
 
 // Loads everything the scenario names and checks the ephemerides cover [start, end] (the scenario's
-// span by default). Errors name the file or key.
+// span by default): the broadcast records (check_coverage) and, when given, the precise products
+// (check_precise_coverage). Errors name the file or key.
 [[nodiscard]] Result<ScenarioResources> prepare_resources(const Scenario& scenario);
 [[nodiscard]] Status check_coverage(const Scenario& scenario, const orbits::BroadcastEphemerides& ephemerides,
                                     const GnssTime& start, const GnssTime& end);
+// The precise products against the run [start, end]: an error (kOutOfRange, exit 4) naming the key,
+// the files, their span and the run's when the SP3 epochs or the clock file's samples do not reach
+// from start to end (the fraction of a second of flight time before start is extrapolated, as the
+// interpolation allows up to one sample interval beyond the data); kNotFound when neither the SP3
+// files nor a clock file hold any clock. Otherwise per satellite what it lacks or where it has gaps.
+[[nodiscard]] Result<PreciseTruthCoverage> check_precise_coverage(const Scenario& scenario,
+                                                                  const orbits::BroadcastEphemerides& ephemerides,
+                                                                  const orbits::PreciseEphemerides& precise,
+                                                                  const GnssTime& start, const GnssTime& end);
 
 // Loads the navigation data a scenario names (files, or the nominal constellation for its span).
 [[nodiscard]] Result<orbits::NavigationData> load_navigation(const Scenario& scenario);
