@@ -3,10 +3,12 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <numbers>
+#include <span>
 
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/constants.hpp"
@@ -49,6 +51,48 @@ std::optional<RecordState> select_record(const orbits::BroadcastEphemerides& eph
   return out;
 }
 
+// The record whose orbit and clock are a satellite's truth with broadcast truth: one record per
+// satellite and epoch, as a real satellite has one clock, whichever messages the navigation data
+// holds. It is the record of the satellite's reference message as a receiver selects it: Galileo
+// I/NAV, else F/NAV; GPS and QZSS LNAV, else CNAV, else CNAV-2; BeiDou D1 (D2 on GEOs), else
+// CNAV1/2/3; the other systems have one message. `default_record` is the receiver's default selection
+// (Galileo I/NAV first, other systems any message), reused when it is of the first rank.
+RecordState reference_record(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                             const GnssTime& t_receiver, const RecordState& default_record) {
+  using M = orbits::NavMessage;
+  if (default_record.kepler == nullptr) return default_record;
+  static constexpr std::array<M, 2> kGalileo{M::kGalileoInav, M::kGalileoFnav};
+  static constexpr std::array<M, 3> kGps{M::kGpsLnav, M::kGpsCnav, M::kGpsCnav2};
+  static constexpr std::array<M, 3> kQzss{M::kQzssLnav, M::kQzssCnav, M::kQzssCnav2};
+  static constexpr std::array<M, 5> kBeiDou{M::kBeiDouD1, M::kBeiDouD2, M::kBeiDouCnav1, M::kBeiDouCnav2,
+                                            M::kBeiDouCnav3};
+  std::span<const M> order;
+  size_t first_rank = 1;  // how many messages of `order` rank first (BeiDou: D1 and D2)
+  switch (sat.system) {
+    case GnssSystem::kGalileo: order = kGalileo; break;
+    case GnssSystem::kGps: order = kGps; break;
+    case GnssSystem::kQzss: order = kQzss; break;
+    case GnssSystem::kBeiDou:
+      order = kBeiDou;
+      first_rank = 2;
+      break;
+    default: return default_record;
+  }
+  const M message = default_record.kepler->message;
+  if (std::find(order.begin(), order.begin() + static_cast<long>(first_rank), message) !=
+      order.begin() + static_cast<long>(first_rank)) {
+    return default_record;  // the closest record of any message is of the reference message
+  }
+  for (const M wanted : order) {
+    if (const orbits::KeplerEphemeris* eph = ephemerides.find_kepler(sat, t_receiver, wanted)) {
+      RecordState out;
+      out.kepler = eph;
+      return out;
+    }
+  }
+  return default_record;
+}
+
 // Evaluates the record's orbit and clock at instant t (on the GPST timeline).
 void evaluate_record(RecordState& record, const GnssTime& t, orbits::GlonassOrbitCache& glonass_orbits) {
   if (record.kepler != nullptr) {
@@ -66,12 +110,34 @@ double group_delay_of(const RecordState& record, const Signal& signal) {
   return 0.0;  // SBAS clocks refer to L1 directly
 }
 
+// The record whose group delay parameters give a signal's code delay relative to the satellite's
+// one clock (the reference record, `truth`): the reference record itself when its message
+// broadcasts the signal's group delay (Galileo I/NAV carries BGD(E1,E5a) as well as BGD(E1,E5b), so
+// E1, E5a and E5b all take theirs from it; GPS LNAV serves L1 C/A and P(Y), BeiDou D1/D2 B1I, B2I
+// and B3I). Otherwise the record of the message that does, when the receiver holds one (GPS/QZSS
+// L2C and L5: CNAV ISCs, L1C: CNAV-2; BeiDou B1C/B2a/B2b: CNAV1/2/3 TGDs): those delays refer to the
+// same clock reference as the reference message's clock (GPS L1/L2 P(Y), BeiDou B3I), so no second
+// clock enters. Failing both, the reference record (group_delay_s derives what it can, e.g. LNAV's
+// gamma T_GD for L2C). `signal_record` is the receiver's record for the signal, which is the
+// signal's own message's when the receiver holds one.
+const RecordState& group_delay_record(const RecordState& truth, const RecordState& signal_record,
+                                      const Signal& signal) {
+  if (truth.kepler == nullptr) return truth;
+  const auto wanted = orbits::preferred_message(signal);
+  const orbits::NavMessage message = truth.kepler->message;
+  if (!wanted || *wanted == message || message == orbits::NavMessage::kGalileoInav) return truth;
+  if (signal_record.kepler != nullptr && signal_record.kepler->message == *wanted) return signal_record;
+  return truth;
+}
+
 // Code group delay of a signal relative to the clock of precise products, which refer to the
 // ionosphere-free combination of the IGS reference signals: GPS/QZSS L1/L2 P(Y) like the broadcast
 // clock; Galileo E1/E5a like F/NAV; BeiDou B1I/B3I where the broadcast clock refers to B3I alone.
-double precise_clock_group_delay_s(const RecordState& record, const Signal& signal) {
-  if (record.kepler == nullptr) return group_delay_of(record, signal);
-  const orbits::KeplerEphemeris& eph = *record.kepler;
+// `delays` is the record of the signal's group delay (group_delay_record), `reference` the
+// satellite's reference record (BeiDou: its TGD1 converts B3I to B1I/B3I).
+double precise_clock_group_delay_s(const RecordState& reference, const RecordState& delays, const Signal& signal) {
+  if (delays.kepler == nullptr) return group_delay_of(delays, signal);
+  const orbits::KeplerEphemeris& eph = *delays.kepler;
   switch (eph.satellite.system) {
     case GnssSystem::kGalileo: {
       orbits::KeplerEphemeris as_fnav = eph;  // I/NAV records carry BGD(E1,E5a) too
@@ -81,7 +147,8 @@ double precise_clock_group_delay_s(const RecordState& record, const Signal& sign
     case GnssSystem::kBeiDou: {
       // The B1I/B3I ionosphere-free code is late by gamma/(gamma-1) TGD1 against B3I.
       const double gamma = std::pow(kFrequencyB1I_Hz / kFrequencyB3I_Hz, 2);
-      return orbits::group_delay_s(eph, signal) - gamma / (gamma - 1.0) * eph.group_delays.tgd1_s;
+      const double tgd1_s = (reference.kepler != nullptr ? *reference.kepler : eph).group_delays.tgd1_s;
+      return orbits::group_delay_s(eph, signal) - gamma / (gamma - 1.0) * tgd1_s;
     }
     default: return orbits::group_delay_s(eph, signal);
   }
@@ -241,9 +308,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   // Satellites above the mask wait here for the world's verdict before their signals are measured.
   struct Pending {
     size_t index = 0;
-    std::optional<RecordState> record;
+    std::optional<RecordState> record;  // the receiver's default record (nav.rnx)
+    RecordState truth;                  // the satellite's reference record, its state at transmission
     bool precise_truth = false;
-    GnssTime transmit_time;
     double range_m = 0.0;
     double range_rate_mps = 0.0;
     Eigen::Vector3d line_of_sight = Eigen::Vector3d::Zero();  // ECEF unit vector, receiver to satellite
@@ -266,6 +333,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       epoch.satellites.push_back(std::move(obs));
       continue;
     }
+    // The truth: one orbit and clock per satellite, from its reference record (or the precise
+    // products below), whatever record each signal's receiver-side message has.
+    RecordState truth = reference_record(ephemerides_, sat, tag, *record);
     // Light-time iteration. The record is evaluated once, at a guess of the transmission time (the
     // last epoch's flight time), and the iteration moves along the second-order expansion of the
     // orbit and clock around it: the step is microseconds after the first epoch, and below 12 ms
@@ -273,7 +343,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const auto guess = flight_time_guess_s_.find(sat);
     const double guess_s = guess != flight_time_guess_s_.end() ? guess->second : 0.075;
     const GnssTime evaluation_time = epoch.true_time - guess_s;
-    evaluate_record(*record, evaluation_time, glonass_orbits_);
+    evaluate_record(truth, evaluation_time, glonass_orbits_);
     bool precise_truth = false;
     if (truth_orbits_ != nullptr && settings_.broadcast_truth.count(sat) == 0) {
       // Precise products as the truth: the signals come from the precise orbit and clock, while
@@ -287,10 +357,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
                           "precise truth at epoch " + tag.to_iso8601(TimeScale::kGpst, 0) + " GPST: " +
                               precise.error().message);
       }
-      record->state = *precise;
+      truth.state = *precise;
       precise_truth = true;
     }
-    const orbits::SatelliteState& at_guess = record->state;
+    const orbits::SatelliteState& at_guess = truth.state;
     const Eigen::Vector3d& r0 = at_guess.position_m;
     const Eigen::Vector3d& v0 = at_guess.velocity_mps;
     // Acceleration in the Earth-fixed frame: gravity, Coriolis and centrifugal terms.
@@ -310,12 +380,11 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     }
     step_s = guess_s - flight_time_s;
     flight_time_guess_s_[sat] = flight_time_s;
-    record->state.clock_bias_s += at_guess.clock_drift_s_per_s * step_s;
-    record->state.relativistic_s += at_guess.relativistic_drift_s_per_s * step_s;
-    record->state.velocity_mps = v0 + a0 * step_s;
-    const GnssTime transmit_time = epoch.true_time - flight_time_s;
+    truth.state.clock_bias_s += at_guess.clock_drift_s_per_s * step_s;
+    truth.state.relativistic_s += at_guess.relativistic_drift_s_per_s * step_s;
+    truth.state.velocity_mps = v0 + a0 * step_s;
     const double rotation_rad = kEarthRotation_radps * flight_time_s;
-    sat_velocity_mps = rotate_earth(record->state.velocity_mps, rotation_rad);
+    sat_velocity_mps = rotate_earth(truth.state.velocity_mps, rotation_rad);
     const Eigen::Vector3d line_of_sight = (sat_position_m - rx_m) / range_m;
     // d(range)/dt with the flight time changing too: the satellite term is scaled by (1 - d tau/dt)
     // and the Sagnac rotation angle grows with d tau/dt (d R(theta) r / d theta = (y, -x, 0)).
@@ -333,8 +402,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     obs.range_m = range_m;
     obs.range_rate_mps = range_rate_mps;
     obs.satellite_position_m = sat_position_m;
-    obs.satellite_clock_m = kC * record->state.clock_bias_s;
-    obs.relativistic_m = kC * record->state.relativistic_s;
+    obs.satellite_clock_m = kC * truth.state.clock_bias_s;
+    obs.relativistic_m = kC * truth.state.relativistic_s;
     if (record->glonass != nullptr) obs.glonass_channel = record->glonass->frequency_channel;
     if (obs.direction.elevation_deg < elevation_mask_deg_) {
       obs.status = SatelliteStatus::kBelowMask;
@@ -354,7 +423,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.ionosphere_l1_m = delay->value_or(0.0);
     }
 
-    pending.push_back(Pending{epoch.satellites.size(), std::move(*record), precise_truth, transmit_time, range_m,
+    pending.push_back(Pending{epoch.satellites.size(), std::move(*record), truth, precise_truth, range_m,
                               range_rate_mps, line_of_sight, sat_velocity_mps});
     epoch.satellites.push_back(std::move(obs));
   }
@@ -391,8 +460,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     SatelliteObservation& obs = epoch.satellites[p.index];
     const SatelliteId sat = obs.satellite;
     const std::optional<RecordState> record = std::move(p.record);
+    const RecordState& truth = p.truth;
     const bool precise_truth = p.precise_truth;
-    const GnssTime transmit_time = p.transmit_time;
     const double range_m = p.range_m;
     const double range_rate_mps = p.range_rate_mps;
     double attenuation_db = 0.0;
@@ -501,35 +570,31 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         if (!acquired || signal_acquired < *acquired) acquired = signal_acquired;
       }
 
-      // The clock and group delay come from the record that belongs to the signal (Galileo E5a:
-      // F/NAV); the orbit is the same for both records of one issue of data.
+      // The receiver side: the record a receiver uses for this signal (the message that belongs to
+      // it, Galileo E5a: F/NAV), which nav.rnx must carry.
       const RecordState* signal_record = &*record;
       std::optional<RecordState> other_record;
       if (record->kepler != nullptr) {
         const auto wanted = orbits::preferred_message(signal);
         if (wanted && *wanted != record->kepler->message) {
           auto r = select_record(ephemerides_, sat, tag, wanted);
-          if (r && r->kepler != record->kepler) {
-            if (!precise_truth) {
-              evaluate_record(*r, transmit_time, glonass_orbits_);
-            } else {
-              r->state = record->state;  // the precise clock serves every signal
-            }
-            other_record = std::move(*r);
-          }
+          if (r && r->kepler != record->kepler) other_record = std::move(*r);
           if (other_record) signal_record = &*other_record;
         }
       }
       records_used_.emplace_back(signal_record->kepler, signal_record->glonass, signal_record->sbas);
 
+      // The truth: the satellite's one clock, and the signal's code delay relative to it from the
+      // group delays of the reference record (group_delay_record).
       SignalMeasurement m;
       m.signal = signal;
       m.carrier_hz = info->carrier_frequency_hz(obs.glonass_channel);
       const double wavelength_m = kC / m.carrier_hz;
-      const orbits::SatelliteState& clock = signal_record->state;
+      const orbits::SatelliteState& clock = truth.state;
+      const RecordState& delays = group_delay_record(truth, *signal_record, signal);
       m.satellite_clock_m = kC * clock.clock_bias_s;
-      m.group_delay_m = kC * (precise_truth ? precise_clock_group_delay_s(*signal_record, signal)
-                                            : group_delay_of(*signal_record, signal));
+      m.group_delay_m = kC * (precise_truth ? precise_clock_group_delay_s(truth, delays, signal)
+                                            : group_delay_of(delays, signal));
       m.ionosphere_code_m = obs.ionosphere_l1_m * std::pow(kFrequencyL1_Hz / m.carrier_hz, 2);
       m.cn0_dbhz = quantize(cn0_dbhz, profile.cn0_resolution_dbhz);
 

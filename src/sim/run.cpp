@@ -233,12 +233,16 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
   for (const auto& sat : epoch.satellites) {
     const std::string status(receiver::to_string(sat.status));
     const std::string sat_name = sat.satellite.to_string();
-    const std::string geometry =
-        sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris
-            ? std::string(kNoGeometry)
-            : fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f}", sat.direction.azimuth_deg,
-                          sat.direction.elevation_deg, sat.range_m, sat.range_rate_mps, sat.satellite_clock_m,
-                          sat.relativistic_m);
+    const bool has_geometry = !(sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris);
+    // Geometry cells with a satellite clock: the satellite's, and in a signal's row the clock that
+    // signal got (the same one unless the generator gave it another: formatted again only then).
+    auto geometry_with = [&](double satellite_clock_m) {
+      return has_geometry ? fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f}", sat.direction.azimuth_deg,
+                                        sat.direction.elevation_deg, sat.range_m, sat.range_rate_mps,
+                                        satellite_clock_m, sat.relativistic_m)
+                          : std::string(kNoGeometry);
+    };
+    const std::string geometry = geometry_with(sat.satellite_clock_m);
     if (sat.signals.empty()) {
       // One row for the satellite: why it is not observed, with the geometry when known.
       const std::string atmosphere = sat.status == receiver::SatelliteStatus::kTracked ||
@@ -254,7 +258,9 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
     for (const auto& m : sat.signals) {
       fmt::format_to(std::back_inserter(out),
                      "{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.5f},{:.5f},{},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.2f},\n",
-                     time, receiver_name, sat_name, m.signal.to_string(), status, geometry, m.group_delay_m,
+                     time, receiver_name, sat_name, m.signal.to_string(), status,
+                     m.satellite_clock_m == sat.satellite_clock_m ? geometry : geometry_with(m.satellite_clock_m),
+                     m.group_delay_m,
                      m.ionosphere_code_m, sat.troposphere_m, rx_clock, m.code_noise_m, m.phase_noise_m,
                      m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
                      m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);

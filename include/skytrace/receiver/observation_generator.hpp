@@ -95,8 +95,8 @@ struct SignalMeasurement {
   bool half_cycle_unresolved = false;  // RINEX LLI bit 1: data signal whose phase polarity is not yet known
   double lock_time_s = 0.0;            // continuous carrier tracking up to this epoch
   // Truth of the terms.
-  double satellite_clock_m = 0.0;   // c * clock polynomial of the record used for this signal
-  double group_delay_m = 0.0;       // c * code group delay of the signal
+  double satellite_clock_m = 0.0;   // c * the satellite's clock (one per satellite: reference record or precise)
+  double group_delay_m = 0.0;       // c * code group delay of the signal relative to that clock
   double ionosphere_code_m = 0.0;   // code delay (the phase is advanced by the same amount)
   double code_noise_m = 0.0;
   double phase_noise_m = 0.0;
@@ -127,7 +127,7 @@ struct SatelliteObservation {
   AzimuthElevation direction;
   double range_m = 0.0;            // geometric, transmit to receive, Sagnac included
   double range_rate_mps = 0.0;
-  double satellite_clock_m = 0.0;  // c * clock polynomial (default record)
+  double satellite_clock_m = 0.0;  // c * clock: the reference record's polynomial, or the precise clock
   double relativistic_m = 0.0;     // c * periodic relativistic clock term
   double troposphere_m = 0.0;
   double ionosphere_l1_m = 0.0;    // group delay on 1575.42 MHz
