@@ -850,6 +850,7 @@ struct EmbreeScene::Impl {
   void add_vegetation(std::vector<VegetationCrossing>& crossings, const std::vector<std::uint32_t>& around,
                       std::vector<std::uint32_t>& convex_candidates, const Eigen::Vector3d& origin,
                       const Eigen::Vector3d& direction, double stop_m, RayOutcome& outcome) const {
+    if (crossings.empty() && around.empty() && convex_candidates.empty()) return;  // most rays
     if (!convex_candidates.empty()) {
       // A primitive may be met more than once by one traversal (Embree may split references).
       std::sort(convex_candidates.begin(), convex_candidates.end());
@@ -1064,10 +1065,8 @@ std::vector<RayOutcome> EmbreeScene::trace(const Eigen::Vector3d& origin_m,
     init_ray(ray_hit, state.origin_f, direction);
     rtcIntersect1(impl.main.top, &state.context.base, &ray_hit);
     if (ray_hit.hit.geomID != kInvalidId) impl.describe_blocking(ray_hit, origin_m, direction, outcome);
-    if (!state.crossings.empty() || !state.around.empty() || !state.convex_candidates.empty()) {
-      impl.add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction,
-                          outcome.blocked ? outcome.blocking_distance_m : kInfinity, outcome);
-    }
+    impl.add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction,
+                        outcome.blocked ? outcome.blocking_distance_m : kInfinity, outcome);
   });
 }
 
@@ -1085,11 +1084,14 @@ std::vector<RayOutcome> EmbreeScene::trace_line_of_sight(const Eigen::Vector3d& 
     rtcOccluded1(impl.main.top, &state.context.base, &ray_hit.ray);
     if (ray_hit.ray.tfar < 0.0F) {  // Embree's mark of an occluded ray
       outcome.blocked = true;
-      const SceneObject& blocker =
-          impl.objects[impl.main.object_index(state.context.blocker_instance, state.context.blocker_geometry)];
-      outcome.blocking_object = blocker.name;
-      outcome.blocking_material = blocker.material.material_class;
-    } else if (!state.crossings.empty() || !state.around.empty() || !state.convex_candidates.empty()) {
+      // Every opaque triangle geometry has the filter that names it (make_geometry).
+      if (state.context.blocker_geometry != kInvalidId) {
+        const SceneObject& blocker =
+            impl.objects[impl.main.object_index(state.context.blocker_instance, state.context.blocker_geometry)];
+        outcome.blocking_object = blocker.name;
+        outcome.blocking_material = blocker.material.material_class;
+      }
+    } else {
       impl.add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction, kInfinity,
                           outcome);
     }
