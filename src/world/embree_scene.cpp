@@ -7,7 +7,7 @@
 // rebuilds only the top-level structure over a handful of instances, not the static BVH.
 //
 // Vegetation. A closed convex volume (a tree crown as a convex hull: the common case) is one Embree
-// user primitive per horizontal slab of it; a ray entering one only notes the volume, and the part
+// user primitive, its bounding box; a ray entering one only notes the volume, and the part
 // of the ray inside is then computed exactly from the volume's face planes (ConvexVolume). Other
 // vegetation volumes are triangles with a filter that records each crossing and rejects it, so the
 // traversal goes on.
@@ -108,10 +108,10 @@ struct TrianglePlane {
 };
 
 // Convex vegetation volumes (tree crowns as convex hulls, the common case) are not traced as
-// triangles: each is a few Embree user primitives (the boxes of its horizontal slabs) and the part
-// of a ray inside it is computed exactly, in double, from its face planes. A ray through a tree
-// then costs a few box tests and callbacks instead of a triangle traversal with a filter call per
-// face it crosses.
+// triangles: each is one Embree user primitive (its bounding box) and the part of a ray inside it
+// is computed exactly, in double, from its face planes. A ray through a tree then costs one box
+// test and one callback instead of a triangle traversal with a filter call per face it crosses.
+// (Boxes per horizontal slab of a crown hug it better but cost more in the BVH than they save.)
 struct ConvexVolumes {
   std::vector<std::uint32_t> object_of_primitive;  // primID -> index in objects
   std::vector<Eigen::AlignedBox3d> bounds_m;       // per primID, frame of the Embree geometry
@@ -366,43 +366,6 @@ struct ConvexVolume {
   }
 };
 
-// Bounding boxes of a convex mesh cut into horizontal slabs: a tree crown narrows towards its top
-// (and a trunk-less hull towards its base), so the boxes of its slabs hold much less empty space
-// than one box, and fewer rays that miss the crown reach its exact test. Each box bounds the part of
-// the volume within its slab: the vertices in it and the points where edges cross its planes.
-std::vector<Eigen::AlignedBox3d> slab_bounds(const std::vector<Eigen::Vector3d>& vertices_m,
-                                             const std::vector<Eigen::Vector3i>& triangles) {
-  constexpr int kSlabs = 4;
-  Eigen::AlignedBox3d whole;
-  for (const auto& v : vertices_m) whole.extend(v);
-  const double bottom_m = whole.min().z();
-  const double height_m = whole.max().z() - bottom_m;
-  if (!(height_m > 0.0)) return {whole};
-  std::vector<Eigen::AlignedBox3d> slabs(kSlabs);
-  auto slab_of = [&](double z_m) {
-    return std::clamp(static_cast<int>((z_m - bottom_m) / height_m * kSlabs), 0, kSlabs - 1);
-  };
-  for (const auto& v : vertices_m) slabs[static_cast<std::size_t>(slab_of(v.z()))].extend(v);
-  for (const auto& tri : triangles) {
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d& a = vertices_m[static_cast<std::size_t>(tri[k])];
-      const Eigen::Vector3d& b = vertices_m[static_cast<std::size_t>(tri[(k + 1) % 3])];
-      for (int cut = 1; cut < kSlabs; ++cut) {
-        const double z_m = bottom_m + height_m * cut / kSlabs;
-        if ((a.z() - z_m) * (b.z() - z_m) > 0.0 || a.z() == b.z()) continue;
-        const Eigen::Vector3d point = a + (b - a) * ((z_m - a.z()) / (b.z() - a.z()));
-        slabs[static_cast<std::size_t>(cut - 1)].extend(point);
-        slabs[static_cast<std::size_t>(cut)].extend(point);
-      }
-    }
-  }
-  std::vector<Eigen::AlignedBox3d> kept;
-  for (const auto& box : slabs) {
-    if (!box.isEmpty()) kept.push_back(box);
-  }
-  return kept;
-}
-
 // The convex volumes of the meshes of a world, one per distinct mesh (Gazebo worlds place the same
 // tree model many times). Meshes that are not closed and convex get nullptr.
 class ConvexShapes {
@@ -468,7 +431,7 @@ struct SceneObject {
   // and its bounding box in the frame of the Embree geometry. nullptr otherwise.
   std::shared_ptr<const ConvexVolume> volume;
   Eigen::Isometry3d volume_from_world = Eigen::Isometry3d::Identity();
-  std::vector<Eigen::AlignedBox3d> volume_slab_bounds_m;  // one user primitive each
+  Eigen::AlignedBox3d volume_bounds_m;  // of its user primitive
   std::unique_ptr<ConvexVolumes> own_volume;  // movable convex volumes: their user geometry's data
   RTCGeometry geometry = nullptr;     // during the build only
   RTCScene own_scene = nullptr;       // movable objects: their scene, instanced in the layers
@@ -640,8 +603,8 @@ struct EmbreeScene::Impl {
     if (object.volume != nullptr) {
       if (object.is_static) return;
       object.own_volume = std::make_unique<ConvexVolumes>();
-      object.own_volume->object_of_primitive.assign(object.volume_slab_bounds_m.size(), index);
-      object.own_volume->bounds_m = object.volume_slab_bounds_m;
+      object.own_volume->object_of_primitive = {index};
+      object.own_volume->bounds_m = {object.volume_bounds_m};
       object.geometry = new_convex_geometry(*object.own_volume);
       object.own_scene = new_scene(false);
       rtcAttachGeometry(object.own_scene, object.geometry);
@@ -852,7 +815,7 @@ struct EmbreeScene::Impl {
                       const Eigen::Vector3d& direction, double stop_m, RayOutcome& outcome) const {
     if (crossings.empty() && around.empty() && convex_candidates.empty()) return;  // most rays
     if (!convex_candidates.empty()) {
-      // A primitive may be met more than once by one traversal (Embree may split references).
+      // A volume may be noted more than once by one traversal (Embree may split references).
       std::sort(convex_candidates.begin(), convex_candidates.end());
       convex_candidates.erase(std::unique(convex_candidates.begin(), convex_candidates.end()), convex_candidates.end());
       for (const std::uint32_t index : convex_candidates) {
@@ -949,7 +912,7 @@ Result<std::unique_ptr<EmbreeScene>> EmbreeScene::build(const WorldModel& world,
       object.volume = convex_shapes.shape_of(source.mesh);
       if (object.volume != nullptr) {
         object.volume_from_world = object.pose.inverse();
-        object.volume_slab_bounds_m = slab_bounds(object.vertices_m, object.triangles);
+        for (const auto& v : object.vertices_m) object.volume_bounds_m.extend(v);
       }
     }
     ++impl->stats.objects;
@@ -966,10 +929,8 @@ Result<std::unique_ptr<EmbreeScene>> EmbreeScene::build(const WorldModel& world,
     impl->make_geometry(object, static_cast<std::uint32_t>(index));
     impl->has_vegetation = impl->has_vegetation || object.material.is_vegetation();
     if (object.is_static && object.volume != nullptr) {
-      for (const auto& box : object.volume_slab_bounds_m) {
-        impl->static_volumes.object_of_primitive.push_back(static_cast<std::uint32_t>(index));
-        impl->static_volumes.bounds_m.push_back(box);
-      }
+      impl->static_volumes.object_of_primitive.push_back(static_cast<std::uint32_t>(index));
+      impl->static_volumes.bounds_m.push_back(object.volume_bounds_m);
     }
   }
   if (!impl->static_volumes.object_of_primitive.empty()) static_convex = impl->new_convex_geometry(impl->static_volumes);
