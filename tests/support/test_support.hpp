@@ -12,7 +12,7 @@ namespace skytrace::test {
 std::filesystem::path shared_data_dir();
 std::filesystem::path source_dir();
 std::filesystem::path binary_dir();
-// A fresh empty folder under the build tree for one test.
+// A fresh empty folder under the build tree for one test (test-tmp/NAME/SUITE.TEST while a test runs).
 std::filesystem::path make_temp_dir(const std::string& name);
 
 }  // namespace skytrace::test
