@@ -29,4 +29,36 @@ std::filesystem::path make_temp_dir(const std::string& name) {
   return dir;
 }
 
+std::string test_profile_yaml(int channels, bool output_requires_ephemeris) {
+  return R"(name: test
+signals: [G1C, E1C]
+channels: )" + std::to_string(channels) + R"(
+elevation_mask_deg: 10
+antenna:
+  elevation_deg: [0, 90]
+  rhcp_gain_dbic: [0, 0]
+  lhcp_gain_dbic: [-20, -20]
+front_end:
+  system_noise_temperature_k: 290
+  implementation_loss_db: 1.5
+tracking:
+  dll_bandwidth_hz: 0.25
+  pll_bandwidth_hz: 15
+  fll_bandwidth_hz: 0.1
+  correlator_spacing_chips: 0.1
+  integration_time_s: 0.01
+  acquisition_threshold_dbhz: 40
+  tracking_threshold_dbhz: 20
+  acquisition_time_s: 3
+  half_cycle_resolution_s: 6
+  cn0_resolution_dbhz: 0.25
+  output_requires_ephemeris: )" + (output_requires_ephemeris ? "true" : "false") + R"(
+oscillator:
+  preset: ocxo
+  initial_bias_s: 0
+  initial_drift_s_per_s: 0
+  steering: steered
+)";
+}
+
 }  // namespace skytrace::test

@@ -14,6 +14,9 @@ std::filesystem::path source_dir();
 std::filesystem::path binary_dir();
 // A fresh empty folder under the build tree for one test (test-tmp/NAME/SUITE.TEST while a test runs).
 std::filesystem::path make_temp_dir(const std::string& name);
+// The YAML text of a plain receiver profile for generator tests (G1C and E1C, isotropic antenna,
+// thresholds 40/20 dB-Hz, acquisition 3 s, steered OCXO); channels 0 = unlimited.
+std::string test_profile_yaml(int channels = 0, bool output_requires_ephemeris = false);
 
 }  // namespace skytrace::test
 

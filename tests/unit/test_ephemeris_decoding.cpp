@@ -10,6 +10,7 @@
 #include "skytrace/orbits/nominal.hpp"
 #include "skytrace/receiver/ephemeris_decoding.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
+#include "test_support.hpp"
 
 namespace skytrace::receiver {
 namespace {
@@ -171,35 +172,6 @@ TEST_F(HeldFrom, GlonassTransmissionIsUtc) {
 
 // ------------------------------------------------------------------------------------- generator
 
-constexpr const char* kProfile = R"(name: test
-signals: [G1C, E1C]
-channels: 0
-elevation_mask_deg: 10
-antenna:
-  elevation_deg: [0, 90]
-  rhcp_gain_dbic: [0, 0]
-  lhcp_gain_dbic: [-20, -20]
-front_end:
-  system_noise_temperature_k: 290
-  implementation_loss_db: 1.5
-tracking:
-  dll_bandwidth_hz: 0.25
-  pll_bandwidth_hz: 15
-  fll_bandwidth_hz: 0.1
-  correlator_spacing_chips: 0.1
-  integration_time_s: 0.01
-  acquisition_threshold_dbhz: 40
-  tracking_threshold_dbhz: 20
-  acquisition_time_s: 3
-  half_cycle_resolution_s: 6
-  cn0_resolution_dbhz: 0.25
-  output_requires_ephemeris: OUTPUT
-oscillator:
-  preset: ocxo
-  initial_bias_s: 0
-  initial_drift_s_per_s: 0
-  steering: steered
-)";
 
 const GnssTime kStart = gpst("2020-06-25T00:00:00");
 const Geodetic kSite{55.49, 8.46, 60.0};
@@ -244,8 +216,7 @@ class SwitchWorld final : public PathQuery {
 std::vector<EpochObservations> run(bool output_requires_ephemeris, int count, const std::set<int>& blocked = {},
                                    std::set<const orbits::KeplerEphemeris*>* used = nullptr,
                                    const orbits::BroadcastEphemerides& ephemerides = nominal()) {
-  std::string text = kProfile;
-  text.replace(text.find("OUTPUT"), 6, output_requires_ephemeris ? "true" : "false");
+  const std::string text = skytrace::test::test_profile_yaml(0, output_requires_ephemeris);
   GeneratorSettings settings;
   settings.signals = {sig("G1C"), sig("E1C")};
   settings.elevation_mask_deg = 0.0;

@@ -9,6 +9,7 @@
 #include "skytrace/orbits/nominal.hpp"
 #include "skytrace/receiver/link_budget.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
+#include "test_support.hpp"
 
 namespace skytrace::receiver {
 namespace {
@@ -30,39 +31,9 @@ class SwitchWorld final : public PathQuery {
   }
 };
 
-constexpr const char* kProfile = R"(name: test
-signals: [G1C, E1C]
-channels: CHANNELS
-elevation_mask_deg: 10
-antenna:
-  elevation_deg: [0, 90]
-  rhcp_gain_dbic: [0, 0]
-  lhcp_gain_dbic: [-20, -20]
-front_end:
-  system_noise_temperature_k: 290
-  implementation_loss_db: 1.5
-tracking:
-  dll_bandwidth_hz: 0.25
-  pll_bandwidth_hz: 15
-  fll_bandwidth_hz: 0.1
-  correlator_spacing_chips: 0.1
-  integration_time_s: 0.01
-  acquisition_threshold_dbhz: 40
-  tracking_threshold_dbhz: 20
-  acquisition_time_s: 3
-  half_cycle_resolution_s: 6
-  cn0_resolution_dbhz: 0.25
-oscillator:
-  preset: ocxo
-  initial_bias_s: 0
-  initial_drift_s_per_s: 0
-  steering: steered
-)";
 
 ReceiverProfile profile_with_channels(int channels) {
-  std::string text = kProfile;
-  text.replace(text.find("CHANNELS"), 8, std::to_string(channels));
-  return parse_profile(text, "test.yaml").value();
+  return parse_profile(skytrace::test::test_profile_yaml(channels), "test.yaml").value();
 }
 
 const GnssTime kStart = GnssTime::parse_iso8601("2020-06-25T00:00:00", TimeScale::kGpst).value();
