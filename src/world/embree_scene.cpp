@@ -207,7 +207,7 @@ std::vector<TrianglePlane> convex_volume_planes(const std::vector<Eigen::Vector3
 }
 
 // Eight floats processed at once (GCC vector extensions: SSE pairs by default, one AVX register
-// in the avx2 and avx512f clones of the kernel below).
+// in the x86-64-v3 (AVX2, FMA) and x86-64-v4 (AVX-512, 32 registers) clones of the kernel below).
 using FloatLanes = float __attribute__((vector_size(32)));
 using IntLanes = std::int32_t __attribute__((vector_size(32)));
 // The same in memory with the alignment of a float: loads are unaligned (as cheap on current
@@ -221,11 +221,47 @@ struct PlaneLanes {
   StoredFloatLanes nx, ny, nz, offset_m;
 };
 
+// Lane-wise maximum and minimum, and the same over all lanes (every lane holds the result).
+// Always inlined into the kernel's clones, so the vector calling convention (-Wpsabi) never applies.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+// Butterflies over the eight lanes: after the three steps every lane holds the result.
+[[gnu::always_inline]] inline float max_over_lanes(FloatLanes v) {
+  FloatLanes o = __builtin_shuffle(v, IntLanes{4, 5, 6, 7, 0, 1, 2, 3});
+  v = v > o ? v : o;
+  o = __builtin_shuffle(v, IntLanes{2, 3, 0, 1, 6, 7, 4, 5});
+  v = v > o ? v : o;
+  o = __builtin_shuffle(v, IntLanes{1, 0, 3, 2, 5, 4, 7, 6});
+  return std::max(v[0], o[0]);
+}
+[[gnu::always_inline]] inline float min_over_lanes(FloatLanes v) {
+  FloatLanes o = __builtin_shuffle(v, IntLanes{4, 5, 6, 7, 0, 1, 2, 3});
+  v = v < o ? v : o;
+  o = __builtin_shuffle(v, IntLanes{2, 3, 0, 1, 6, 7, 4, 5});
+  v = v < o ? v : o;
+  o = __builtin_shuffle(v, IntLanes{1, 0, 3, 2, 5, 4, 7, 6});
+  return std::min(v[0], o[0]);
+}
+[[gnu::always_inline]] inline std::int32_t min_over_lanes(IntLanes v) {
+  IntLanes o = __builtin_shuffle(v, IntLanes{4, 5, 6, 7, 0, 1, 2, 3});
+  v = v < o ? v : o;
+  o = __builtin_shuffle(v, IntLanes{2, 3, 0, 1, 6, 7, 4, 5});
+  v = v < o ? v : o;
+  o = __builtin_shuffle(v, IntLanes{1, 0, 3, 2, 5, 4, 7, 6});
+  return std::min(v[0], o[0]);
+}
+// A ray parallel to a face outside it, or entering after it has left: a miss.
+[[gnu::always_inline]] inline bool misses(FloatLanes best_entry, FloatLanes best_exit, IntLanes parallel_outside) {
+  return min_over_lanes(parallel_outside) != 0 || max_over_lanes(best_entry) > min_over_lanes(best_exit);
+}
+#pragma GCC diagnostic pop
+
 // The faces that bound the part of a ray inside a convex volume: the entering face with the
 // largest distance and the leaving face with the smallest (-1: none), found in float over all
-// faces at once; false when the ray runs parallel to a face outside it. Branch-free, so that the
-// many rays that only graze a volume's bounding box cost a few dozen vector operations.
-__attribute__((target_clones("avx512f", "avx2", "default"))) bool binding_faces(
+// faces at once; false when the ray misses the volume (then the faces are not set). Branch-free
+// over the faces, with one early test: the many rays that only graze a volume's bounding box are
+// known to miss after the first faces, which are spread over all directions.
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) bool binding_faces(
     const PlaneLanes* chunks, std::size_t chunk_count, const float origin_m[3], const float direction[3],
     int& entry_face, int& exit_face) {
   constexpr float kFar = 3.0e38F;
@@ -241,21 +277,10 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) bool binding_faces(
   IntLanes exit_index = IntLanes{} - 1;
   IntLanes parallel_outside = IntLanes{};
   IntLanes index = {0, 1, 2, 3, 4, 5, 6, 7};
-  // The first faces are spread over all directions (ConvexVolume::from_faces): alone they bound a
-  // coarse polytope around the volume, so most rays that miss are known to miss after them.
+  // The first faces alone bound a coarse polytope around the volume (ConvexVolume::from_faces).
   constexpr std::size_t kCoarseChunks = 2;
   for (std::size_t c = 0; c < chunk_count; ++c, index += kLanes) {
-    if (c > 0 && c <= kCoarseChunks) {
-      float entry_m = -kFar;
-      float exit_m = kFar;
-      bool outside = false;
-      for (int k = 0; k < kLanes; ++k) {
-        entry_m = std::max(entry_m, best_entry[k]);
-        exit_m = std::min(exit_m, best_exit[k]);
-        outside = outside || parallel_outside[k] != 0;
-      }
-      if (outside || entry_m > exit_m) return false;
-    }
+    if (c == kCoarseChunks && misses(best_entry, best_exit, parallel_outside)) return false;
     const FloatLanes nx = chunks[c].nx;
     const FloatLanes ny = chunks[c].ny;
     const FloatLanes nz = chunks[c].nz;
@@ -269,25 +294,18 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) bool binding_faces(
     entry_index = better_entry ? index : entry_index;
     best_exit = better_exit ? t_m : best_exit;
     exit_index = better_exit ? index : exit_index;
-    parallel_outside |= (rate == 0.0F) & (inside_m < 0.0F);
+    parallel_outside |= (rate == 0.0F) & (inside_m < 0.0F);  // all bits set where true
   }
-  float entry_m = -kFar;
-  float exit_m = kFar;
-  entry_face = -1;
-  exit_face = -1;
-  bool outside = false;
-  for (int k = 0; k < kLanes; ++k) {
-    if (entry_index[k] >= 0 && best_entry[k] > entry_m) {
-      entry_m = best_entry[k];
-      entry_face = entry_index[k];
-    }
-    if (exit_index[k] >= 0 && best_exit[k] < exit_m) {
-      exit_m = best_exit[k];
-      exit_face = exit_index[k];
-    }
-    outside = outside || parallel_outside[k] != 0;
-  }
-  return !outside;
+  if (misses(best_entry, best_exit, parallel_outside)) return false;
+  // The lowest face index among the lanes holding the extreme distance.
+  constexpr std::int32_t kNone = std::numeric_limits<std::int32_t>::max();
+  const FloatLanes entry_m = FloatLanes{} + max_over_lanes(best_entry);
+  const FloatLanes exit_m = FloatLanes{} + min_over_lanes(best_exit);
+  const std::int32_t entry = min_over_lanes((entry_index >= 0) & (best_entry == entry_m) ? entry_index : kNone);
+  const std::int32_t exit = min_over_lanes((exit_index >= 0) & (best_exit == exit_m) ? exit_index : kNone);
+  entry_face = entry == kNone ? -1 : entry;
+  exit_face = exit == kNone ? -1 : exit;
+  return true;
 }
 
 // A convex vegetation volume: its outward face planes (normal . x <= offset_m inside) in double,
@@ -988,7 +1006,9 @@ template <typename Answer>
 std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& origin_m,
                                                         const std::vector<Eigen::Vector3d>& directions,
                                                         Answer answer) const {
-  std::vector<RayOutcome> outcomes(directions.size());
+  // Copies of one default outcome: cheaper than value-initialising each (a rep stos per element).
+  static const RayOutcome kDefaultOutcome{};
+  std::vector<RayOutcome> outcomes(directions.size(), kDefaultOutcome);
   const bool origin_finite = origin_m.allFinite();
   const bool answerable = !main.empty && origin_finite;
   QueryState state;
