@@ -76,13 +76,6 @@ std::optional<Records> select_records(const orbits::BroadcastEphemerides& epheme
   return out;
 }
 
-// Coordinates in the frame at reception of a vector of the frame at transmission (the Earth
-// turned by angle_rad in between).
-Eigen::Vector3d rotate_earth(const Eigen::Vector3d& v, double angle_rad) {
-  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
-  return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
-}
-
 // One satellite's measurement with everything that does not depend on the receiver position.
 struct Candidate {
   size_t use_index = 0;  // into PositionFix::satellites
@@ -131,13 +124,13 @@ Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, co
   for (int iteration = 0; iteration < 4; ++iteration) {
     if (receiver_clock_m) step_s = move_to(pseudorange_s - *receiver_clock_m / kC - flight_time_s);
     const Eigen::Vector3d at_transmission = g.satellite_m;
-    g.satellite_m = rotate_earth(at_transmission, kEarthRotation_radps * flight_time_s);
+    g.satellite_m = rotate_earth_frame(at_transmission, kEarthRotation_radps * flight_time_s);
     g.range_m = (g.satellite_m - receiver_m).norm();
     flight_time_s = g.range_m / kC;
     if (iteration < 3) g.satellite_m = at_transmission;
   }
   g.satellite_velocity_mps =
-      rotate_earth(c.velocity_mps + c.acceleration_mps2 * step_s, kEarthRotation_radps * flight_time_s);
+      rotate_earth_frame(c.velocity_mps + c.acceleration_mps2 * step_s, kEarthRotation_radps * flight_time_s);
   g.line_of_sight = (g.satellite_m - receiver_m) / g.range_m;
   if (to_enu != nullptr) {
     const Eigen::Vector3d enu = *to_enu * (g.satellite_m - receiver_m);

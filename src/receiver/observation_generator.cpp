@@ -154,13 +154,6 @@ double precise_clock_group_delay_s(const RecordState& reference, const RecordSta
   }
 }
 
-// Coordinates of a vector of the Earth-fixed frame at transmission in the frame at reception,
-// the Earth having turned by `angle_rad` in between.
-Eigen::Vector3d rotate_earth(const Eigen::Vector3d& v, double angle_rad) {
-  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
-  return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
-}
-
 std::uint64_t satellite_key(const SatelliteId& sat) {
   return (static_cast<std::uint64_t>(sat.system) << 8) | sat.number;
 }
@@ -374,7 +367,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     for (int iteration = 0; iteration < 4; ++iteration) {
       step_s = guess_s - flight_time_s;
       const Eigen::Vector3d r = r0 + v0 * step_s + 0.5 * a0 * step_s * step_s;
-      sat_position_m = rotate_earth(r, kEarthRotation_radps * flight_time_s);
+      sat_position_m = rotate_earth_frame(r, kEarthRotation_radps * flight_time_s);
       range_m = (sat_position_m - rx_m).norm();
       flight_time_s = range_m / kC;
     }
@@ -384,7 +377,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     truth.state.relativistic_s += at_guess.relativistic_drift_s_per_s * step_s;
     truth.state.velocity_mps = v0 + a0 * step_s;
     const double rotation_rad = kEarthRotation_radps * flight_time_s;
-    sat_velocity_mps = rotate_earth(truth.state.velocity_mps, rotation_rad);
+    sat_velocity_mps = rotate_earth_frame(truth.state.velocity_mps, rotation_rad);
     const Eigen::Vector3d line_of_sight = (sat_position_m - rx_m) / range_m;
     // d(range)/dt with the flight time changing too: the satellite term is scaled by (1 - d tau/dt)
     // and the Sagnac rotation angle grows with d tau/dt (d R(theta) r / d theta = (y, -x, 0)).

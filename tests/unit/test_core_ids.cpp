@@ -87,6 +87,29 @@ TEST(Frames, GeodeticRoundTripAndKnownPoint) {
 namespace skytrace {
 namespace {
 
+// The small-angle series against libm's sine and cosine, across the angles of flight times
+// (0 to 0.3 s of Earth rotation) and beyond, where the function falls back to libm.
+TEST(Frames, EarthRotationOverTheFlightTimeMatchesSineAndCosine) {
+  const Eigen::Vector3d satellite_m(-13.1e6, 19.7e6, 10.4e6);
+  for (const double flight_s : {0.0, 1e-9, 0.06, 0.0673, 0.0871, 0.14, 0.3, 13.7, 20.0, 3600.0}) {
+    for (const double sign : {1.0, -1.0}) {
+      const double angle_rad = sign * 7.2921151467e-5 * flight_s;
+      const Eigen::Vector3d expected(std::cos(angle_rad) * satellite_m.x() + std::sin(angle_rad) * satellite_m.y(),
+                                     -std::sin(angle_rad) * satellite_m.x() + std::cos(angle_rad) * satellite_m.y(),
+                                     satellite_m.z());
+      const Eigen::Vector3d rotated = rotate_earth_frame(satellite_m, angle_rad);
+      // 2.6e7 m at double precision: a few ulp are ~1e-8 m.
+      EXPECT_LT((rotated - expected).norm(), 2e-8) << "angle " << angle_rad << " rad";
+      EXPECT_NEAR(rotated.norm(), satellite_m.norm(), 2e-8);
+    }
+  }
+  // A quarter turn (no series): x goes to -y.
+  const Eigen::Vector3d turned = rotate_earth_frame(Eigen::Vector3d(1.0, 0.0, 0.5), M_PI / 2.0);
+  EXPECT_NEAR(turned.x(), 0.0, 1e-15);
+  EXPECT_NEAR(turned.y(), -1.0, 1e-15);
+  EXPECT_EQ(turned.z(), 0.5);
+}
+
 TEST(LocalFrame, HeadingTurnsTheXAxisCounterClockwiseFromEast) {
   const LocalFrame east_x{Geodetic{55.49357, 8.45683, 59.5}, 0.0};
   const LocalFrame north_x{Geodetic{55.49357, 8.45683, 59.5}, 90.0};
