@@ -480,7 +480,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
             (relative_mps - p.line_of_sight * p.line_of_sight.dot(relative_mps)) / range_m;
         received = receive_paths(obs, std::move(path_sets[pending_index].paths), settings_.profile.antenna,
                                  rx_to_enu * to_world.transpose(), to_world * rx_v_mps, to_world * direction_rate);
-        if (direct_blocked) obs.detail = "nlos, direct blocked by " + outcome.blocking_object;
+        if (direct_blocked) obs.detail = "nlos, direct blocked by " + std::string(outcome.blocking_object);
       }
     }
     std::vector<MultipathErrors> multipath_of;  // per candidate signal
@@ -671,7 +671,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     }
     if (obs.signals.empty() && direct_blocked) {
       obs.status = SatelliteStatus::kBlocked;  // its reflected and diffracted paths are too weak
-      obs.detail = outcomes[pending_index].blocking_object + " (indirect paths too weak)";
+      obs.detail = std::string(outcomes[pending_index].blocking_object) + " (indirect paths too weak)";
       obs.path_kind = PathKind::kNone;  // paths.csv still lists them
       arcs_lost(sat);
     } else if (obs.signals.empty()) {

@@ -254,7 +254,7 @@ Status check_outside_objects(const LoadedWorld& world, const Eigen::Vector3d& po
   // towards the origin, not the winding, so the test is: the zenith and nearly every other
   // direction end on the same object (a doorway or a slit may let one or two rays out).
   if (!outcomes.front().blocked) return Ok{};
-  const std::string& roof = outcomes.front().blocking_object;
+  const std::string roof(outcomes.front().blocking_object);
   const auto same = std::count_if(outcomes.begin(), outcomes.end(),
                                   [&](const RayOutcome& o) { return o.blocked && o.blocking_object == roof; });
   if (same >= 24) {

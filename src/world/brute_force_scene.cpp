@@ -74,7 +74,7 @@ bool normalise_ray(const Eigen::Vector3d& origin, const Eigen::Vector3d& directi
 RayOutcome invalid_ray_outcome() {
   RayOutcome outcome;
   outcome.blocked = true;
-  outcome.blocking_object = std::string(kInvalidRayObject);
+  outcome.blocking_object = kInvalidRayObject;
   return outcome;
 }
 

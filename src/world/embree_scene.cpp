@@ -308,6 +308,25 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) bo
   return true;
 }
 
+// Where a ray enters a box (negative from inside), infinity when it misses it.
+double box_entry_m(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) {
+  constexpr double kMiss = std::numeric_limits<double>::infinity();
+  double entry_m = -kMiss;
+  double exit_m = kMiss;
+  for (int k = 0; k < 3; ++k) {
+    if (direction[k] == 0.0) {
+      if (origin[k] < box.min()[k] || origin[k] > box.max()[k]) return kMiss;
+      continue;
+    }
+    double near_m = (box.min()[k] - origin[k]) / direction[k];
+    double far_m = (box.max()[k] - origin[k]) / direction[k];
+    if (near_m > far_m) std::swap(near_m, far_m);
+    entry_m = std::max(entry_m, near_m);
+    exit_m = std::min(exit_m, far_m);
+  }
+  return entry_m <= exit_m ? entry_m : kMiss;
+}
+
 // A convex vegetation volume: its outward face planes (normal . x <= offset_m inside) in double,
 // the same in float lanes relative to its centre, and its bounding box (frame of its geometry:
 // world for static objects, object for movable ones).
@@ -817,11 +836,16 @@ struct EmbreeScene::Impl {
   // The part of a ray inside a convex volume before stop_m (m).
   double convex_path_m(const SceneObject& object, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                        double stop_m) const {
+    const Eigen::Vector3d volume_origin = object.volume_from_world * origin;
+    const Eigen::Vector3d volume_direction = object.volume_from_world.linear() * direction;
+    // Closest-hit queries meet crowns beyond the opaque hit before they find it: a crown whose
+    // bounding box the ray enters only after the hit is skipped without its faces.
+    if (std::isfinite(stop_m) && box_entry_m(object.volume->bounds_m, volume_origin, volume_direction) >= stop_m) {
+      return 0.0;
+    }
     double entry_m = 0.0;
     double exit_m = 0.0;
-    const bool crosses = object.volume->chord(object.volume_from_world * origin,
-                                              object.volume_from_world.linear() * direction, entry_m, exit_m);
-    if (!crosses) return 0.0;
+    if (!object.volume->chord(volume_origin, volume_direction, entry_m, exit_m)) return 0.0;
     return std::max(0.0, std::min(exit_m, stop_m) - std::max(entry_m, 0.0));
   }
 
@@ -1026,7 +1050,7 @@ std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& o
     Eigen::Vector3d direction;
     if (!origin_finite || !unit_direction(directions[i], direction)) {
       outcomes[i].blocked = true;
-      outcomes[i].blocking_object = std::string(kInvalidRayObject);
+      outcomes[i].blocking_object = kInvalidRayObject;
       continue;
     }
     if (!answerable) continue;  // an empty world: free

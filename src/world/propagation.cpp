@@ -569,7 +569,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       objects.clear();
       auto add_object = [&](const RayOutcome& o) {
         if (!o.blocked || o.blocking_distance_m > settings.radius_m) return;
-        const auto it = object_index_.find(o.blocking_object);
+        const auto it = object_index_.find(std::string(o.blocking_object));
         if (it != object_index_.end() && std::find(objects.begin(), objects.end(), it->second) == objects.end()) {
           objects.push_back(it->second);
         }

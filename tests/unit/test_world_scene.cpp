@@ -330,7 +330,7 @@ TEST(WorldScene, EmbreeAgreesWithBruteForceOnRandomRays) {
       EXPECT_EQ(general[i].blocking_object, reference[i].blocking_object);
       if (line_of_sight[i].blocked) {
         // Any opaque object on the ray; no vegetation reported behind it.
-        const auto it = alone.find(line_of_sight[i].blocking_object);
+        const auto it = alone.find(std::string(line_of_sight[i].blocking_object));
         ASSERT_NE(it, alone.end()) << line_of_sight[i].blocking_object;
         EXPECT_TRUE(it->second.trace(origin, {directions[i]}).front().blocked) << line_of_sight[i].blocking_object;
         EXPECT_EQ(line_of_sight[i].vegetation_path_m, 0.0);

@@ -8,6 +8,7 @@
 #include <complex>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace skytrace {
@@ -29,7 +30,9 @@ struct RayOutcome {
   bool blocked = false;
   // When blocked: the first opaque hit.
   double blocking_distance_m = 0.0;
-  std::string blocking_object;  // world object name (model/link/collision, building id)
+  // World object name (model/link/collision, building id): a view of the name the answering scene
+  // holds, valid while that scene lives (copy it to keep it longer). No allocation per ray.
+  std::string_view blocking_object;
   MaterialClass blocking_material = MaterialClass::kUnknown;
   Eigen::Vector3d blocking_point_m = Eigen::Vector3d::Zero();  // world frame
   Eigen::Vector3d blocking_normal = Eigen::Vector3d::Zero();   // unit, world frame
