@@ -24,6 +24,8 @@ constexpr double kC = constants::kSpeedOfLight_mps;
 // Sagnac: the Earth turns during the signal's flight (WGS84 rate for every system: it is physics,
 // not a parameter of any one navigation message).
 constexpr double kEarthRotation_radps = constants::kEarthRotationRateGps_radps;
+// The loop that aids semi-codeless P(Y) tracking (ReceiverProfile::semicodeless_aiding_bandwidth_hz).
+const Signal kAidingSignal{GnssSystem::kGps, '1', 'C'};
 
 // The ephemeris record a receiver uses, and the satellite state it gives at some instant.
 struct RecordState {
@@ -250,6 +252,11 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
     data_modulated_[signal] = has_data_modulation(*info);
   }
   settings_.signals = std::move(trackable);
+  // Aided semi-codeless loops follow the satellite's L1 C/A loop: the C/A signal comes first.
+  if (settings_.profile.semicodeless_aiding_bandwidth_hz > 0.0) {
+    std::stable_partition(settings_.signals.begin(), settings_.signals.end(),
+                          [](const Signal& s) { return !is_semicodeless(s); });
+  }
   elevation_mask_deg_ = std::max(settings_.elevation_mask_deg, settings_.profile.elevation_mask_deg);
   for (const SatelliteId& sat : ephemerides_.satellites()) {
     const bool wanted = std::any_of(settings_.signals.begin(), settings_.signals.end(),
@@ -518,6 +525,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     records_used_.clear();
     std::string not_tracked_because;
     std::size_t candidate_index = 0;
+    // The phase error of the satellite's L1 C/A loop at this epoch, which aided loops follow.
+    std::optional<double> aiding_phase_noise_m;
     for (const auto& [signal_pointer, cn0_dbhz] : candidates_) {
       const MultipathErrors& multipath = multipath_of[candidate_index++];
       const Signal& signal = *signal_pointer;
@@ -591,6 +600,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       m.ionosphere_code_m = obs.ionosphere_l1_m * std::pow(kFrequencyL1_Hz / m.carrier_hz, 2);
       m.cn0_dbhz = quantize(cn0_dbhz, profile.cn0_resolution_dbhz);
 
+      const bool aided = profile.semicodeless_aiding_bandwidth_hz > 0.0 && aiding_phase_noise_m.has_value() &&
+                         is_semicodeless(signal);
       SignalStreams* streams = nullptr;
       if (settings_.noise) {
         auto it = streams_.find(key);
@@ -605,13 +616,14 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         }
         streams = &it->second;
         const TrackingNoise sigma = tracking_noise(profile, *info, m.carrier_hz, cn0_dbhz);
+        const double phase_bandwidth_hz = aided ? profile.semicodeless_aiding_bandwidth_hz : profile.pll_bandwidth_hz;
         // Loop outputs, correlated over each loop's time constant (profile.hpp); a new arc starts afresh.
         LoopNoiseState& loops = streams->loops;
         const double now_s = tag.gpst_seconds_approx();
         const double dt_s = loops.started && was_tracked ? now_s - loops.last_s : std::numeric_limits<double>::infinity();
         loops.code = gauss_markov_step(loops.code, dt_s, loop_time_constant_s(profile.dll_bandwidth_hz),
                                        streams->noise.gaussian());
-        loops.phase = gauss_markov_step(loops.phase, dt_s, loop_time_constant_s(profile.pll_bandwidth_hz),
+        loops.phase = gauss_markov_step(loops.phase, dt_s, loop_time_constant_s(phase_bandwidth_hz),
                                         streams->noise.gaussian());
         loops.doppler = gauss_markov_step(loops.doppler, dt_s, loop_time_constant_s(profile.fll_bandwidth_hz),
                                           streams->noise.gaussian());
@@ -619,6 +631,13 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         loops.last_s = now_s;
         m.code_noise_m = sigma.code_m * loops.code;
         m.phase_noise_m = sigma.phase_m * loops.phase;
+        if (aided) {
+          // The aided loop's phase is the C/A loop's (in metres) plus what its narrow loop adds.
+          const double residual_m = pll_jitter_rad(profile, cn0_dbhz, phase_bandwidth_hz) * wavelength_m /
+                                    (2.0 * std::numbers::pi);
+          m.phase_noise_m = *aiding_phase_noise_m + residual_m * loops.phase;
+        }
+        if (signal == kAidingSignal) aiding_phase_noise_m = m.phase_noise_m;
         m.doppler_noise_mps = sigma.doppler_mps * loops.doppler;
       }
 
@@ -635,7 +654,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
         arc.lock_start = tag;
         m.loss_of_lock = true;
       } else if (streams != nullptr && profile.pll_bandwidth_hz > 0.0) {
-        const double mean_s = mean_time_to_slip_s(pll_jitter_rad(profile, cn0_dbhz), profile.pll_bandwidth_hz, data);
+        const double loop_bandwidth_hz = aided ? profile.semicodeless_aiding_bandwidth_hz : profile.pll_bandwidth_hz;
+        const double mean_s =
+            mean_time_to_slip_s(pll_jitter_rad(profile, cn0_dbhz, loop_bandwidth_hz), loop_bandwidth_hz, data);
         const double probability = -std::expm1(-(tag - *last_tag_) / mean_s);
         if (streams->slips.uniform() < probability) {
           // The slip is a whole number of cycles (half cycles of a Costas loop resolve again).

@@ -131,7 +131,7 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   tracking.expect_keys({"dll_bandwidth_hz", "pll_bandwidth_hz", "fll_bandwidth_hz", "correlator_spacing_chips",
                         "integration_time_s", "acquisition_threshold_dbhz", "tracking_threshold_dbhz",
                         "acquisition_time_s", "half_cycle_resolution_s", "cn0_resolution_dbhz",
-                        "output_requires_ephemeris"});
+                        "output_requires_ephemeris", "semicodeless_aiding_bandwidth_hz"});
   p.dll_bandwidth_hz = tracking.required("dll_bandwidth_hz").as_double_in(0.0, 50.0);
   p.pll_bandwidth_hz = tracking.required("pll_bandwidth_hz").as_double_in(0.0, 100.0);
   p.fll_bandwidth_hz = tracking.required("fll_bandwidth_hz").as_double_in(0.0, 50.0);
@@ -148,6 +148,9 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   p.half_cycle_resolution_s = tracking.required("half_cycle_resolution_s").as_double_in(0.0, 600.0);
   p.cn0_resolution_dbhz = tracking.required("cn0_resolution_dbhz").as_double_in(0.0, 10.0);
   if (auto c = tracking.child("output_requires_ephemeris")) p.output_requires_ephemeris = c->as_bool();
+  if (auto c = tracking.child("semicodeless_aiding_bandwidth_hz")) {
+    p.semicodeless_aiding_bandwidth_hz = c->as_double_in(0.0, 100.0);
+  }
 
   p.oscillator = parse_oscillator(root.required("oscillator"));
   return p;
@@ -340,10 +343,13 @@ double gauss_markov_step(double previous, double dt_s, double tau_s, double whit
 }
 
 double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz) {
-  if (profile.pll_bandwidth_hz <= 0.0) return 0.0;
+  return pll_jitter_rad(profile, cn0_dbhz, profile.pll_bandwidth_hz);
+}
+
+double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz, double bandwidth_hz) {
+  if (bandwidth_hz <= 0.0) return 0.0;
   const double cn0_hz = std::pow(10.0, cn0_dbhz / 10.0);
-  const double var_rad2 =
-      profile.pll_bandwidth_hz / cn0_hz * (1.0 + 1.0 / (2.0 * profile.integration_time_s * cn0_hz));
+  const double var_rad2 = bandwidth_hz / cn0_hz * (1.0 + 1.0 / (2.0 * profile.integration_time_s * cn0_hz));
   return std::sqrt(var_rad2);
 }
 

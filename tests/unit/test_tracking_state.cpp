@@ -217,6 +217,69 @@ TEST(TrackingState, CycleSlipsAtLowCn0OnlyAndReproducible) {
   EXPECT_EQ(again, jumps);
 }
 
+// Semi-codeless L2W aided by the L1 C/A loop: the L2W phase error follows the C/A loop's (the
+// same metres), so the geometry-free combination keeps only the narrow aided loop's noise; the
+// C/A signal's own noise is unchanged, and the order the signals are listed in does not matter.
+TEST(TrackingState, AidedSemicodelessPhaseFollowsTheCaLoop) {
+  auto profile_yaml = [](double aiding_hz) {
+    std::string yaml = skytrace::test::test_profile_yaml(0);
+    yaml.replace(yaml.find("signals: [G1C, E1C]"), 19, "signals: [G1C, G2W, E1C]");
+    if (aiding_hz > 0.0) {
+      const std::string pll = "  pll_bandwidth_hz: 15\n";
+      yaml.insert(yaml.find(pll) + pll.size(), "  semicodeless_aiding_bandwidth_hz: " + std::to_string(aiding_hz) + "\n");
+    }
+    return parse_profile(yaml, "test.yaml").value();
+  };
+  struct Series {
+    std::vector<double> l1_m, l2_m;
+  };
+  auto run = [&](const ReceiverProfile& profile, std::vector<Signal> signals) {
+    auto generator = make_generator(profile, true, signals);
+    const std::string sat = highest_gps(generator.observe(kStart).value());
+    Series out;
+    for (int i = 1; i <= 600; ++i) {
+      const auto e = generator.observe(kStart + static_cast<double>(i)).value();
+      const SignalMeasurement* l1 = find(e, sat, "G1C");
+      const SignalMeasurement* l2 = find(e, sat, "G2W");
+      if (l1 == nullptr || l2 == nullptr) continue;
+      out.l1_m.push_back(l1->phase_noise_m);
+      out.l2_m.push_back(l2->phase_noise_m);
+    }
+    return out;
+  };
+  auto rms = [](const std::vector<double>& a, const std::vector<double>& b, double b_sign) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) sum += std::pow(a[i] + b_sign * b[i], 2);
+    return std::sqrt(sum / static_cast<double>(a.size()));
+  };
+  const std::vector<Signal> ca_first{Signal::parse("G1C").value(), Signal::parse("G2W").value()};
+  const std::vector<Signal> w_first{Signal::parse("G2W").value(), Signal::parse("G1C").value()};
+  const Series unaided = run(profile_yaml(0.0), ca_first);
+  const Series aided = run(profile_yaml(1.0), ca_first);
+  ASSERT_GT(unaided.l1_m.size(), 500u);
+  ASSERT_EQ(aided.l1_m.size(), unaided.l1_m.size());
+  EXPECT_EQ(aided.l1_m, unaided.l1_m);  // the C/A loop is not touched
+  const std::vector<double> zero(aided.l1_m.size(), 0.0);
+  const double gf_unaided_m = rms(unaided.l1_m, unaided.l2_m, -1.0);
+  const double gf_aided_m = rms(aided.l1_m, aided.l2_m, -1.0);
+  // Aided, L2W - L1C is the narrow loop's error alone: the unaided L2W loop's at the same C/N0
+  // scaled by sqrt(1 Hz / 15 Hz) (at 1 s both loops' errors are white).
+  EXPECT_NEAR(gf_aided_m, rms(unaided.l2_m, zero, 1.0) * std::sqrt(1.0 / 15.0), 0.1 * gf_aided_m);
+  EXPECT_LT(gf_aided_m, 0.4 * gf_unaided_m) << gf_aided_m << " m against " << gf_unaided_m << " m";
+  // And the L2W error carries the C/A error: correlated when aided, not otherwise.
+  auto correlation = [&](const Series& x) {
+    double xy = 0.0;
+    for (std::size_t i = 0; i < x.l1_m.size(); ++i) xy += x.l1_m[i] * x.l2_m[i];
+    return xy / static_cast<double>(x.l1_m.size()) / (rms(x.l1_m, zero, 1.0) * rms(x.l2_m, zero, 1.0));
+  };
+  EXPECT_GT(correlation(aided), 0.4);
+  EXPECT_LT(std::abs(correlation(unaided)), 0.15);
+  // Listed W first, the C/A loop still aids it: the same measurements.
+  const Series reordered = run(profile_yaml(1.0), w_first);
+  EXPECT_EQ(reordered.l1_m, aided.l1_m);
+  EXPECT_EQ(reordered.l2_m, aided.l2_m);
+}
+
 TEST(TrackingState, SignalsTheProfileCannotTrackAreLeftOut) {
   auto generator = make_generator(profile_with_channels(0), false,
                                   {Signal::parse("G1C").value(), Signal::parse("G2W").value(), Signal::parse("E1C").value()});

@@ -66,6 +66,11 @@ struct ReceiverProfile {
   double dll_bandwidth_hz = 0.0;  // 0 = no code noise
   double pll_bandwidth_hz = 0.0;  // 0 = no phase noise and no cycle slips
   double fll_bandwidth_hz = 0.0;  // 0 = no Doppler noise
+  // Semi-codeless P(Y) carrier loops (GPS L1W/L2W) aided by the satellite's L1 C/A loop: the
+  // aided loop follows the C/A loop (the same phase error in metres) and tracks only the
+  // difference, the ionosphere's divergence, with this narrow bandwidth. 0 = unaided (a loop of
+  // pll_bandwidth_hz of its own). Applies while L1 C/A is simulated and tracked.
+  double semicodeless_aiding_bandwidth_hz = 0.0;
   double correlator_spacing_chips = 0.1;
   double integration_time_s = 0.02;
   // Tracking state: a signal is acquired after `acquisition_time_s` above the acquisition
@@ -133,6 +138,8 @@ struct LoopNoiseState {
 
 // PLL thermal phase jitter (rad, 1 sigma) of the profile at a C/N0.
 [[nodiscard]] double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz);
+// The same for a loop of another bandwidth (an aided loop's).
+[[nodiscard]] double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz, double bandwidth_hz);
 
 // Mean time to a cycle slip (s) of a first-order loop with thermal jitter `jitter_rad` and noise
 // bandwidth `bandwidth_hz` (Viterbi 1966: T = pi^2 rho I0(rho)^2 / (2 B_L), rho the loop SNR).
