@@ -159,9 +159,23 @@ double noise_density_dbw_per_hz(double system_noise_temperature_k) {
   return kBoltzmann_dbw_per_k_hz + 10.0 * std::log10(system_noise_temperature_k);
 }
 
+double block_power_offset_db(SatelliteBlock block, const Signal& signal) {
+  // GPS L2C (the CM/CL rows and their sum): the ICD's -158.5 dBW for GPS III against the row's
+  // -160.0, then what IIF and III deliver beyond the usual margin relative to IIR-M, fitted on
+  // ESBC 2020-177 (PolaRx5) and tested on NYA1 2024-124 (NetR9): docs/validation.md.
+  const bool l2c = signal.system == GnssSystem::kGps && signal.band == '2' &&
+                   std::string_view("SLX").find(signal.attribute) != std::string_view::npos;
+  if (!l2c) return 0.0;
+  switch (block) {
+    case SatelliteBlock::kGpsIIF: return 2.9;
+    case SatelliteBlock::kGpsIIIA: return 1.5 + 2.0;
+    default: return 0.0;
+  }
+}
+
 LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal, const Eigen::Vector3d& satellite_m,
                        const Eigen::Vector3d& receiver_m, double elevation_deg, double azimuth_deg,
-                       double attenuation_db) {
+                       double attenuation_db, double satellite_power_offset_db) {
   std::optional<SignalPowerSpec> spec = signal_power_spec(signal.signal);
   if (!spec) spec = signal_power_spec(Signal{signal.signal.system, '1', 'C'});
   if (!spec) spec = SignalPowerSpec{-158.5, 5.0, kUsualMargin_db, "GPS L1 C/A"};
@@ -171,7 +185,7 @@ LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& sign
   const double cos_angle = std::clamp(-satellite_m.dot(to_receiver) / (orbit_radius_m * range_m), -1.0, 1.0);
   LinkBudget b;
   b.received_power_dbw =
-      received_power_dbw(*spec, range_m, orbit_radius_m, std::acos(cos_angle) / kDeg);
+      received_power_dbw(*spec, range_m, orbit_radius_m, std::acos(cos_angle) / kDeg) + satellite_power_offset_db;
   b.antenna_gain_dbic = profile.antenna.rhcp_dbic(elevation_deg, azimuth_deg);
   b.implementation_loss_db = profile.implementation_loss_db + signal.extra_loss_db;
   b.noise_density_dbw_per_hz = noise_density_dbw_per_hz(profile.system_noise_temperature_k);

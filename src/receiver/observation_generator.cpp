@@ -283,6 +283,16 @@ bool ObservationGenerator::transmitted(const SatelliteId& sat, const Signal& sig
   return it->second.second;
 }
 
+double ObservationGenerator::satellite_power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
+  const auto day = static_cast<std::int64_t>(std::floor(t.gpst_seconds_approx() / 86400.0));
+  auto [it, inserted] = power_offset_cache_.try_emplace(std::make_pair(sat, signal), day, 0.0);
+  if (inserted || it->second.first != day) {
+    const auto info = satellite_info(sat, t);
+    it->second = {day, info ? block_power_offset_db(info->block_id, signal) : 0.0};
+  }
+  return it->second.second;
+}
+
 Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   if (last_tag_) {
     if (tag <= *last_tag_) {
@@ -510,7 +520,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       }
       multipath_of.push_back(multipath);
       const double cn0_dbhz = link_budget(profile, tracked_.at(signal), obs.satellite_position_m, rx_m,
-                                          obs.direction.elevation_deg, obs.direction.azimuth_deg, attenuation_db)
+                                          obs.direction.elevation_deg, obs.direction.azimuth_deg, attenuation_db,
+                                          satellite_power_offset_db(sat, signal, tag))
                                   .cn0_dbhz() +
                               multipath.power_db;
       candidates_.emplace_back(&signal, cn0_dbhz);

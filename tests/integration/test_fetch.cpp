@@ -137,50 +137,56 @@ int free_port() {
   return ntohs(address.sin_port);
 }
 
-bool port_answers(int port) {
+bool have_python3() { return std::system("python3 --version >/dev/null 2>&1") == 0; }
+
+// The body of an HTTP/1.0 GET of `path` on 127.0.0.1:port, or "" when nothing answers.
+std::string http_get(int port, const std::string& path) {
   const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   address.sin_port = htons(static_cast<std::uint16_t>(port));
-  const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0;
+  std::string response;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0) {
+    const std::string request = "GET " + path + " HTTP/1.0\r\n\r\n";
+    if (::send(fd, request.data(), request.size(), 0) == static_cast<ssize_t>(request.size())) {
+      char buffer[4096];
+      for (ssize_t n; (n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0;) response.append(buffer, static_cast<size_t>(n));
+    }
+  }
   ::close(fd);
-  return ok;
+  const auto body = response.find("\r\n\r\n");
+  return body == std::string::npos ? "" : response.substr(body + 4);
 }
 
-bool have_python3() { return std::system("python3 --version >/dev/null 2>&1") == 0; }
-
 // python3 -m http.server on 127.0.0.1, stopped (SIGTERM to its pid) by stop() or the destructor.
+// Tests run as parallel processes: a port found free may be taken before the server binds it, and
+// another test's server may answer on it. The server is ready when it serves this instance's own
+// token file; a server that could not bind is started again on another port.
 class LocalHttpServer {
  public:
-  explicit LocalHttpServer(const fs::path& root) : port_(free_port()) {
-    const std::string port_text = std::to_string(port_);
-    const std::string root_text = root.string();
-    std::vector<std::string> args{"python3", "-m", "http.server", "--bind", "127.0.0.1", port_text,
-                                  "--directory", root_text};
-    std::vector<char*> argv;
-    for (auto& arg : args) argv.push_back(arg.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    // The server logs every request on stderr; keep the test output readable.
-    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-    if (posix_spawnp(&pid_, "python3", &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
+  explicit LocalHttpServer(const fs::path& root) : root_(root) {
+    token_ = std::to_string(::getpid()) + "-" + std::to_string(reinterpret_cast<std::uintptr_t>(this)) + "-" +
+             std::to_string(std::chrono::steady_clock::now().time_since_epoch().count());
+    std::ofstream(root_ / kTokenFile) << token_;
+    start();
   }
   ~LocalHttpServer() { stop(); }
   LocalHttpServer(const LocalHttpServer&) = delete;
   LocalHttpServer& operator=(const LocalHttpServer&) = delete;
 
-  // Waits until the server accepts connections (at most 20 s).
-  [[nodiscard]] bool wait_ready() const {
-    if (pid_ <= 0) return false;
-    for (int i = 0; i < 200; ++i) {
-      if (port_answers(port_)) return true;
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) return false;  // exited early
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  // Waits until the server serves this instance's files (at most 20 s per attempt, 5 attempts).
+  [[nodiscard]] bool wait_ready() {
+    for (int attempt = 0; attempt < 5; ++attempt) {
+      if (pid_ <= 0) return false;
+      for (int i = 0; i < 200; ++i) {
+        if (http_get(port_, std::string("/") + kTokenFile) == token_) return true;
+        int status = 0;
+        if (::waitpid(pid_, &status, WNOHANG) == pid_) break;  // exited: the port was taken
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+      stop();
+      start();
     }
     return false;
   }
@@ -196,6 +202,28 @@ class LocalHttpServer {
   [[nodiscard]] std::string base_url() const { return "http://127.0.0.1:" + std::to_string(port_) + "/"; }
 
  private:
+  static constexpr const char* kTokenFile = ".local-http-server-token";
+
+  void start() {
+    port_ = free_port();
+    const std::string port_text = std::to_string(port_);
+    const std::string root_text = root_.string();
+    std::vector<std::string> args{"python3", "-m", "http.server", "--bind", "127.0.0.1", port_text,
+                                  "--directory", root_text};
+    std::vector<char*> argv;
+    for (auto& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    // The server logs every request on stderr; keep the test output readable.
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    if (posix_spawnp(&pid_, "python3", &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+
+  fs::path root_;
+  std::string token_;
   int port_ = 0;
   pid_t pid_ = -1;
 };

@@ -160,10 +160,11 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   // The contract's realistic ESBC scenario (precise truth, noise, steered clock, seed 7) for its GPS
   // signals. The file's GPS records are all LNAV, whose record is every GPS signal's reference, so
   // one-clock-per-satellite changed nothing: obs.rnx is the file skytrace wrote before that change
-  // (commit 1d3c1d5), byte for byte, except L2W's phase, which L1 C/A aiding of semi-codeless loops
-  // changed deliberately (session 4: only that column differs from 1d3c1d5's file, and the profile
-  // without the aiding key reproduces its hash 0x11e6ee0c3fde63f7). Update the value only with a
-  // deliberate change of the GPS model.
+  // (commit 1d3c1d5), byte for byte, except for two deliberate changes of session 4, each checked
+  // column by column: L2W's phase (L1 C/A aiding of semi-codeless loops; the profile without the
+  // aiding key reproduces 1d3c1d5's hash 0x11e6ee0c3fde63f7), then the four L2C columns (L2C power
+  // per GPS block, and the refitted G2L loss; 0x06976b7b5220e15c before it). Update the value only
+  // with a deliberate change of the GPS model.
   const auto scenario = test::shared_data_dir().parent_path() / "contract" / "esbc-realistic.yaml";
   if (!std::filesystem::exists(scenario)) GTEST_SKIP() << "contract scenario absent";
   const auto out = dir_ / "gps";
@@ -171,7 +172,7 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string bytes = read_bytes(out / "obs.rnx");
   EXPECT_EQ(bytes.size(), 264615u);
-  EXPECT_EQ(fnv1a64(bytes), 0x06976b7b5220e15cULL);
+  EXPECT_EQ(fnv1a64(bytes), 0x56b465d10e205e1fULL);
 }
 
 }  // namespace

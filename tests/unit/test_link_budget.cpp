@@ -92,5 +92,30 @@ TEST(LinkBudget, Cn0OfAProfile) {
   EXPECT_DOUBLE_EQ(link_budget(profile, g1c, satellite, receiver, 45.0, 0.0, 0.0).antenna_gain_dbic, 0.5);
 }
 
+// GPS L2C per block: the ICD's +1.5 dB of GPS III and the measured surplus of IIF and III over
+// IIR-M; nothing for other signals or blocks. The offset adds to the received power one for one.
+TEST(LinkBudget, GpsL2cPowerPerBlock) {
+  const Signal l2l = Signal::parse("G2L").value();
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIRM, l2l), 0.0);
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIF, l2l), 2.9);
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, l2l), 3.5);
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, Signal::parse("G2S").value()), 3.5);
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, Signal::parse("G2X").value()), 3.5);
+  for (const char* other : {"G1C", "G2W", "G5Q", "J2L", "E5Q"}) {
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIF, Signal::parse(other).value()), 0.0) << other;
+  }
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kUnknown, l2l), 0.0);
+
+  ReceiverProfile profile;
+  profile.antenna.elevation_deg = {0.0, 90.0};
+  profile.antenna.rhcp_gain_dbic = {{0.0, 0.0}};
+  profile.antenna.lhcp_gain_dbic = {{-20.0, -20.0}};
+  const TrackedSignal tracked{l2l, 0.0};
+  const Eigen::Vector3d receiver(kEarthRadiusMean_m, 0.0, 0.0);
+  const Eigen::Vector3d satellite(kGpsOrbit_m, 0.0, 0.0);
+  const double base = link_budget(profile, tracked, satellite, receiver, 90.0, 0.0, 0.0).cn0_dbhz();
+  EXPECT_NEAR(link_budget(profile, tracked, satellite, receiver, 90.0, 0.0, 0.0, 2.9).cn0_dbhz(), base + 2.9, 1e-12);
+}
+
 }  // namespace
 }  // namespace skytrace::receiver

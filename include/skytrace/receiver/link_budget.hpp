@@ -9,6 +9,7 @@
 #include <optional>
 #include <string_view>
 
+#include "skytrace/core/satellite_catalog.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/receiver/profile.hpp"
 
@@ -76,11 +77,19 @@ struct LinkBudget {
   }
 };
 
+// The power a satellite generation delivers relative to its signal's row of the ICD table (dB,
+// added to the received power). GPS L2C: the ICD minimum of GPS III (IS-GPS-200 Table 3-Vb,
+// -158.5 dBW against -160.0 for IIR-M/IIF) and the measured surplus of IIF and III over IIR-M
+// (docs/validation.md, "GPS L2C power per block"). 0 elsewhere.
+[[nodiscard]] double block_power_offset_db(SatelliteBlock block, const Signal& signal);
+
 // The budget of a signal from a satellite at `satellite_m` (ECEF) to a receiver at `receiver_m`
-// seen at (elevation, azimuth), through `attenuation_db` of obstacles. A signal without a power
-// specification is treated like its system's L1 civil signal.
+// seen at (elevation, azimuth), through `attenuation_db` of obstacles, from a satellite delivering
+// `satellite_power_offset_db` more than its signal's row (block_power_offset_db). A signal
+// without a power specification is treated like its system's L1 civil signal.
 [[nodiscard]] LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal,
                                      const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m,
-                                     double elevation_deg, double azimuth_deg, double attenuation_db);
+                                     double elevation_deg, double azimuth_deg, double attenuation_db,
+                                     double satellite_power_offset_db = 0.0);
 
 }  // namespace skytrace::receiver

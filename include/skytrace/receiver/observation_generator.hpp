@@ -209,6 +209,8 @@ class ObservationGenerator {
   void arcs_lost(const SatelliteId& sat);
   // Whether the satellite transmits the signal, cached per GPST day.
   bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
+  // What the satellite's block delivers beyond the signal's ICD row (link_budget.hpp), cached per day.
+  double satellite_power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
 
   GeneratorSettings settings_;
   std::map<Signal, const SignalInfo*> signal_info_;
@@ -228,6 +230,8 @@ class ObservationGenerator {
     }
   };
   std::unordered_map<SignalKey, std::pair<std::int64_t, bool>, SignalKeyHash> transmits_cache_;
+  // block_power_offset_db of (satellite, signal) for a GPST day, like transmits_cache_.
+  std::unordered_map<SignalKey, std::pair<std::int64_t, double>, SignalKeyHash> power_offset_cache_;
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
