@@ -327,7 +327,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       group_delay_s = orbits::group_delay_s(*records->clock_kepler, chosen->signal);
       c.accuracy_m = records->orbit_kepler->accuracy_m;
     } else if (records->glonass != nullptr) {
-      orbit = clock = orbits::evaluate_glonass(*records->glonass, t0);
+      orbit = clock = glonass_orbits_.evaluate(*records->glonass, t0);
       group_delay_s = orbits::group_delay_s(*records->glonass, chosen->signal);
     } else {
       orbit = clock = orbits::evaluate_sbas(*records->sbas, t0);
@@ -547,9 +547,13 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     covariance = (h.transpose() * w.asDiagonal() * h).inverse();
     fix.chi_square = v.dot(w.asDiagonal() * v);
     fix.degrees_of_freedom = used - unknowns;
-    fix.chi_square_threshold = fix.degrees_of_freedom > 0
-                                   ? chi_square_quantile(1.0 - settings_.outlier_probability, fix.degrees_of_freedom)
-                                   : 0.0;
+    if (fix.degrees_of_freedom > 0) {
+      auto [it, inserted] = chi_square_thresholds_.try_emplace(fix.degrees_of_freedom, 0.0);
+      if (inserted) it->second = chi_square_quantile(1.0 - settings_.outlier_probability, fix.degrees_of_freedom);
+      fix.chi_square_threshold = it->second;
+    } else {
+      fix.chi_square_threshold = 0.0;
+    }
     const bool test_failed = fix.degrees_of_freedom > 0 && fix.chi_square > fix.chi_square_threshold;
     if (!settings_.reject_outliers || !test_failed) break;
     // Exclude the satellite with the largest standardised residual v_i / sigma(v_i), where the

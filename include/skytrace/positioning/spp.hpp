@@ -133,6 +133,11 @@ class SinglePointSolver {
   std::optional<orbits::KlobucharCoefficients> klobuchar_;
   std::optional<Eigen::Vector3d> last_position_ecef_m_;
   std::array<std::vector<Signal>, kAllSystems.size()> priority_;  // per system, from the settings
+  // GLONASS orbits integrated from kept 60 s nodes (bit-identical to evaluate_glonass, faster).
+  orbits::GlonassOrbitCache glonass_orbits_;
+  // chi_square_quantile(1 - outlier_probability, dof) per degrees of freedom: the bisection is
+  // costly and the settings do not change.
+  std::map<int, double> chi_square_thresholds_;
 };
 
 }  // namespace skytrace::positioning
