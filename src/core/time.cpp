@@ -140,6 +140,21 @@ UtcView to_scale_count(const GnssTime& t, TimeScale scale) {
   return view;
 }
 
+// A scale's whole-second count split into calendar fields; second 60 inside a leap second.
+struct CalendarFields {
+  CivilDate date;
+  int hour = 0;
+  int minute = 0;
+  int second = 0;
+};
+
+CalendarFields calendar_fields(const UtcView& view) {
+  const std::int64_t days = floor_div(view.count_s, kSecondsPerDay);
+  const std::int64_t sod = view.count_s - days * kSecondsPerDay;
+  return {civil_from_days(days + kGpsEpochDaysSinceUnix), static_cast<int>(sod / 3600),
+          static_cast<int>((sod % 3600) / 60), static_cast<int>(sod % 60) + (view.in_leap_second ? 1 : 0)};
+}
+
 }  // namespace
 
 std::string_view to_string(TimeScale scale) {
@@ -195,11 +210,8 @@ GnssTime GnssTime::from_week_tow(TimeScale scale, int week, double tow_s) {
   const double fraction = tow_s - static_cast<double>(whole_tow);
   if (!has_leap_seconds(scale)) return from_gpst_seconds(scale_count - fixed_offset_s(scale), fraction);
   // Weeks counted on a UTC-like calendar: go through the calendar conversion.
-  const auto days = floor_div(scale_count, kSecondsPerDay);
-  const auto date = civil_from_days(days + kGpsEpochDaysSinceUnix);
-  const std::int64_t sod = scale_count - days * kSecondsPerDay;
-  CalendarTime cal{date.year, date.month, date.day, static_cast<int>(sod / 3600),
-                   static_cast<int>((sod % 3600) / 60), static_cast<double>(sod % 60) + fraction};
+  const CalendarFields f = calendar_fields(UtcView{scale_count, false});
+  CalendarTime cal{f.date.year, f.date.month, f.date.day, f.hour, f.minute, static_cast<double>(f.second) + fraction};
   return from_calendar(cal, scale);
 }
 
@@ -269,17 +281,14 @@ WeekTow GnssTime::to_week_tow(TimeScale scale) const {
 }
 
 CalendarTime GnssTime::to_calendar(TimeScale scale) const {
-  const UtcView view = to_scale_count(*this, scale);
-  const std::int64_t days = floor_div(view.count_s, kSecondsPerDay);
-  const std::int64_t sod = view.count_s - days * kSecondsPerDay;
-  const CivilDate date = civil_from_days(days + kGpsEpochDaysSinceUnix);
+  const CalendarFields f = calendar_fields(to_scale_count(*this, scale));
   CalendarTime c;
-  c.year = date.year;
-  c.month = date.month;
-  c.day = date.day;
-  c.hour = static_cast<int>(sod / 3600);
-  c.minute = static_cast<int>((sod % 3600) / 60);
-  c.second = static_cast<double>(sod % 60 + (view.in_leap_second ? 1 : 0)) + fraction_s_;
+  c.year = f.date.year;
+  c.month = f.date.month;
+  c.day = f.date.day;
+  c.hour = f.hour;
+  c.minute = f.minute;
+  c.second = static_cast<double>(f.second) + fraction_s_;
   return c;
 }
 
@@ -339,17 +348,14 @@ RoundedCalendarTime GnssTime::to_rounded_calendar(TimeScale scale, int decimals)
   // leap second of UTC / GLONASST is a whole GPST second of its own: an instant that rounds into
   // it shows second 60 (a real 23:59:60), one that rounds past it shows 00:00:00 of the next day.
   const RoundedSeconds r = round_seconds(whole_s_, fraction_s_, decimals);
-  const UtcView view = to_scale_count(from_gpst_seconds(r.whole_s), scale);
-  const std::int64_t days = floor_div(view.count_s, kSecondsPerDay);
-  const std::int64_t sod = view.count_s - days * kSecondsPerDay;
-  const CivilDate date = civil_from_days(days + kGpsEpochDaysSinceUnix);
+  const CalendarFields f = calendar_fields(to_scale_count(from_gpst_seconds(r.whole_s), scale));
   RoundedCalendarTime c;
-  c.year = date.year;
-  c.month = date.month;
-  c.day = date.day;
-  c.hour = static_cast<int>(sod / 3600);
-  c.minute = static_cast<int>((sod % 3600) / 60);
-  c.second = static_cast<int>(sod % 60) + (view.in_leap_second ? 1 : 0);
+  c.year = f.date.year;
+  c.month = f.date.month;
+  c.day = f.date.day;
+  c.hour = f.hour;
+  c.minute = f.minute;
+  c.second = f.second;
   c.fraction = r.units;
   c.decimals = decimals;
   return c;
