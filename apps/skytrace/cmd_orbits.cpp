@@ -2,12 +2,14 @@
 // constellation) on a time grid, as CSV. Used to check the orbit layer against precise products.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "skytrace/core/input_limits.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/nominal.hpp"
@@ -44,7 +46,7 @@ int run_orbits(const OrbitsArgs& args) {
   if (!scale) return report_error(scale.error().with_context("--scale"));
   auto start = GnssTime::parse_iso8601(args.start, *scale);
   if (!start) return report_error(start.error().with_context("--start"));
-  if (args.interval_s <= 0.0 || args.duration_s < 0.0) {
+  if (!(args.interval_s > 0.0) || !(args.duration_s >= 0.0) || !std::isfinite(args.duration_s)) {
     return report_error(make_error(ErrorCode::kInvalidArgument,
                                    "--interval-s must be positive and --duration-s not negative"));
   }
@@ -61,6 +63,15 @@ int run_orbits(const OrbitsArgs& args) {
     return report_error(make_error(ErrorCode::kNotFound, "the navigation data holds no ephemeris"));
   }
 
+  // The table is built in memory: bound it before the first row.
+  const double table_rows = (std::floor(args.duration_s / args.interval_s + 1e-9) + 1.0) * static_cast<double>(satellites.size());
+  if (!(table_rows <= static_cast<double>(input_limits().max_table_rows))) {
+    return report_error(make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("--duration-s {} and --interval-s {} give {:.3g} rows for {} satellites, more than a table may have {}",
+                    args.duration_s, args.interval_s, table_rows, satellites.size(),
+                    limit_hint(input_limits().max_table_rows, "SKYTRACE_MAX_TABLE_ROWS"))));
+  }
   std::string csv = "time_gpst,sat,x_m,y_m,z_m,clock_s\n";
   size_t rows = 0;
   size_t missing = 0;
@@ -71,6 +82,10 @@ int run_orbits(const OrbitsArgs& args) {
     const std::string time_text = t.to_iso8601(TimeScale::kGpst, 3);
     for (const auto& sat : satellites) {
       auto state = ephemerides.state(sat, t);
+      if (state && !(state->position_m.allFinite() && std::isfinite(state->clock_bias_s))) {
+        state = make_error(ErrorCode::kParse, sat.to_string() + ": its ephemeris gives no finite position at " +
+                                                  time_text + " (a malformed record)");
+      }
       if (!state) {
         if (missing++ == 0) first_missing = state.error().message;
         continue;

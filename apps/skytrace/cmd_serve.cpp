@@ -12,7 +12,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -59,6 +61,12 @@ Result<int> bind_socket(const std::string& endpoint, int type, const char* optio
   std::string host = endpoint.substr(0, colon);
   if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
   const std::string port = endpoint.substr(colon + 1);
+  // getaddrinfo wraps numbers above 65535 into some other port: check the number ourselves.
+  const bool digits = port.size() <= 5 && std::all_of(port.begin(), port.end(), [](unsigned char c) { return std::isdigit(c); });
+  if (!digits || std::stoi(port) > 65535) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{} '{}': port must be a number from 0 to 65535 (0: any free port)", option, endpoint));
+  }
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = type;

@@ -1,9 +1,11 @@
 // skytrace: GNSS receiver simulator for robotics.
 #include <spdlog/spdlog.h>
 
+#include <csignal>
 #include <iostream>
 
 #include "commands.hpp"
+#include "skytrace/core/cancellation.hpp"
 
 namespace skytrace::cli {
 
@@ -17,6 +19,8 @@ int report_error(const Error& error) {
     case ErrorCode::kUnsupported: return kExitInput;
     case ErrorCode::kOutOfRange: return kExitCoverage;
     case ErrorCode::kNetwork: return kExitNetwork;
+    case ErrorCode::kOutput: return kExitOutput;
+    case ErrorCode::kCancelled: return 128 + cancellation_signal().value_or(SIGINT);  // as the shell reports a signal
   }
   return kExitRuntime;
 }
@@ -29,6 +33,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "skytrace 0.1.0");
   int exit_code = kExitOk;
+  skytrace::install_cancellation_handlers();  // serve and gz install their own stop handlers over these
   register_run_command(app, exit_code);
   register_orbits_command(app, exit_code);
   register_fetch_command(app, exit_code);
@@ -43,6 +48,9 @@ int main(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   } catch (const skytrace::ErrorException& e) {
     return report_error(e.error());
+  } catch (const std::bad_alloc&) {
+    std::cerr << "skytrace: error: out of memory (an input asks for more than this machine has; see docs/reliability.md)\n";
+    return kExitRuntime;
   } catch (const std::exception& e) {
     std::cerr << "skytrace: internal error: " << e.what() << "\n";
     return kExitRuntime;

@@ -1,5 +1,7 @@
 #include "skytrace/atmosphere/ionex.hpp"
 
+#include "skytrace/core/input_limits.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -172,6 +174,17 @@ class Parser {
                        static_cast<double>(numbers[4]) * 60.0 + *second);
   }
 
+  // EXPONENT: TEC values are stored as integers times 10^exponent (IONEX 1.0: -1 in practice).
+  Result<int> exponent_at(size_t index) const {
+    constexpr long kMaxExponent = 9;
+    auto v = integer_token(index, "EXPONENT");
+    if (!v.ok()) return v.error();
+    if (*v < -kMaxExponent || *v > kMaxExponent) {
+      return error_at(index, cat("field EXPONENT: expected an integer from -9 to 9, found ", *v));
+    }
+    return static_cast<int>(*v);
+  }
+
   Result<IonexAxis> axis(size_t index, std::string_view what, bool latitude) const {
     auto v = fixed_reals(index, 3, what);
     if (!v.ok()) return v.error();
@@ -183,6 +196,10 @@ class Parser {
                                  " ", a.step_deg));
     }
     const double steps = (a.last_deg - a.first_deg) / a.step_deg;
+    constexpr double kMaxSteps = 1e7;  // keeps count() within range; the grid limit applies later
+    if (steps > kMaxSteps) {
+      return error_at(index, cat("field ", what, ": a step of ", a.step_deg, " degrees gives more than 10^7 points"));
+    }
     if (steps < 0.0 || std::abs(steps - std::round(steps)) > 1e-6) {
       return error_at(index, cat("field ", what, ": ", a.first_deg, " to ", a.last_deg,
                                  " is not a whole number of steps of ", a.step_deg));
@@ -300,9 +317,9 @@ class Parser {
         maps_.longitude = *a;
         seen_lon = true;
       } else if (label == "EXPONENT") {
-        auto v = integer_token(i_, label);
+        auto v = exponent_at(i_);
         if (!v.ok()) return v.error();
-        maps_.exponent = static_cast<int>(*v);
+        maps_.exponent = *v;
       } else if (label == "START OF AUX DATA") {
         // Differential code biases: not needed for the delay; skip the block.
         const size_t start = i_;
@@ -328,6 +345,12 @@ class Parser {
         return make_error(ErrorCode::kParse,
                           cat(lines_.name(), ": header record ", name, " missing"));
     }
+    const std::uint64_t points = static_cast<std::uint64_t>(maps_.latitude.count()) * maps_.longitude.count();
+    if (points > input_limits().max_grid_points) {
+      return make_error(ErrorCode::kParse,
+                        cat(lines_.name(), ": LAT1 / LAT2 / DLAT and LON1 / LON2 / DLON give ", points,
+                            " grid points per map ", limit_hint(input_limits().max_grid_points, "SKYTRACE_MAX_GRID_POINTS")));
+    }
     if (maps_.map_dimension != 2) {
       return make_error(ErrorCode::kUnsupported,
                         lines_.name() + ": 3-D maps (MAP DIMENSION 3) are not supported");
@@ -344,6 +367,13 @@ class Parser {
       const std::string_view label = label_of(lines_[i_]);
       if (label == "START OF TEC MAP" || label == "START OF RMS MAP") {
         const bool rms = label == "START OF RMS MAP";
+        const std::uint64_t per_map = static_cast<std::uint64_t>(maps_.latitude.count()) * maps_.longitude.count();
+        const std::uint64_t file_limit = 10 * input_limits().max_grid_points;
+        if ((maps_.tec_maps.size() + maps_.rms_maps.size() + 1) * per_map > file_limit) {
+          return error_at(i_, cat("the maps of this file hold more than ", file_limit, " grid points together ",
+                                  limit_hint(input_limits().max_grid_points, "SKYTRACE_MAX_GRID_POINTS"),
+                                  " (ten times the per-map limit)"));
+        }
         auto map = read_map(rms ? "RMS" : "TEC");
         if (!map.ok()) return map.error();
         (rms ? maps_.rms_maps : maps_.tec_maps).push_back(std::move(*map));
@@ -398,9 +428,9 @@ class Parser {
         map.epoch = *t;
         seen_epoch = true;
       } else if (label == "EXPONENT") {
-        auto v = integer_token(i_, label);
+        auto v = exponent_at(i_);
         if (!v.ok()) return v.error();
-        exponent = static_cast<int>(*v);
+        exponent = *v;
       } else if (label == "LAT/LON1/LON2/DLON/H") {
         if (!seen_epoch) return error_at(i_, "LAT/LON1/LON2/DLON/H before EPOCH OF CURRENT MAP");
         auto row = read_row(exponent, map.values_tecu, row_seen);

@@ -1,13 +1,15 @@
 #include "skytrace/core/text_file.hpp"
 
+#include "skytrace/core/input_limits.hpp"
+
 #include <zlib.h>
 
 #include <cerrno>
+#include <cmath>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <random>
 #include <system_error>
 
 namespace skytrace {
@@ -23,10 +25,18 @@ Result<std::string> read_text_file(const std::filesystem::path& path) {
     return make_error(ErrorCode::kIo, path.string() + ": cannot open (" + std::strerror(errno) + ")");
   }
   gzbuffer(file, 1 << 17);
+  const bool compressed = gzdirect(file) == 0;
+  const std::uint64_t limit = input_limits().max_decompressed_bytes;
   std::string content;
   char buffer[1 << 16];
   while (true) {
     const int n = gzread(file, buffer, sizeof buffer);
+    if (n > 0 && compressed && content.size() + static_cast<size_t>(n) > limit) {
+      gzclose(file);
+      return make_error(ErrorCode::kIo, path.string() + ": decompresses to more than " + std::to_string(limit >> 20) +
+                                            " MiB " + limit_hint(limit >> 20, "SKYTRACE_MAX_DECOMPRESSED_MB") +
+                                            "; a compression bomb or a file too large to read at once");
+    }
     if (n < 0) {
       int errnum = 0;
       const std::string message = gzerror(file, &errnum);
@@ -96,6 +106,8 @@ Result<double> parse_fortran_double(std::string_view text) {
   if (ec != std::errc() || ptr != buffer + n) {
     return make_error(ErrorCode::kParse, "not a number: '" + std::string(text) + "'");
   }
+  // from_chars takes "nan" and "inf"; no format read here has a use for them.
+  if (!std::isfinite(value)) return make_error(ErrorCode::kParse, "not a finite number: '" + std::string(text) + "'");
   return value;
 }
 
@@ -110,31 +122,6 @@ Result<long> parse_integer(std::string_view text) {
     return make_error(ErrorCode::kParse, "not an integer: '" + std::string(text) + "'");
   }
   return value;
-}
-
-Status write_file_atomically(const std::filesystem::path& path, std::string_view content) {
-  std::random_device rd;
-  const auto tmp = path.parent_path() /
-                   (path.filename().string() + ".tmp" + std::to_string(rd() % 1000000));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return make_error(ErrorCode::kIo, tmp.string() + ": cannot create file");
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.flush();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      return make_error(ErrorCode::kIo, tmp.string() + ": write failed (disk full?)");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    return make_error(ErrorCode::kIo, path.string() + ": cannot rename temporary file (" + ec.message() + ")");
-  }
-  return Ok{};
 }
 
 }  // namespace skytrace

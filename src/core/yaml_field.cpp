@@ -1,5 +1,7 @@
 #include "skytrace/core/yaml_field.hpp"
 
+#include <map>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -20,6 +22,40 @@ void YamlField::fail(const std::string& what) const {
   std::string where = *file_;
   if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
   throw YamlFieldError{where + ": " + (path_.empty() ? document_ : path_) + ": " + what};
+}
+
+namespace {
+
+std::optional<std::string> duplicate_in(const YAML::Node& node, const std::string& file, const std::string& path,
+                                        int depth) {
+  constexpr int kMaxDepth = 256;  // far deeper than any configuration; bounds the recursion
+  if (depth > kMaxDepth) return file + ":" + std::to_string(node.Mark().line + 1) + ": nesting deeper than 256 levels";
+  if (node.IsMap()) {
+    std::map<std::string, int> first_line;
+    for (const auto& item : node) {
+      if (!item.first.IsScalar()) continue;
+      const std::string key = item.first.Scalar();
+      const int line = item.first.Mark().line + 1;
+      const auto [it, inserted] = first_line.emplace(key, line);
+      const std::string key_path = path.empty() ? key : path + "." + key;
+      if (!inserted) {
+        return file + ":" + std::to_string(line) + ": " + key_path + ": duplicate key (first at line " +
+               std::to_string(it->second) + "; YAML allows a key once per mapping)";
+      }
+      if (auto found = duplicate_in(item.second, file, key_path, depth + 1)) return found;
+    }
+  } else if (node.IsSequence()) {
+    for (size_t i = 0; i < node.size(); ++i) {
+      if (auto found = duplicate_in(node[i], file, path + "[" + std::to_string(i) + "]", depth + 1)) return found;
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> find_duplicate_key(const YAML::Node& root, const std::string& file) {
+  return duplicate_in(root, file, "", 0);
 }
 
 void YamlField::expect_keys(std::initializer_list<const char*> allowed) const {

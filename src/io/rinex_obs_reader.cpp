@@ -555,6 +555,12 @@ class Parser {
           return error(index, sat.to_string() + " value " + std::to_string(type_index + 1) + ": not a number '" +
                                   std::string(trim(text)) + "'");
         }
+        // Exponent forms ("1e308") read, but the field is F14.3: anything it cannot hold is malformed.
+        constexpr double kF14_3Limit = 1e10;
+        if (!(std::fabs(*slow) < kF14_3Limit)) {
+          return error(index, sat.to_string() + " value " + std::to_string(type_index + 1) + ": '" +
+                                  std::string(trim(text)) + "' does not fit the F14.3 field");
+        }
         v = *slow;
       }
       out.value = v / divisor;

@@ -14,6 +14,8 @@
 
 #include "skytrace/io/rinex_obs.hpp"
 
+#include "skytrace/core/output_file.hpp"
+
 namespace skytrace::io {
 
 namespace detail {
@@ -344,20 +346,6 @@ std::string format_header(const ObservationHeader& h, const GnssTime& first, con
   return out;
 }
 
-std::filesystem::path temporary_sibling(const std::filesystem::path& target, std::string_view role) {
-  std::random_device rd;
-  char suffix[32];
-  std::snprintf(suffix, sizeof suffix, "%08x%08x", rd(), rd());
-  std::string name = ".";
-  name += target.filename().string();
-  name += '.';
-  name += role;
-  name += '-';
-  name += suffix;
-  name += ".tmp";
-  return target.parent_path() / name;
-}
-
 char* put_two_digits(char* p, int v) {
   p[0] = static_cast<char>('0' + (v / 10) % 10);
   p[1] = static_cast<char>('0' + v % 10);
@@ -401,7 +389,7 @@ struct RinexObsWriter::Impl {
   Status flush_buffer() {
     if (used == 0) return Ok{};
     if (std::fwrite(buffer.data(), 1, used, body) != used) {
-      return make_error(ErrorCode::kIo, body_path.string() + ": write failed (" + std::strerror(errno) + ")");
+      return make_error(ErrorCode::kOutput, body_path.string() + ": write failed (" + std::strerror(errno) + ")");
     }
     used = 0;
     return Ok{};
@@ -603,11 +591,11 @@ struct RinexObsWriter::Impl {
     };
     if (auto s = flush_buffer(); !s) return fail(s.error());
     if (std::fflush(body) != 0 || std::ferror(body)) {
-      return fail(make_error(ErrorCode::kIo, body_path.string() + ": write failed (disk full?)"));
+      return fail(make_error(ErrorCode::kOutput, body_path.string() + ": write failed (disk full?)"));
     }
     if (std::fclose(body) != 0) {
       body = nullptr;
-      return fail(make_error(ErrorCode::kIo, body_path.string() + ": close failed"));
+      return fail(make_error(ErrorCode::kOutput, body_path.string() + ": close failed"));
     }
     body = nullptr;
 
@@ -620,16 +608,16 @@ struct RinexObsWriter::Impl {
     const std::optional<double> interval = header.interval_s ? header.interval_s : min_interval_s;
     const std::string head = format_header(header, *first, last, interval);
 
-    const std::filesystem::path final_tmp = temporary_sibling(target, "part");
+    const std::filesystem::path final_tmp = temporary_sibling(body_path.parent_path() / target.filename(), "part");
     std::FILE* out = std::fopen(final_tmp.c_str(), "wb");
     if (out == nullptr) {
-      return fail(make_error(ErrorCode::kIo, final_tmp.string() + ": cannot create (" + std::strerror(errno) + ")"));
+      return fail(make_error(ErrorCode::kOutput, final_tmp.string() + ": cannot create (" + std::strerror(errno) + ")"));
     }
     const auto fail_final = [&](const std::string& why) -> Status {
       std::fclose(out);
       std::error_code ignored;
       std::filesystem::remove(final_tmp, ignored);
-      return fail(make_error(ErrorCode::kIo, final_tmp.string() + ": " + why));
+      return fail(make_error(ErrorCode::kOutput, final_tmp.string() + ": " + why));
     };
     if (std::fwrite(head.data(), 1, head.size(), out) != head.size()) return fail_final("write failed");
     std::FILE* in = std::fopen(body_path.c_str(), "rb");
@@ -650,15 +638,9 @@ struct RinexObsWriter::Impl {
     if (std::fclose(out) != 0) {
       std::error_code ignored;
       std::filesystem::remove(final_tmp, ignored);
-      return fail(make_error(ErrorCode::kIo, final_tmp.string() + ": close failed"));
+      return fail(make_error(ErrorCode::kOutput, final_tmp.string() + ": close failed"));
     }
-    std::error_code ec;
-    std::filesystem::rename(final_tmp, target, ec);
-    if (ec) {
-      std::error_code ignored;
-      std::filesystem::remove(final_tmp, ignored);
-      return fail(make_error(ErrorCode::kIo, target.string() + ": cannot rename the finished file (" + ec.message() + ")"));
-    }
+    if (auto installed = install_output_file(final_tmp, target); !installed) return fail(installed.error());
     discard();
     finished = true;
     return Ok{};
@@ -684,12 +666,19 @@ Status RinexObsWriter::open(const std::filesystem::path& path, ObservationHeader
   for (const auto& [system, types] : impl->header.observation_types) {
     impl->types_by_system[static_cast<size_t>(system)] = &types;
   }
-  impl->body_path = temporary_sibling(path, "body");
+  // Temporary files beside the file the path leads to (through links), or in the temporary folder
+  // when the target is a device or FIFO, which is written in place at the end.
+  auto resolved = resolve_output_target(path);
+  if (!resolved) return resolved.error();
+  const auto scratch_anchor = resolved->kind == OutputKind::kFile
+                                  ? resolved->path
+                                  : std::filesystem::temp_directory_path() / path.filename();
+  impl->body_path = temporary_sibling(scratch_anchor, "body");
   impl->body = std::fopen(impl->body_path.c_str(), "wb");
   if (impl->body == nullptr) {
     const std::string why = std::strerror(errno);
     impl->body_path.clear();
-    return make_error(ErrorCode::kIo, path.string() + ": cannot create a temporary file beside it (" + why + ")");
+    return make_error(ErrorCode::kOutput, path.string() + ": cannot create a temporary file beside it (" + why + ")");
   }
   impl_ = std::move(impl);
   return Ok{};

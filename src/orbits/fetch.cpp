@@ -359,7 +359,7 @@ Result<FetchedProduct> fetch_file(const FetchRequest& request, const std::filesy
     std::error_code ec;
     std::filesystem::create_directories(path.parent_path(), ec);
     if (ec) {
-      return make_error(ErrorCode::kIo, path.parent_path().string() + ": cannot create cache folder (" + ec.message() + ")");
+      return make_error(ErrorCode::kOutput, path.parent_path().string() + ": cannot create cache folder (" + ec.message() + ")");
     }
     if (auto written = write_file_atomically(path, *content); !written.ok()) return written.error();
     return FetchedProduct{file.kind, file.description, path, url, false, got.body.size()};

@@ -7,6 +7,7 @@
 // RTKLIB does it, so that both give the same state to far below a millimetre.
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/orbits/broadcast.hpp"
@@ -20,6 +21,9 @@ namespace k = skytrace::constants;
 using State = std::array<double, 6>;
 
 constexpr double kMaxStep_s = 60.0;
+// Beyond a day from t_b a broadcast GLONASS state means nothing (it is valid for +-15 min); the
+// bound also keeps a wild time (a pseudorange of 1e308 m) from integrating for ever.
+constexpr double kMaxPropagation_s = 86400.0;
 
 State derivative(const State& x, const Eigen::Vector3d& lunisolar_mps2) {
   constexpr double mu = k::kGmGlonass_m3ps2;
@@ -75,10 +79,22 @@ SatelliteState to_satellite_state(const GlonassEphemeris& eph, const State& x, d
   return state;
 }
 
+// NaN everywhere: callers test position_m.allFinite() (positioning drops the satellite).
+SatelliteState unusable_state() {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  SatelliteState state;
+  state.position_m = Eigen::Vector3d::Constant(nan);
+  state.velocity_mps = Eigen::Vector3d::Constant(nan);
+  state.clock_bias_s = nan;
+  state.clock_drift_s_per_s = nan;
+  return state;
+}
+
 }  // namespace
 
 SatelliteState evaluate_glonass(const GlonassEphemeris& eph, const GnssTime& t) {
   const double dt_s = t - eph.toe;
+  if (!(std::abs(dt_s) <= kMaxPropagation_s)) return unusable_state();
   State x = initial_state(eph);
   double remaining_s = dt_s;
   const double step_s = remaining_s < 0.0 ? -kMaxStep_s : kMaxStep_s;
@@ -93,6 +109,7 @@ SatelliteState evaluate_glonass(const GlonassEphemeris& eph, const GnssTime& t) 
 
 SatelliteState GlonassOrbitCache::evaluate(const GlonassEphemeris& eph, const GnssTime& t) {
   const double dt_s = t - eph.toe;
+  if (!(std::abs(dt_s) <= kMaxPropagation_s)) return unusable_state();
   const double step_s = dt_s < 0.0 ? -kMaxStep_s : kMaxStep_s;
   // The full steps evaluate_glonass takes, counted with the same subtractions.
   double remaining_s = dt_s;

@@ -101,6 +101,15 @@ class FieldReader {
     return read(row, slot, name, true).value_or(fallback);
   }
   std::optional<double> maybe(size_t row, int slot, std::string_view name) { return read(row, slot, name, true); }
+  // A required value that must lie in [low, high] to describe a real satellite.
+  double required_in(size_t row, int slot, std::string_view name, double low, double high, std::string_view what) {
+    const double value = required(row, slot, name);
+    if (!error_ && !(value >= low && value <= high)) {
+      fail(row, name, "value " + std::to_string(value) + " outside [" + std::to_string(low) + ", " +
+                          std::to_string(high) + "] (" + std::string(what) + ")");
+    }
+    return value;
+  }
 
   [[nodiscard]] const std::optional<Error>& error() const { return error_; }
 
@@ -763,9 +772,10 @@ class NavReader {
     e.delta_n_rad_per_s = f.required(1, 2, delta_n_name);
     e.m0_rad = f.required(1, 3, "M0");
     e.cuc_rad = f.required(2, 0, "Cuc");
-    e.eccentricity = f.required(2, 1, "e Eccentricity");
+    e.eccentricity = f.required_in(2, 1, "e Eccentricity", 0.0, 0.9, "an orbit around the Earth");
     e.cus_rad = f.required(2, 2, "Cus");
-    e.sqrt_a_sqrtm = f.required(2, 3, "sqrt(A)");
+    // 1000-10000 sqrt(m): semi-major axes from 1,000 to 100,000 km hold every navigation orbit.
+    e.sqrt_a_sqrtm = f.required_in(2, 3, "sqrt(A)", 1000.0, 10000.0, "a semi-major axis of 1,000 to 100,000 km");
     e.toe_sow = f.required(3, 0, "Toe");
     e.cic_rad = f.required(3, 1, "Cic");
     e.omega0_rad = f.required(3, 2, "OMEGA0");

@@ -318,6 +318,13 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     // Transmission time from the pseudorange, corrected by the satellite clock (evaluated at the
     // uncorrected time; the correction is below a millisecond and the orbit follows it to second
     // order, as the generator expands it).
+    // A range to a navigation satellite plus a receiver clock kept within a millisecond or so; a
+    // value far outside is no pseudorange (and would send the orbit to an absurd time).
+    constexpr double kMaxPseudorange_m = 1e8;
+    if (!(chosen->pseudorange_m > 0.0 && chosen->pseudorange_m < kMaxPseudorange_m)) {
+      skip("pseudorange " + std::to_string(chosen->pseudorange_m) + " m is not a range to a navigation satellite");
+      continue;
+    }
     const GnssTime t0 = tag - chosen->pseudorange_m / kC;
     orbits::SatelliteState orbit, clock;
     double group_delay_s = 0.0;
@@ -332,6 +339,10 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     } else {
       orbit = clock = orbits::evaluate_sbas(*records->sbas, t0);
       c.accuracy_m = records->sbas->accuracy_m;
+    }
+    if (!orbit.position_m.allFinite() || !orbit.velocity_mps.allFinite() || !std::isfinite(clock.clock_bias_s)) {
+      skip("no usable orbit at the transmission time");
+      continue;
     }
     const Eigen::Vector3d omega(0.0, 0.0, kEarthRotation_radps);
     const Eigen::Vector3d& r0 = orbit.position_m;

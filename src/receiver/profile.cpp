@@ -233,6 +233,7 @@ Result<ReceiverProfile> parse_profile(const std::string& yaml_text, const std::s
   try {
     const YAML::Node root = YAML::Load(yaml_text);
     if (!root || root.IsNull()) return make_error(ErrorCode::kParse, source + ": empty profile");
+    if (auto duplicate = find_duplicate_key(root, source)) return make_error(ErrorCode::kParse, *duplicate);
     return parse_root(Field(root, "", &source, "profile"), source);
   } catch (const YamlFieldError& e) {
     return make_error(ErrorCode::kParse, e.message);

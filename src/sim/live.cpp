@@ -27,6 +27,7 @@ class ExternalPose final : public receiver::KinematicsSource {
       // Velocity from successive poses, when they are close enough in time to mean it.
       const double dt_s = time - pose_->time;
       if (dt_s > 1e-3 && dt_s <= 2.0 * timeout_s_) velocity = (position_m - pose_->position_m) / dt_s;
+      if (velocity.norm() > 2e4) velocity = Eigen::Vector3d::Zero();  // a jump, not a motion
     }
     pose_ = Pose{time, position_m, velocity};
   }
@@ -141,6 +142,13 @@ Status LiveSession::set_antenna_pose_ecef(const GnssTime& time, const Eigen::Vec
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("antenna pose {:.1f} km from the Earth's centre ignored (not near the Earth)", radius_m / 1e3));
   }
+  // Faster than a low Earth orbit is no robot, vehicle or aircraft: a unit mistake or garbage (and
+  // extrapolated over a second it would put the antenna anywhere).
+  constexpr double kMaxSpeed_mps = 2e4;
+  if (velocity_ecef_mps && velocity_ecef_mps->norm() > kMaxSpeed_mps) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("antenna velocity {:.3g} m/s ignored (more than 20 km/s)", velocity_ecef_mps->norm()));
+  }
   impl_->pose->set(time, position_ecef_m, velocity_ecef_mps);
   return Ok{};
 }
@@ -161,6 +169,10 @@ Status LiveSession::set_object_pose(const std::string& name, const Eigen::Isomet
   }
   if (!pose_world.matrix().allFinite()) {
     return make_error(ErrorCode::kInvalidArgument, "pose of '" + name + "' with non-finite values ignored");
+  }
+  constexpr double kMaxWorldDistance_m = 1e6;  // a world's local frame holds to a few hundred km
+  if (pose_world.translation().norm() > kMaxWorldDistance_m) {
+    return make_error(ErrorCode::kInvalidArgument, "pose of '" + name + "' more than 1000 km from the world origin ignored");
   }
   return sim::set_object_pose(*impl_->resources.world, name, pose_world);
 }

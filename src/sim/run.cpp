@@ -3,7 +3,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <chrono>
+#include <cstring>
 #include <condition_variable>
 #include <deque>
 #include <mutex>
@@ -15,7 +20,9 @@
 #include <set>
 
 #include "skytrace/atmosphere/ionex.hpp"
+#include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/constants.hpp"
+#include "skytrace/core/output_file.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/io/report.hpp"
 #include "skytrace/io/rinex_obs.hpp"
@@ -35,21 +42,66 @@ namespace {
 
 constexpr const char* kVersion = "skytrace 0.1.0";
 
-// A folder inside out_dir that collects the outputs until the run has succeeded.
+constexpr std::string_view kStagingPrefix = ".skytrace-staging-";
+constexpr const char* kStagingLockName = ".lock";
+// A staging folder without a lock file is another run's only in the instant between its mkdir and
+// the lock; one older than this is left over from a version without locks.
+constexpr auto kUnlockedStagingAge = std::chrono::minutes(10);
+
+// Removes staging folders of runs that are no longer alive: their lock file can be locked (the
+// kernel drops a dead process's locks, also after SIGKILL or a crash).
+void remove_stale_staging(const std::filesystem::path& out_dir) {
+  std::error_code ec;
+  for (auto it = std::filesystem::directory_iterator(out_dir, ec); !ec && it != std::filesystem::directory_iterator();
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(kStagingPrefix, 0) != 0 || !it->is_directory(ec)) continue;
+    const auto lock_path = it->path() / kStagingLockName;
+    bool stale = false;
+    const int fd = ::open(lock_path.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd >= 0) {
+      stale = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+      ::close(fd);
+    } else {
+      const auto modified = std::filesystem::last_write_time(it->path(), ec);
+      stale = !ec && std::filesystem::file_time_type::clock::now() - modified > kUnlockedStagingAge;
+    }
+    if (stale) {
+      std::error_code ignored;
+      std::filesystem::remove_all(it->path(), ignored);
+    }
+  }
+}
+
+// A folder inside out_dir that collects the outputs until the run has succeeded. It holds a locked
+// file for as long as this process lives, so that a later run can tell it from a live run's.
 class StagingDir {
  public:
   static Result<StagingDir> create(const std::filesystem::path& out_dir) {
     std::error_code ec;
+    if (std::filesystem::exists(out_dir, ec) && !std::filesystem::is_directory(out_dir, ec)) {
+      return make_error(ErrorCode::kOutput, out_dir.string() + ": is not a folder (--out names the output folder)");
+    }
     std::filesystem::create_directories(out_dir, ec);
-    if (ec) return make_error(ErrorCode::kIo, out_dir.string() + ": cannot create output folder (" + ec.message() + ")");
+    if (ec) return make_error(ErrorCode::kOutput, out_dir.string() + ": cannot create output folder (" + ec.message() + ")");
+    remove_stale_staging(out_dir);
     std::random_device rd;
-    const auto path = out_dir / fmt::format(".skytrace-staging-{:08x}", rd());
-    std::filesystem::create_directories(path, ec);
-    if (ec) return make_error(ErrorCode::kIo, path.string() + ": cannot create (" + ec.message() + ")");
-    return StagingDir(out_dir, path);
+    const auto path = out_dir / fmt::format("{}{}-{:08x}", kStagingPrefix, ::getpid(), rd());
+    std::filesystem::create_directory(path, ec);
+    if (ec) return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + ec.message() + ")");
+    const int lock_fd = ::open((path / kStagingLockName).c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (lock_fd < 0 || ::flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+      const std::string why = std::strerror(errno);
+      if (lock_fd >= 0) ::close(lock_fd);
+      std::filesystem::remove_all(path, ec);
+      return make_error(ErrorCode::kOutput, path.string() + ": cannot lock the staging folder (" + why + ")");
+    }
+    return StagingDir(out_dir, path, lock_fd);
   }
-  StagingDir(StagingDir&& other) noexcept : out_dir_(std::move(other.out_dir_)), path_(std::move(other.path_)) {
+  StagingDir(StagingDir&& other) noexcept
+      : out_dir_(std::move(other.out_dir_)), path_(std::move(other.path_)), lock_fd_(other.lock_fd_) {
     other.path_.clear();
+    other.lock_fd_ = -1;
   }
   StagingDir(const StagingDir&) = delete;
   ~StagingDir() {
@@ -57,29 +109,34 @@ class StagingDir {
       std::error_code ignored;
       std::filesystem::remove_all(path_, ignored);
     }
+    if (lock_fd_ >= 0) ::close(lock_fd_);
   }
   [[nodiscard]] std::filesystem::path file(const std::string& name) const { return path_ / name; }
-  // Moves every staged file into the output folder.
+  // Moves every staged file into the output folder (through links, into devices: install_output_file).
   Result<std::vector<std::filesystem::path>> commit() {
-    std::vector<std::filesystem::path> moved;
+    std::vector<std::filesystem::path> staged;
     for (const auto& entry : std::filesystem::directory_iterator(path_)) {
-      const auto target = out_dir_ / entry.path().filename();
-      std::error_code ec;
-      std::filesystem::rename(entry.path(), target, ec);
-      if (ec) return make_error(ErrorCode::kIo, target.string() + ": cannot move into place (" + ec.message() + ")");
+      if (entry.path().filename() != kStagingLockName) staged.push_back(entry.path());
+    }
+    std::sort(staged.begin(), staged.end());
+    std::vector<std::filesystem::path> moved;
+    for (const auto& file : staged) {
+      const auto target = out_dir_ / file.filename();
+      if (auto st = install_output_file(file, target); !st) return st.error();
       moved.push_back(target);
     }
     std::error_code ignored;
     std::filesystem::remove_all(path_, ignored);
     path_.clear();
-    std::sort(moved.begin(), moved.end());
     return moved;
   }
 
  private:
-  StagingDir(std::filesystem::path out_dir, std::filesystem::path path) : out_dir_(std::move(out_dir)), path_(std::move(path)) {}
+  StagingDir(std::filesystem::path out_dir, std::filesystem::path path, int lock_fd)
+      : out_dir_(std::move(out_dir)), path_(std::move(path)), lock_fd_(lock_fd) {}
   std::filesystem::path out_dir_;
   std::filesystem::path path_;
+  int lock_fd_ = -1;
 };
 
 struct QueuedEpoch {
@@ -299,6 +356,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   const std::optional<LoadedWorld>& world = resources->world;
   const orbits::BroadcastEphemerides& ephemerides = *resources->ephemerides;
 
+  if (cancellation_requested()) return cancelled_error();
   auto staging = StagingDir::create(out_dir);
   if (!staging) return staging.error();
 
@@ -328,7 +386,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   std::string truth_buffer;
   if (options.write_truth) {
     truth.open(staging->file("truth.csv"), std::ios::binary);
-    if (!truth) return make_error(ErrorCode::kIo, staging->file("truth.csv").string() + ": cannot create");
+    if (!truth) return make_error(ErrorCode::kOutput, staging->file("truth.csv").string() + ": cannot create");
     truth_buffer = kTruthHeader;
   }
   std::ofstream paths_file;
@@ -336,7 +394,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   const bool write_paths = options.write_truth && s.models.multipath;
   if (write_paths) {
     paths_file.open(staging->file("paths.csv"), std::ios::binary);
-    if (!paths_file) return make_error(ErrorCode::kIo, staging->file("paths.csv").string() + ": cannot create");
+    if (!paths_file) return make_error(ErrorCode::kOutput, staging->file("paths.csv").string() + ": cannot create");
     paths_buffer = kPathsHeader;
   }
 
@@ -345,6 +403,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   io::ReportBuilder report;  // of the first receiver
   // Writes one computed epoch of one receiver: RINEX, counts, truth, report.
   auto write_epoch = [&](std::int64_t index, size_t receiver_index, const receiver::EpochObservations& epoch) -> Status {
+    if (cancellation_requested()) return cancelled_error();
     ReceiverRun& rx = receivers[receiver_index];
     const io::ObservationEpoch record = rx.records->record(epoch);
     if (auto st = rx.writer.write_epoch(record); !st) return st.error();
@@ -419,7 +478,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     std::optional<Error> producer_error;
     std::thread producer([&] {
       EpochBatch batch;
-      for (std::int64_t k = 0; k < epoch_count && !queue.cancelled(); ++k) {
+      for (std::int64_t k = 0; k < epoch_count && !queue.cancelled() && !cancellation_requested(); ++k) {
         if (auto st = move_models(k); !st) {
           producer_error = st.error();
           queue.close();
@@ -467,12 +526,12 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   if (options.write_truth) {
     truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
     truth.close();
-    if (!truth) return make_error(ErrorCode::kIo, staging->file("truth.csv").string() + ": write failed");
+    if (!truth) return make_error(ErrorCode::kOutput, staging->file("truth.csv").string() + ": write failed (disk full?)");
   }
   if (write_paths) {
     paths_file.write(paths_buffer.data(), static_cast<std::streamsize>(paths_buffer.size()));
     paths_file.close();
-    if (!paths_file) return make_error(ErrorCode::kIo, staging->file("paths.csv").string() + ": write failed");
+    if (!paths_file) return make_error(ErrorCode::kOutput, staging->file("paths.csv").string() + ": write failed (disk full?)");
   }
   const orbits::NavigationData used = used_navigation(ephemerides.data(), receivers);
   orbits::RinexNavWriteOptions nav_options;
@@ -548,6 +607,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   j["configuration"] = nlohmann::json::parse(scenario_to_json(s));
   if (auto st = write_file_atomically(staging->file("summary.json"), j.dump(2) + "\n"); !st) return st.error();
 
+  if (cancellation_requested()) return cancelled_error();
   auto moved = staging->commit();
   if (!moved) return moved.error();
   summary.outputs = *moved;

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -49,10 +50,13 @@ PositionSetting parse_position(const Node& node) {
     if (std::fabs(position.value.x()) > 90.0) c->fail("latitude must be within [-90, 90] degrees");
     if (std::fabs(position.value.y()) > 360.0) c->fail("longitude must be within [-360, 360] degrees");
     if (position.value.z() < -500.0) c->fail("height " + std::to_string(position.value.z()) + " m is below the Earth's surface");
+    if (position.value.z() > 4.4e7) c->fail("height " + std::to_string(position.value.z()) + " m is above the GNSS orbits");
     ++forms;
   }
   if (auto c = node.child("world_enu_m")) {
     position = {PositionSetting::Kind::kWorldEnu, c->as_vector3()};
+    constexpr double kMaxWorldDistance_m = 1e6;  // a world's local frame holds to a few hundred km
+    if (position.value.norm() > kMaxWorldDistance_m) c->fail("position is more than 1000 km from the world's origin");
     ++forms;
   }
   if (forms != 1) node.fail("give exactly one of ecef_m, lla_deg_m, world_enu_m");
@@ -71,7 +75,15 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
                     "profile", "signals", "receiver_type", "antenna_type"});
   ReceiverSettings r;
   r.name = default_name;
-  if (auto c = node.child("name")) r.name = c->as_string();
+  if (auto c = node.child("name")) {
+    r.name = c->as_string();
+    // The name becomes part of file names (obs_NAME.rnx): no folders, no hidden files.
+    const bool safe = !r.name.empty() && r.name.size() <= 64 && r.name.front() != '.' &&
+                      std::all_of(r.name.begin(), r.name.end(), [](unsigned char ch) {
+                        return std::isalnum(ch) || ch == '_' || ch == '-' || ch == '.';
+                      });
+    if (!safe) c->fail("receiver name '" + r.name + "': expected 1-64 letters, digits, '_', '-' or '.' (it names output files)");
+  }
   if (auto c = node.child("position")) r.position = parse_position(*c);
   if (auto c = node.child("trajectory")) {
     c->expect_keys({"file", "frame", "time_scale"});
@@ -236,6 +248,19 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     for (const Node& r : c->elements()) s.receivers.push_back(parse_receiver(r, base, "RX" + std::to_string(++index)));
   }
   if (s.receivers.empty()) root.fail("missing required key 'receiver' (or 'receivers')");
+  if (auto c = root.child("receivers")) {
+    // Each receiver's outputs are named after it (obs_NAME.rnx): two of one name would overwrite.
+    const auto elements = c->elements();
+    for (size_t i = 0; i < s.receivers.size(); ++i) {
+      for (size_t k = 0; k < i; ++k) {
+        if (s.receivers[i].name == s.receivers[k].name) {
+          elements[std::min(i, elements.size() - 1)].fail("receiver name '" + s.receivers[i].name +
+                                                           "' is also receiver " + std::to_string(k + 1) +
+                                                           "'s: names must be unique (they name the output files)");
+        }
+      }
+    }
+  }
 
   const Node ephemeris = root.required("ephemeris");
   ephemeris.expect_keys({"navigation", "precise_orbits", "precise_clocks", "nominal"});
@@ -359,6 +384,7 @@ Result<Scenario> parse_scenario(const std::string& text, const std::string& name
   } catch (const YAML::Exception& e) {
     return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
   }
+  if (auto duplicate = find_duplicate_key(root, name)) return make_error(ErrorCode::kParse, *duplicate);
   for (const std::string& assignment : overrides) {
     if (auto st = apply_override(root, assignment); !st) return st.error().with_context(name);
   }

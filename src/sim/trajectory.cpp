@@ -28,11 +28,11 @@ Result<Eigen::Vector3d> position_to_ecef(const PositionSetting& position, const 
 Result<std::shared_ptr<InterpolatedTrajectory>> InterpolatedTrajectory::create(std::vector<TrajectorySample> samples,
                                                                                std::string name) {
   if (samples.size() < 2) {
-    return make_error(ErrorCode::kInvalidArgument, name + ": a trajectory needs at least two samples");
+    return make_error(ErrorCode::kParse, name + ": a trajectory needs at least two samples");
   }
   for (size_t i = 1; i < samples.size(); ++i) {
     if (!(samples[i - 1].time < samples[i].time)) {
-      return make_error(ErrorCode::kInvalidArgument, name + ": sample " + std::to_string(i + 1) +
+      return make_error(ErrorCode::kParse, name + ": sample " + std::to_string(i + 1) +
                                                          " is not later than the one before it");
     }
   }
@@ -82,6 +82,7 @@ Result<std::vector<TrajectorySample>> read_trajectory_csv(const TrajectorySettin
   if (!lines) return lines.error();
   std::vector<TrajectorySample> samples;
   bool header_seen = false;
+  size_t previous_line = 0;
   for (size_t i = 0; i < lines->size(); ++i) {
     std::string_view line = (*lines)[i];
     if (line.empty() || line.front() == '#') continue;
@@ -111,6 +112,8 @@ Result<std::vector<TrajectorySample>> read_trajectory_csv(const TrajectorySettin
     } else {
       auto seconds = parse_fortran_double(cells[0]);
       if (!seconds) return lines->error_at(i, "time: " + seconds.error().message);
+      constexpr double kMaxOffset_s = 400.0 * 86400.0;  // longer than any scenario (366 days)
+      if (std::fabs(*seconds) > kMaxOffset_s) return lines->error_at(i, "time: expected seconds within 400 days of the start");
       sample.time = start + *seconds;
     }
     Eigen::Vector3d value;
@@ -122,6 +125,12 @@ Result<std::vector<TrajectorySample>> read_trajectory_csv(const TrajectorySettin
     auto ecef = position_to_ecef(PositionSetting{setting.frame, value}, world);
     if (!ecef) return lines->error_at(i, ecef.error().message);
     if (ecef->norm() < 6.3e6) return lines->error_at(i, "position is below the Earth's surface");
+    if (ecef->norm() > 5e7) return lines->error_at(i, "position is farther than 50000 km from the Earth's centre");
+    if (!samples.empty() && !(samples.back().time < sample.time)) {
+      return lines->error_at(i, "time is not later than the previous sample's (line " + std::to_string(previous_line + 1) +
+                                    "): a trajectory's times must increase");
+    }
+    previous_line = i;
     sample.position_m = *ecef;
     samples.push_back(sample);
   }

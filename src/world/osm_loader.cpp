@@ -26,6 +26,7 @@
 #include <set>
 #include <sstream>
 
+#include "skytrace/core/input_limits.hpp"
 #include "skytrace/world/loaders.hpp"
 
 namespace skytrace::world {
@@ -81,6 +82,11 @@ Result<PreparedPolygon> prepare_polygon(const PolygonWithHoles& polygon) {
   };
   append(polygon.outer);
   for (const auto& hole : polygon.holes) append(hole);
+  if (prepared.points.size() > input_limits().max_way_nodes) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "polygon: " + std::to_string(prepared.points.size()) + " nodes, more than a footprint may have " +
+                          limit_hint(input_limits().max_way_nodes, "SKYTRACE_MAX_WAY_NODES"));
+  }
   for (const auto& p : prepared.points) {
     if (!p.allFinite()) return make_error(ErrorCode::kInvalidArgument, "polygon: non-finite point");
   }
@@ -336,11 +342,18 @@ class EarClipper {
     return m;
   }
 
-  bool is_ear(int ear) const {
+  // Ear clipping is quadratic on good rings but can go cubic on pathological ones (100,000
+  // self-intersecting nodes took minutes): every vertex test counts against a budget, and a ring
+  // that spends it is given up as not triangulable.
+  static constexpr std::uint64_t kWorkBudget = 300'000'000;
+  [[nodiscard]] bool over_budget() const { return work_ > kWorkBudget; }
+
+  bool is_ear(int ear) {
     const int a = prev(ear);
     const int c = next(ear);
     if (area(a, ear, c) <= 0.0) return false;  // reflex or flat
     for (int p = next(c); p != a; p = next(p)) {
+      if (++work_ > kWorkBudget) return false;
       // A reflex (or flat) vertex inside the triangle blocks it; copies of its corners do not.
       if (same_place(p, a) || same_place(p, ear) || same_place(p, c)) continue;
       if (inside_triangle(at(a), at(ear), at(c), at(p)) && area(prev(p), p, next(p)) <= 0.0)
@@ -371,6 +384,11 @@ class EarClipper {
     int a = start;
     do {
       for (int b = next(next(a)); b != prev(a); b = next(b)) {
+        work_ += 64;  // valid_diagonal walks the ring
+        if (over_budget()) {
+          stuck_ = true;
+          return;
+        }
         if (index(a) != index(b) && valid_diagonal(a, b)) {
           int c = split(a, b);
           a = filter(a, next(a));
@@ -392,6 +410,10 @@ class EarClipper {
     }
     int stop = ear;
     while (prev(ear) != next(ear)) {
+      if (over_budget()) {
+        stuck_ = true;
+        return;
+      }
       const int a = prev(ear);
       const int c = next(ear);
       if (is_ear(ear)) {
@@ -419,6 +441,7 @@ class EarClipper {
   std::vector<Node> nodes_;
   std::vector<std::array<int, 3>> triangles_;
   bool stuck_ = false;
+  std::uint64_t work_ = 0;
 
  public:
   [[nodiscard]] bool stuck() const { return stuck_; }
@@ -443,7 +466,8 @@ Result<std::vector<std::array<int, 3>>> triangulate_polygon(const PolygonWithHol
   auto triangles = clipper.run();
   if (triangles.ok() && clipper.stuck()) {
     return make_error(ErrorCode::kInvalidArgument,
-                      "polygon: cannot triangulate the rings (self-intersecting?)");
+                      clipper.over_budget() ? "polygon: too complex to triangulate within the work limit (self-intersecting?)"
+                            : "polygon: cannot triangulate the rings (self-intersecting?)");
   }
   return triangles;
 }

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
@@ -480,6 +481,129 @@ class Resolver {
 
  private:
   std::vector<fs::path> dirs_;
+};
+
+// The SDF file a model folder holds: the first file model.config names in an <sdf> element that
+// exists, else model.sdf.
+std::optional<fs::path> model_file_of_folder(const fs::path& folder) {
+  std::error_code ec;
+  std::ifstream config(folder / "model.config", std::ios::binary);
+  if (config) {
+    std::ostringstream content;
+    content << config.rdbuf();
+    const std::string text = content.str();
+    for (std::size_t at = text.find("<sdf"); at != std::string::npos; at = text.find("<sdf", at + 4)) {
+      const std::size_t open_end = text.find('>', at);
+      const std::size_t close = text.find("</sdf>", at);
+      if (open_end == std::string::npos || close == std::string::npos || close < open_end) break;
+      std::string name = text.substr(open_end + 1, close - open_end - 1);
+      name.erase(0, name.find_first_not_of(" \t\r\n"));
+      name.erase(name.find_last_not_of(" \t\r\n") + 1);
+      if (!name.empty() && fs::is_regular_file(folder / name, ec)) return folder / name;
+    }
+  }
+  if (fs::is_regular_file(folder / "model.sdf", ec)) return folder / "model.sdf";
+  return std::nullopt;
+}
+
+// Follows every <include> URI from the world file through the model files it reaches, before
+// sdformat does: sdformat expands includes recursively without a limit, so a file that includes
+// itself (directly or through others) would take all memory. Reports the first cycle or a chain
+// deeper than kMaxIncludeDepth with the file and line of each step.
+class IncludeGraphCheck {
+ public:
+  static constexpr int kMaxIncludeDepth = 32;
+  static constexpr std::size_t kMaxFiles = 20000;
+
+  explicit IncludeGraphCheck(const Resolver& resolver) : resolver_(resolver) {}
+
+  Status check(const fs::path& file) { return visit(file, 0); }
+
+ private:
+  struct Uri {
+    std::string text;
+    int line = 0;
+  };
+
+  // <uri> values inside <include> elements (comments skipped), with their lines.
+  static std::vector<Uri> include_uris(const std::string& text) {
+    std::vector<Uri> out;
+    int line = 1;
+    std::size_t counted = 0;
+    const auto line_at = [&](std::size_t position) {
+      line += static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(counted),
+                                          text.begin() + static_cast<std::ptrdiff_t>(position), '\n'));
+      counted = position;
+      return line;
+    };
+    int include_depth = 0;
+    for (std::size_t at = text.find('<'); at != std::string::npos; at = text.find('<', at + 1)) {
+      if (text.compare(at, 4, "<!--") == 0) {
+        const std::size_t end = text.find("-->", at + 4);
+        if (end == std::string::npos) break;
+        at = end;
+        continue;
+      }
+      if (text.compare(at, 8, "<include") == 0 && (at + 8 < text.size()) &&
+          (text[at + 8] == '>' || std::isspace(static_cast<unsigned char>(text[at + 8])))) {
+        const std::size_t end = text.find('>', at);
+        if (end != std::string::npos && text[end - 1] != '/') ++include_depth;
+      } else if (text.compare(at, 10, "</include>") == 0) {
+        include_depth = std::max(0, include_depth - 1);
+      } else if (include_depth > 0 && text.compare(at, 5, "<uri>") == 0) {
+        const std::size_t close = text.find("</uri>", at + 5);
+        if (close == std::string::npos) break;
+        std::string value = text.substr(at + 5, close - at - 5);
+        value.erase(0, value.find_first_not_of(" \t\r\n"));
+        value.erase(value.find_last_not_of(" \t\r\n") + 1);
+        out.push_back({value, line_at(at)});
+      }
+    }
+    return out;
+  }
+
+  Status visit(const fs::path& file, int depth) {
+    std::error_code ec;
+    const fs::path key = fs::weakly_canonical(file, ec);
+    if (done_.count(key) != 0) return Ok{};
+    if (done_.size() > kMaxFiles) {
+      return make_error(ErrorCode::kParse, file.string() + ": includes reach more than 20000 model files");
+    }
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return Ok{};  // unreadable files are reported by the load itself
+    std::ostringstream content;
+    content << in.rdbuf();
+    chain_.push_back(key);
+    for (const Uri& uri : include_uris(content.str())) {
+      const auto resolved = resolver_.resolve(uri.text, file.parent_path());
+      if (!resolved) continue;  // a missing model is a warning of the load
+      std::optional<fs::path> target = *resolved;
+      if (fs::is_directory(*resolved, ec)) target = model_file_of_folder(*resolved);
+      if (!target) continue;
+      const std::string place = file.string() + ":" + std::to_string(uri.line);
+      const fs::path target_key = fs::weakly_canonical(*target, ec);
+      if (std::find(chain_.begin(), chain_.end(), target_key) != chain_.end()) {
+        std::string cycle;
+        for (auto it = std::find(chain_.begin(), chain_.end(), target_key); it != chain_.end(); ++it) {
+          cycle += it->string() + " -> ";
+        }
+        return make_error(ErrorCode::kParse, place + ": <include> of '" + uri.text + "' closes a cycle (" + cycle +
+                                                 target_key.string() + "): a world or model cannot include itself");
+      }
+      if (depth + 1 >= kMaxIncludeDepth) {
+        return make_error(ErrorCode::kParse, place + ": includes nested deeper than " +
+                                                 std::to_string(kMaxIncludeDepth) + " levels");
+      }
+      if (auto st = visit(*target, depth + 1); !st) return st;
+    }
+    chain_.pop_back();
+    done_.insert(key);
+    return Ok{};
+  }
+
+  const Resolver& resolver_;
+  std::vector<fs::path> chain_;
+  std::set<fs::path> done_;
 };
 
 Eigen::Isometry3d to_isometry(const ignition::math::Pose3d& pose) {
@@ -1290,6 +1414,7 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   }
 
   const Resolver resolver(options);
+  if (auto st = IncludeGraphCheck(resolver).check(path); !st) return st.error();
   WorldModel world;
   ConsoleCapture console;
 

@@ -17,6 +17,8 @@ enum class ErrorCode {
   kOutOfRange,       // a time or position is outside what the data covers
   kNetwork,          // a download failed
   kUnsupported,      // valid input that this version does not handle
+  kOutput,           // an output could not be created or written (disk full, no permission, a folder)
+  kCancelled,        // the user stopped the process (SIGINT, SIGTERM, SIGHUP) before it finished
 };
 
 struct Error {

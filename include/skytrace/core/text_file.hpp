@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "skytrace/core/error.hpp"
+#include "skytrace/core/output_file.hpp"  // write_file_atomically, for the writers that read too
 
 namespace skytrace {
 
@@ -39,8 +40,5 @@ class TextLines {
 // Parses a Fortran-style number ("1.234D-05", "-.5E+01"); a blank field is an error.
 [[nodiscard]] Result<double> parse_fortran_double(std::string_view text);
 [[nodiscard]] Result<long> parse_integer(std::string_view text);
-
-// Writes `content` to `path` atomically: a temporary file in the same folder, then a rename.
-[[nodiscard]] Status write_file_atomically(const std::filesystem::path& path, std::string_view content);
 
 }  // namespace skytrace

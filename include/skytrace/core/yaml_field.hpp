@@ -19,6 +19,10 @@ struct YamlFieldError {
   std::string message;
 };
 
+// "file:LINE: duplicate key 'k' (first at line N)" for the first mapping anywhere in `root` that
+// holds a key twice (YAML forbids it; yaml-cpp would keep the first value silently), else nullopt.
+[[nodiscard]] std::optional<std::string> find_duplicate_key(const YAML::Node& root, const std::string& file);
+
 class YamlField {
  public:
   // `file` names the document in messages and must outlive the field; `document` stands for the

@@ -18,7 +18,8 @@ namespace skytrace::orbits {
 // GEO rotation for BeiDou GEO satellites, IS-QZSS-PNT, NavIC SPS ICD). t on the GPST timeline.
 [[nodiscard]] SatelliteState evaluate_kepler(const KeplerEphemeris& eph, const GnssTime& t);
 // GLONASS: 4th-order Runge-Kutta integration of the PZ-90 equations of motion (J2, Earth rotation,
-// broadcast lunisolar acceleration) from t_b to t, GLONASS ICD 5.1 appendix A.3.1.2.
+// broadcast lunisolar acceleration) from t_b to t, GLONASS ICD 5.1 appendix A.3.1.2. More than a day
+// from t_b gives a state of NaNs (never an unbounded integration).
 [[nodiscard]] SatelliteState evaluate_glonass(const GlonassEphemeris& eph, const GnssTime& t);
 // The same integration with the states at the full 60 s steps from t_b kept per record, so that a
 // receiver evaluating the same record epoch after epoch integrates one partial step instead of up
