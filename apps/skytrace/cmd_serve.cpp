@@ -40,7 +40,17 @@ namespace skytrace::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_stop_signal(int /*signal*/) { g_stop = true; }
+// Stops the loop; should an epoch hang for whatever reason, SIGALRM ends the process a second later,
+// so that SIGTERM always ends it promptly (alarm is async-signal-safe).
+extern "C" void on_stop_signal(int /*signal*/) {
+  g_stop = true;
+  alarm(1);
+}
+
+// Bounds that keep one misbehaving peer from starving the epochs or growing memory.
+constexpr size_t kMaxTcpClients = 64;
+constexpr size_t kMaxDatagramsPerWakeup = 256;
+constexpr size_t kMaxClientBacklogBytes = size_t{1} << 20;
 
 struct ServeArgs {
   std::string scenario;
@@ -120,13 +130,19 @@ class TcpBroadcaster {
     for (;;) {
       const int fd = accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
       if (fd < 0) break;
+      if (clients_.size() >= kMaxTcpClients) {
+        close(fd);  // full, as a receiver with all its ports in use
+        ++refused_;
+        continue;
+      }
       clients_.push_back({fd, {}});
     }
     for (auto& c : clients_) {
-      char discard[512];
-      for (;;) {
+      char discard[4096];
+      for (int reads = 0;; ++reads) {
         const ssize_t n = recv(c.fd, discard, sizeof discard, MSG_DONTWAIT);
-        if (n > 0) continue;
+        if (n > 0 && reads < 64) continue;  // what clients send is not used; bounded per wake-up
+        if (n > 0) break;
         if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) c.dead = true;
         break;
       }
@@ -136,7 +152,7 @@ class TcpBroadcaster {
   }
   void broadcast(std::string_view bytes) {
     for (auto& c : clients_) {
-      if (c.pending.size() + bytes.size() > (size_t{1} << 20)) {
+      if (c.pending.size() + bytes.size() > kMaxClientBacklogBytes) {
         c.dead = true;
         continue;
       }
@@ -146,6 +162,7 @@ class TcpBroadcaster {
     drop_dead();
   }
   [[nodiscard]] size_t client_count() const { return clients_.size(); }
+  [[nodiscard]] size_t refused_count() const { return refused_; }
 
  private:
   struct Client {
@@ -179,6 +196,7 @@ class TcpBroadcaster {
   }
   int listen_fd_;
   std::vector<Client> clients_;
+  size_t refused_ = 0;
 };
 
 // A pseudo-terminal in raw mode whose slave is reached through a symbolic link, like a serial port.
@@ -357,6 +375,8 @@ int serve(const ServeArgs& args) {
   const auto tag_at = [&](Clock::time_point t) { return start + std::chrono::duration<double>(t - wall_start).count(); };
   std::int64_t k = 0;
   std::int64_t late_epochs = 0;
+  constexpr std::int64_t kReportedIgnoredPoses = 10;
+  std::int64_t ignored_poses = 0;
   while (!g_stop) {
     if (args.duration_s > 0.0 && static_cast<double>(k) * period_s > args.duration_s + 1e-9) break;
     const auto deadline = wall_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(k * period_s));
@@ -375,7 +395,7 @@ int serve(const ServeArgs& args) {
       if (rtcm_tcp) rtcm_tcp->service();
       if (pose_fd >= 0) {
         char buffer[2048];
-        for (;;) {
+        for (size_t datagrams = 0; datagrams < kMaxDatagramsPerWakeup; ++datagrams) {
           const ssize_t n = recv(pose_fd, buffer, sizeof buffer, MSG_DONTWAIT);
           if (n <= 0) break;
           std::string_view text(buffer, static_cast<size_t>(n));
@@ -389,7 +409,10 @@ int serve(const ServeArgs& args) {
           } else {
             applied = live.set_antenna_pose_ecef(tag_at(Clock::now()), pose->position, pose->velocity);
           }
-          if (!applied) std::cerr << "skytrace serve: warning: pose ignored: " << applied.error().message << "\n";
+          if (!applied && ++ignored_poses <= kReportedIgnoredPoses) {
+            std::cerr << "skytrace serve: warning: pose ignored: " << applied.error().message.substr(0, 200) << "\n";
+            if (ignored_poses == kReportedIgnoredPoses) std::cerr << "skytrace serve: further ignored poses are only counted\n";
+          }
         }
       }
     }
@@ -419,7 +442,15 @@ int serve(const ServeArgs& args) {
       k = static_cast<std::int64_t>(std::floor(behind));
     }
   }
+  alarm(0);  // stopped in time: no forced exit
   if (late_epochs > 0) std::cerr << "skytrace serve: " << late_epochs << " epochs skipped to keep real time\n";
+  if (ignored_poses > 0) std::cerr << "skytrace serve: " << ignored_poses << " pose datagrams ignored\n";
+  for (const TcpBroadcaster* server : {nmea_tcp.get(), rtcm_tcp.get()}) {
+    if (server != nullptr && server->refused_count() > 0) {
+      std::cerr << "skytrace serve: " << server->refused_count() << " connections refused (more than "
+                << kMaxTcpClients << " clients at once)\n";
+    }
+  }
   std::cout << "skytrace serve: stopped after " << k << " epochs" << std::endl;
   return kExitOk;
 }

@@ -13,6 +13,18 @@ struct ProcessResult {
 
 // Runs a shell command line (arguments must already be quoted) and captures its output.
 ProcessResult run_command(const std::string& command_line);
+
+struct MeasuredProcess {
+  int exit_code = -1;       // -1 when killed by a signal or the timeout
+  int signal = 0;           // the signal that ended it, if any
+  bool timed_out = false;   // killed (with its process group) after the timeout
+  double wall_s = 0.0;
+  long max_rss_kib = 0;     // peak resident memory of the process and the children it waited for
+  std::string output;       // stdout and stderr together
+};
+// Runs `command_line` through /bin/sh in a process group of its own, killing the group after
+// `timeout_s`; the peak memory comes from wait4's rusage.
+MeasuredProcess run_measured(const std::string& command_line, double timeout_s);
 // Quotes one argument for the shell.
 std::string shell_quote(const std::string& argument);
 // build/bin/skytrace
