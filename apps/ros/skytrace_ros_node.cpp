@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <unistd.h>
+
 #include <csignal>
 #include <cmath>
 #include <fstream>
@@ -36,7 +38,12 @@ constexpr int kExitInput = 3;
 constexpr int kExitOutput = 5;
 
 std::atomic<bool> g_stop{false};
-void on_signal(int /*signal*/) { g_stop = true; }
+// Stops the loop; should it not end within a second (a NodeHandle waiting for a master that never
+// comes, a stuck callback), SIGALRM ends the process: SIGTERM always ends the node promptly.
+void on_signal(int /*signal*/) {
+  g_stop = true;
+  alarm(1);
+}
 
 enum class PoseSource { kScenario, kTf, kOdometry, kPose };
 
@@ -383,6 +390,7 @@ int run(int argc, char** argv) {
            : config.pose_source == PoseSource::kPose   ? config.pose_topic.c_str()
                                                        : config.odom_topic.c_str());
   node.run();
+  alarm(0);  // the loop ended in time: no forced exit while the files are finished
   node.finish();
   ros::shutdown();
   return 0;
