@@ -445,6 +445,7 @@ class EarClipper {
 
  public:
   [[nodiscard]] bool stuck() const { return stuck_; }
+  [[nodiscard]] bool spent_budget() const { return over_budget(); }
 };
 
 }  // namespace
@@ -466,7 +467,7 @@ Result<std::vector<std::array<int, 3>>> triangulate_polygon(const PolygonWithHol
   auto triangles = clipper.run();
   if (triangles.ok() && clipper.stuck()) {
     return make_error(ErrorCode::kInvalidArgument,
-                      clipper.over_budget() ? "polygon: too complex to triangulate within the work limit (self-intersecting?)"
+                      clipper.spent_budget() ? "polygon: too complex to triangulate within the work limit (self-intersecting?)"
                             : "polygon: cannot triangulate the rings (self-intersecting?)");
   }
   return triangles;
