@@ -71,13 +71,26 @@ bool galileo_component_ok(int health, const GalileoComponent& c) {
   return !dvs && hs == 0;
 }
 
-bool galileo_signal_healthy(int health, const Signal& s) {
+// I/NAV broadcasts the health of E1-B and E5b, F/NAV that of E5a; RINEX leaves the other bits of
+// the word zero, or fills them from the other message. A component the record's message does not
+// describe must be clear in the word and is judged by those the message does describe too (an F/NAV
+// record of a satellite whose E5a is out of service says nothing good about its E1).
+bool galileo_signal_healthy(int health, NavMessage message, const Signal& s) {
+  const bool fnav = message == NavMessage::kGalileoFnav;
+  const auto described_ok = [&] {
+    return fnav ? galileo_component_ok(health, kE5a)
+                : galileo_component_ok(health, kE1B) && galileo_component_ok(health, kE5b);
+  };
+  const auto ok = [&](const GalileoComponent& c) {
+    const bool described = fnav ? c.dvs_bit == kE5a.dvs_bit : c.dvs_bit != kE5a.dvs_bit;
+    return galileo_component_ok(health, c) && (described || described_ok());
+  };
   switch (s.band) {
-    case '1': return galileo_component_ok(health, kE1B);
-    case '5': return galileo_component_ok(health, kE5a);
-    case '7': return galileo_component_ok(health, kE5b);
-    case '8': return galileo_component_ok(health, kE5a) && galileo_component_ok(health, kE5b);
-    default: return true;  // E6: not in the word
+    case '1': return ok(kE1B);
+    case '5': return ok(kE5a);
+    case '7': return ok(kE5b);
+    case '8': return ok(kE5a) && ok(kE5b);
+    default: return described_ok();  // E6: in neither message
   }
 }
 
@@ -165,7 +178,7 @@ bool signal_healthy(const KeplerEphemeris& eph, const Signal& signal) {
     case NavMessage::kQzssCnav:
     case NavMessage::kQzssCnav2: return cnav_signal_healthy(h, signal);
     case NavMessage::kGalileoInav:
-    case NavMessage::kGalileoFnav: return galileo_signal_healthy(h, signal);
+    case NavMessage::kGalileoFnav: return galileo_signal_healthy(h, eph.message, signal);
     default: return h == 0;  // BeiDou, NavIC: one flag for the satellite
   }
 }

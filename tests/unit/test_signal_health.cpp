@@ -107,20 +107,33 @@ TEST(SignalHealth, GalileoHealthAndDataValidityPerComponent) {
   // bit 0 E1-B DVS, bits 1-2 E1-B HS, bit 3 E5a DVS, bits 4-5 E5a HS, bit 6 E5b DVS, bits 7-8 E5b HS.
   const auto e1_dvs = kepler("E11", NavMessage::kGalileoInav, 1 << 0);
   EXPECT_FALSE(healthy(e1_dvs, "E1C"));
-  EXPECT_TRUE(healthy(e1_dvs, "E5Q"));
   EXPECT_TRUE(healthy(e1_dvs, "E7Q"));
   const auto e1_hs = kepler("E11", NavMessage::kGalileoInav, 1 << 1);
   EXPECT_FALSE(healthy(e1_hs, "E1B"));
   const auto e5a_test = kepler("E11", NavMessage::kGalileoFnav, 3 << 4);
   EXPECT_FALSE(healthy(e5a_test, "E5Q"));
   EXPECT_FALSE(healthy(e5a_test, "E8Q"));  // AltBOC needs both sidebands
-  EXPECT_TRUE(healthy(e5a_test, "E1C"));
-  EXPECT_TRUE(healthy(e5a_test, "E7Q"));
+  const auto e5a_in_inav = kepler("E11", NavMessage::kGalileoInav, (3 << 4) | (1 << 6));  // E5b DVS
+  EXPECT_TRUE(healthy(e5a_in_inav, "E1C"));
+  EXPECT_FALSE(healthy(e5a_in_inav, "E7Q"));
+  EXPECT_FALSE(healthy(e5a_in_inav, "E8Q"));
   EXPECT_FALSE(healthy(kepler("E11", NavMessage::kGalileoFnav, 1 << 3), "E5I"));
+  // I/NAV does not carry E5a, but a set E5a bit (filled from F/NAV) still counts.
+  EXPECT_FALSE(healthy(kepler("E11", NavMessage::kGalileoInav, 3 << 4), "E5Q"));
+  EXPECT_TRUE(healthy(kepler("E11", NavMessage::kGalileoInav, 3 << 4), "E1C"));
   const auto e5b = kepler("E11", NavMessage::kGalileoInav, (1 << 6) | (2 << 7));
   EXPECT_FALSE(healthy(e5b, "E7I"));
-  EXPECT_TRUE(healthy(e5b, "E5I"));
-  EXPECT_TRUE(healthy(kepler("E11", NavMessage::kGalileoInav, 0x1FF), "E6C"));  // E6 is not in the word
+  EXPECT_TRUE(healthy(e5b, "E1B"));
+  EXPECT_FALSE(healthy(kepler("E11", NavMessage::kGalileoInav, 0x1FF), "E6C"));  // E6: judged by E1-B, E5b
+  EXPECT_TRUE(healthy(kepler("E11", NavMessage::kGalileoInav, 0), "E6C"));
+  // What ESBC's file has for E14 and E18: I/NAV 390 (E1-B and E5b HS 3), F/NAV 48 (E5a HS 3). An
+  // F/NAV record does not carry E1-B: its E1 is judged by its E5a, an I/NAV record's E5a by E1-B/E5b.
+  EXPECT_FALSE(healthy(kepler("E14", NavMessage::kGalileoInav, 390), "E1C"));
+  EXPECT_FALSE(healthy(kepler("E14", NavMessage::kGalileoInav, 390), "E5Q"));
+  EXPECT_FALSE(healthy(kepler("E14", NavMessage::kGalileoFnav, 48), "E1C"));
+  EXPECT_FALSE(healthy(kepler("E14", NavMessage::kGalileoFnav, 48), "E7Q"));
+  EXPECT_TRUE(healthy(kepler("E11", NavMessage::kGalileoFnav, 0), "E1C"));
+  EXPECT_TRUE(healthy(kepler("E11", NavMessage::kGalileoInav, 48), "E1C"));  // bits I/NAV does not carry
 }
 
 TEST(SignalHealth, BeiDouNavicGlonassSbas) {

@@ -15,14 +15,16 @@
 //   Galileo (RINEX 3/4 "SV health", OS SIS ICD 5.1.9.3): bit 0 E1-B DVS, bits 1-2 E1-B HS, bit 3
 //     E5a DVS, bits 4-5 E5a HS, bit 6 E5b DVS, bits 7-8 E5b HS. A component is used when its HS
 //     is 0 (signal OK) and its DVS 0 (navigation data valid), as receivers and RTKLIB do; E5
-//     AltBOC needs both E5a and E5b; E6 is not described by the word.
+//     AltBOC needs both E5a and E5b. I/NAV carries E1-B and E5b, F/NAV E5a (RINEX leaves the other
+//     bits zero): a component, or E6, the record's message does not carry is judged by those it
+//     does.
 //   BeiDou: D1/D2 SatH1 and the CNAV1/2/3 health status, 0 = healthy, for the whole satellite.
 //   NavIC: 0 = healthy, for the whole satellite.
 //   GLONASS FDMA: B_n (RINEX "health", MSB of B_n) and, from RINEX 3.05, l_n (bit 2 of the
 //     health flags of the fourth line); 1 = unhealthy, for every FDMA signal.
 //   SBAS (RINEX 3 health): bits 0-3 MT17 health (bit 0 set = ranging off), bit 4 = MT17 health
 //     unavailable (bits 0-3 then say nothing).
-// A signal the word says nothing about (QZSS L6, Galileo E6, ...) counts as healthy.
+// A signal the word says nothing about (QZSS L6 and L5S, GPS/QZSS CNAV L6) counts as healthy.
 #pragma once
 
 #include <span>
