@@ -110,8 +110,14 @@ bool sbas_ranging_healthy(int health) {
 
 constexpr int kGlonassLnFlag = 1 << 2;  // RINEX 3.05 health flags: l_n
 
+// A word that declares every signal healthy (the common case: no search through the signals).
+bool all_clear(const KeplerEphemeris& eph) { return eph.health == 0; }
+bool all_clear(const GlonassEphemeris& eph) { return eph.health == 0 && (eph.health_flags & kGlonassLnFlag) == 0; }
+bool all_clear(const SbasEphemeris& eph) { return sbas_ranging_healthy(eph.health); }
+
 template <typename Record>
 bool any_usable(const Record& eph, std::span<const Signal> wanted) {
+  if (all_clear(eph)) return true;
   const GnssSystem system = eph.satellite.system;
   const bool any_of_system =
       std::any_of(wanted.begin(), wanted.end(), [&](const Signal& s) { return s.system == system; });

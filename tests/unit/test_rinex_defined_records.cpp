@@ -15,9 +15,9 @@ namespace {
 // epochs, so that a note per line would show.
 constexpr const char* kObs304WithChannels =
     "     3.04           OBSERVATION DATA    M                   RINEX VERSION / TYPE\n"
-    "G    4 C1C L1C S1C X1                                      SYS / # / OBS TYPES\n"
-    "E    3 C1C C6A X1                                          SYS / # / OBS TYPES\n"
-    "R    2 C4A X1                                              SYS / # / OBS TYPES\n"
+    "G    4 C1C L1C S1C X1                                       SYS / # / OBS TYPES\n"
+    "E    3 C1C C6A X1                                           SYS / # / OBS TYPES\n"
+    "R    2 C4A X1                                               SYS / # / OBS TYPES\n"
     "  2020     6    25     0     0    0.0000000     GPS         TIME OF FIRST OBS\n"
     "                                                            END OF HEADER\n"
     "> 2020 06 25 00 00  0.0000000  0  3\n"
@@ -170,8 +170,10 @@ TEST(RinexDefinedRecords, Rinex4MalformedRecordNamesFileAndLine) {
   ASSERT_FALSE(read.ok());
   EXPECT_NE(read.error().message.find("BRD400DLR.rnx:8"), std::string::npos) << read.error().message;
   EXPECT_NE(read.error().message.find("Toe"), std::string::npos) << read.error().message;
-  std::string without_type = kNav402;
-  without_type.replace(without_type.find("> EOP G05 CNVX"), 14, ">");
+  const std::string full = kNav402;
+  const std::string eop = "> EOP G05 CNVX";
+  const size_t at = full.find(eop);
+  const std::string without_type = full.substr(0, at) + '>' + full.substr(at + eop.size());
   auto no_type = orbits::parse_rinex_nav("BRD400DLR.rnx", without_type);
   ASSERT_FALSE(no_type.ok());
   EXPECT_NE(no_type.error().message.find("BRD400DLR.rnx:"), std::string::npos) << no_type.error().message;
