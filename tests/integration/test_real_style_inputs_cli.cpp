@@ -95,9 +95,10 @@ std::filesystem::path write_observations_with_channel_numbers(const std::filesys
     if (line.empty()) continue;
     const size_t types = type_count.at(line[0]);
     const size_t extra = line[0] == 'G' ? 2 : 1;
-    std::string record = pad(line, 3 + 16 * (types - extra));
-    record += "             7.000  ";  // channel 7
-    if (line[0] == 'G') record += "             1.250  ";
+    std::string record = line;
+    record.resize(3 + 16 * (types - extra), ' ');  // the original values (trailing blanks cut or added)
+    record += "         7.000  ";  // channel 7 (F14.3, LLI, SSI)
+    if (line[0] == 'G') record += "         1.250  ";
     while (!record.empty() && record.back() == ' ') record.pop_back();
     out.push_back(record);
   }
@@ -183,8 +184,13 @@ TEST_F(RealStyleInputs, ChannelNumbersAreReadAndIgnoredByCompareAndPosition) {
   const auto x1 = file->header.type_index(GnssSystem::kGps, "X1");
   ASSERT_TRUE(x1.has_value());
   ASSERT_FALSE(file->epochs.empty());
-  ASSERT_GT(file->epochs[0].satellites[0].values.size(), *x1);
-  EXPECT_EQ(file->epochs[0].satellites[0].values[*x1].value, 7.0);
+  const io::SatelliteObservations* gps = nullptr;
+  for (const auto& sat : file->epochs[0].satellites) {
+    if (gps == nullptr && sat.satellite.system == GnssSystem::kGps) gps = &sat;
+  }
+  ASSERT_NE(gps, nullptr);
+  ASSERT_GT(gps->values.size(), *x1);
+  EXPECT_EQ(gps->values[*x1].value, 7.0);
 
   // Against the original hour, and against a simulation of the same span.
   auto r = test::run_command(skytrace_cmd() + " compare " + q(real) + " " + q(esbc_obs()) + " --json " +
