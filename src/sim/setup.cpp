@@ -286,6 +286,10 @@ Result<ScenarioResources> prepare_resources(const Scenario& s) {
     auto precise_coverage = check_precise_coverage(s, *r.ephemerides, *r.precise, s.time.start, end);
     if (!precise_coverage) return precise_coverage.error();
     r.precise_coverage = std::move(*precise_coverage);
+    // Satellites of left-out systems are not observed: nothing to say about their products.
+    const auto left_out = [&](const auto& entry) { return r.left_out_systems.count(entry.first.system) != 0; };
+    std::erase_if(r.precise_coverage->lacking, left_out);
+    std::erase_if(r.precise_coverage->gaps, left_out);
     for (auto& warning : r.precise_coverage->warnings()) r.warnings.push_back(std::move(warning));
   }
   return r;
