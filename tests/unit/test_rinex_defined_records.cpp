@@ -47,6 +47,17 @@ TEST(RinexDefinedCodes, ChannelNumbersAreReadAndNotedOncePerFile) {
   EXPECT_EQ(note.find("C4A"), std::string::npos) << note;  // GLONASS L1OC is catalogued
 }
 
+TEST(RinexDefinedCodes, ChannelNumbersInEveryVersionFromThreeOhTwo) {
+  for (const char* version : {"3.02", "3.03", "3.05", "4.00", "4.01", "4.02"}) {
+    std::string text = kObs304WithChannels;
+    text.replace(5, 4, version);
+    auto read = io::parse_rinex_obs("v.rnx", text);
+    ASSERT_TRUE(read.ok()) << version << ": " << read.error().message;
+    EXPECT_EQ(read->epochs.size(), 3u) << version;
+    EXPECT_EQ(read->warnings.size(), 1u) << version;
+  }
+}
+
 TEST(RinexDefinedCodes, IonosphereAndUnknownSignalsAreNotedNotRefused) {
   std::string text = kObs304WithChannels;
   text.replace(text.find("G    4 C1C L1C S1C X1 "), 22, "G    4 C1C L1C S1C I1 ");
