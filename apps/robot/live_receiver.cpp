@@ -31,6 +31,8 @@ SkyStatus to_view(receiver::SatelliteStatus status) {
     case receiver::SatelliteStatus::kNoSignal: return SkyStatus::kNoSignal;
     case receiver::SatelliteStatus::kBlocked: return SkyStatus::kBlocked;
     case receiver::SatelliteStatus::kAttenuated: return SkyStatus::kAttenuated;
+    // The sky message has no status of its own for it; the detail names the health word.
+    case receiver::SatelliteStatus::kUnhealthy: return SkyStatus::kNoSignal;
   }
   return SkyStatus::kNoSignal;
 }

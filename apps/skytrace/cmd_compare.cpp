@@ -46,11 +46,13 @@ int run_compare(const CompareArgs& args) {
       if (!data) return report_error(data.error());
       all.merge(std::move(*data));
     }
+    for (const auto& warning : all.warnings) std::cerr << "skytrace compare: warning: " << warning << "\n";
     ephemerides.emplace(std::move(all));
     options.satellite_source = &*ephemerides;
   }
   auto report = io::compare_observation_files(args.real_path, args.sim_path, options);
   if (!report) return report_error(report.error());
+  for (const auto& warning : report->warnings) std::cerr << "skytrace compare: warning: " << warning << "\n";
   if (!args.json_path.empty()) {
     if (auto s = write_file_atomically(args.json_path, io::comparison_to_json(*report)); !s) {
       return report_error(s.error());

@@ -68,10 +68,12 @@ int run_position(const PositionArgs& args) {
     std::cerr << "skytrace: warning: no GPS Klobuchar coefficients (ION ALPHA/BETA, GPSA/GPSB) in the "
                  "navigation data: no ionosphere correction\n";
   }
+  for (const auto& warning : navigation.warnings) std::cerr << "skytrace position: warning: " << warning << "\n";
   const orbits::BroadcastEphemerides ephemerides(std::move(navigation));
 
   auto observations = io::read_rinex_obs(args.obs_path);
   if (!observations) return report_error(observations.error());
+  for (const auto& warning : observations->warnings) std::cerr << "skytrace position: warning: " << warning << "\n";
   const io::MeasurementExtractor extractor(observations->header);
   positioning::SinglePointSolver solver(ephemerides, settings, klobuchar);
 

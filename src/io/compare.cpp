@@ -603,6 +603,9 @@ Result<ComparisonReport> compare_observation_files(const std::filesystem::path& 
   if (!report) return report.error();
   report->real_name = real_path.string();
   report->sim_name = sim_path.string();
+  for (const auto* file : {&*real, &*sim}) {
+    report->warnings.insert(report->warnings.end(), file->warnings.begin(), file->warnings.end());
+  }
   return report;
 }
 
@@ -726,6 +729,7 @@ std::string comparison_to_json(const ComparisonReport& r) {
   nlohmann::json j;
   j["real"] = {{"file", r.real_name}, {"epochs", r.real_epochs}};
   j["sim"] = {{"file", r.sim_name}, {"epochs", r.sim_epochs}};
+  j["warnings"] = r.warnings;
   j["common_epochs"] = r.common_epochs;
   j["first_common_epoch_gpst"] = r.first_common_epoch.to_iso8601(TimeScale::kGpst, 3);
   j["last_common_epoch_gpst"] = r.last_common_epoch.to_iso8601(TimeScale::kGpst, 3);

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <set>
 
+#include "skytrace/core/signal.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 
@@ -14,7 +15,7 @@ namespace skytrace::io {
 char ObservationType::kind() const {
   const char c = !code.empty() ? code[0] : (!rinex2_code.empty() ? rinex2_code[0] : '\0');
   switch (c) {
-    case 'C': case 'L': case 'D': case 'S': case 'X': return c;
+    case 'C': case 'L': case 'D': case 'S': case 'I': case 'X': return c;
     case 'P': return 'C';  // RINEX 2 P-code pseudorange
     default: return '\0';
   }
@@ -72,16 +73,26 @@ std::string rinex2_to_rinex3_code(GnssSystem system, std::string_view rinex2_cod
       break;
     case '5':
       if (system == G::kGps || system == G::kGalileo || system == G::kSbas || system == G::kQzss) attribute = 'X';
+      if (system == G::kNavic) attribute = 'A';  // L5 SPS
       break;
     case '6':
       if (system == G::kGalileo || system == G::kQzss) attribute = 'X';
+      if (system == G::kBeiDou) attribute = 'I';  // B3I
       break;
     case '7':
+      if (system == G::kGalileo) attribute = 'X';
+      if (system == G::kBeiDou) attribute = 'I';  // B2I
+      break;
     case '8':
       if (system == G::kGalileo) attribute = 'X';
       break;
+    case '9':
+      if (system == G::kNavic) attribute = 'A';  // S SPS
+      break;
     default: break;
   }
+  // BeiDou in RINEX 2.12 files: B1I is band 2 (band 1 as RINEX 3.01 wrote it).
+  if (system == G::kBeiDou && (band == '1' || band == '2')) return std::string{type, '2', 'I'};
   if (attribute == '\0') return {};
   return std::string{type, band, attribute};
 }
@@ -95,6 +106,22 @@ std::string_view trim(std::string_view s) {
 }
 
 std::string_view header_label(std::string_view line) { return line.size() > 60 ? trim(line.substr(60)) : std::string_view{}; }
+
+// A RINEX 3/4 observation code: type (C, L, D, S; I from 3.01, X from 3.02), band digit, then an
+// attribute letter, blank only for I and X ("I5", "X1").
+bool is_rinex3_code(std::string_view code) {
+  if (code.size() != 2 && code.size() != 3) return false;
+  if (std::string_view("CLDSIX").find(code[0]) == std::string_view::npos) return false;
+  if (code[1] < '0' || code[1] > '9') return false;
+  if (code.size() == 2) return code[0] == 'I' || code[0] == 'X';
+  return code[2] >= 'A' && code[2] <= 'Z';
+}
+
+// A RINEX 2 observation type: C, P, L, D, S or T (Transit) and a band digit.
+bool is_rinex2_code(std::string_view code) {
+  return code.size() == 2 && std::string_view("CPLDST").find(code[0]) != std::string_view::npos && code[1] >= '1' &&
+         code[1] <= '9';
+}
 
 constexpr std::array<double, 19> kPowersOfTen = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8, 1e9,
                                                  1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18};
@@ -166,6 +193,7 @@ class Parser {
     const Status body = major_ == 2 ? parse_body_v2() : parse_body_v3();
     if (!body) return body.error();
     if (major_ == 2) finish_v2_types();
+    note_unused_types();
     return std::move(file_);
   }
 
@@ -339,8 +367,19 @@ class Parser {
         for (size_t k = 0; k < 13 && list.size() < types_expected; ++k) {
           const auto code = field(line, 7 + 4 * k, 3);
           if (code.empty()) break;
-          if (code.size() != 3) return error(i, "SYS / # / OBS TYPES: bad code '" + std::string(code) + "'");
-          list.push_back(ObservationType{std::string(code), {}});
+          if (!is_rinex3_code(code)) {
+            return error(i, "SYS / # / OBS TYPES: bad code '" + std::string(code) +
+                                "' (expected type C, L, D, S, I or X, a band digit and an attribute letter, "
+                                "e.g. C1C; blank attribute only for I and X, e.g. X1)");
+          }
+          std::string text(code);
+          // BeiDou B1I in band 1 ("C1I", 3.01 and 3.02 drafts, as RTKLIB reads them): band 2 from 3.02
+          // on; band 1 means B1C only from 3.04.
+          if (*types_system == GnssSystem::kBeiDou && h.version < 3.035 && text.size() == 3 && text[1] == '1' &&
+              (text[2] == 'I' || text[2] == 'Q' || text[2] == 'X')) {
+            text[1] = '2';
+          }
+          list.push_back(ObservationType{std::move(text), {}});
         }
       } else if (label == "# / TYPES OF OBSERV") {
         const auto count_text = field(line, 0, 6);
@@ -353,6 +392,10 @@ class Parser {
         for (size_t k = 0; k < 9 && v2_codes_.size() < v2_expected; ++k) {
           const auto code = field(line, 6 + 6 * k + 4, 2);
           if (code.empty()) break;
+          if (!is_rinex2_code(code)) {
+            return error(i, "# / TYPES OF OBSERV: bad type '" + std::string(code) +
+                                "' (expected C, P, L, D, S or T and a band digit, e.g. L1, C5)");
+          }
           v2_codes_.emplace_back(code);
         }
       } else if (label == "SIGNAL STRENGTH UNIT") {
@@ -783,6 +826,26 @@ class Parser {
       epochs.push_back(std::move(epoch));
     }
     return Ok{};
+  }
+
+  // One note for the file naming the types it defines that skytrace does not use: channel numbers,
+  // ionosphere pseudo-observables, codes of signals outside the catalogue.
+  void note_unused_types() {
+    std::string list;
+    for (const auto& [system, types] : file_.header.observation_types) {
+      std::string codes;
+      for (const auto& type : types) {
+        const bool used = type.code.size() == 3 && std::string_view("CLDS").find(type.code[0]) != std::string_view::npos &&
+                          Signal::from_code(system, std::string_view(type.code).substr(1)).ok();
+        if (used) continue;
+        const std::string& shown = type.code.empty() ? type.rinex2_code : type.code;
+        if (codes.find(shown) == std::string::npos) codes += " " + shown;
+      }
+      if (!codes.empty()) list += std::string(list.empty() ? "" : ";") + " " + system_letter(system) + ":" + codes;
+    }
+    if (list.empty()) return;
+    file_.warnings.push_back(lines_.name() + ": observation types read but not used (channel numbers, ionosphere "
+                             "pseudo-observables, signals outside the catalogue or without a RINEX 3 code):" + list);
   }
 
   // RINEX 2 lists one set of types for all systems: give each system present its mapped copy.

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "skytrace/core/constants.hpp"
+#include "skytrace/orbits/signal_health.hpp"
 
 namespace skytrace::orbits {
 namespace {
@@ -66,18 +67,6 @@ std::string format_hours(double seconds) {
   std::snprintf(buf, sizeof buf, "%.1f h", seconds / 3600.0);
   return buf;
 }
-
-// SBAS health as RINEX 3 writes it: bits 0-3 are the MT17 health bits (bit 0 set = ranging off),
-// bit 4 says the MT17 health is unavailable (bits 0-3 then carry no information), bit 5 says the
-// URA is unknown. Ranging counts as available unless MT17 says it is off.
-bool sbas_ranging_healthy(int health) {
-  const bool mt17_unavailable = (health & 0x10) != 0;
-  return mt17_unavailable || (health & 0x01) == 0;
-}
-
-bool healthy(const KeplerEphemeris& e) { return e.health == 0; }
-bool healthy(const GlonassEphemeris& e) { return e.health == 0; }
-bool healthy(const SbasEphemeris& e) { return sbas_ranging_healthy(e.health); }
 
 double window_s(const KeplerEphemeris& e) { return validity_half_window_s(e); }
 double window_s(const GlonassEphemeris&) { return glonass_validity_half_window_s(); }
@@ -148,7 +137,7 @@ Error explain_no_record(const std::vector<Record>& records, const std::vector<si
   int unhealthy_value = 0;
   for (const Record* r : matching) {
     const double distance_s = std::abs(r->toe - t);
-    if (!healthy(*r)) {
+    if (!record_usable(*r)) {
       if (distance_s <= window_s(*r)) {
         ++unhealthy_in_window;
         unhealthy_value = r->health;
@@ -216,10 +205,11 @@ std::optional<NavMessage> message_for(const SatelliteId& satellite, const std::o
 // (time window, health) without the noise of "no record of the preferred message".
 Result<const KeplerEphemeris*> select_with_fallback(const BroadcastEphemerides& ephemerides,
                                                     const SatelliteId& satellite, const GnssTime& t,
-                                                    std::optional<NavMessage> message) {
-  auto first = ephemerides.select_kepler(satellite, t, message);
+                                                    std::optional<NavMessage> message,
+                                                    std::span<const Signal> wanted = {}) {
+  auto first = ephemerides.select_kepler(satellite, t, message, wanted);
   if (first.ok() || !message) return first;
-  return ephemerides.select_kepler(satellite, t, std::nullopt);
+  return ephemerides.select_kepler(satellite, t, std::nullopt, wanted);
 }
 
 Status check_signal(const SatelliteId& satellite, const Signal& signal) {
@@ -534,25 +524,27 @@ BroadcastEphemerides::BroadcastEphemerides(NavigationData data) : data_(std::mov
 }
 
 const KeplerEphemeris* BroadcastEphemerides::find_kepler(const SatelliteId& satellite, const GnssTime& t,
-                                                          std::optional<NavMessage> message) const {
+                                                          std::optional<NavMessage> message,
+                                                          std::span<const Signal> wanted) const {
   const auto it = kepler_index_.find(satellite);
   if (it == kepler_index_.end()) return nullptr;
   // A Galileo data set is first broadcast after its toe (the age of data is never negative), so a
   // receiver at t can only hold records with toe < t; RTKLIB applies the same rule.
   const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;
   const auto accept = [&](const KeplerEphemeris& e) {
-    return healthy(e) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
+    return record_usable(e, wanted) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
   };
   return select_nearest(data_.kepler, it->second, t, kepler_max_window_s_.at(satellite), accept);
 }
 
-std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const SatelliteId& satellite) const {
+std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const SatelliteId& satellite,
+                                                                           std::span<const Signal> wanted) const {
   std::vector<RecordAvailability> out;
   if (const auto it = kepler_index_.find(satellite); it != kepler_index_.end()) {
     const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;  // as find_kepler
     for (size_t i : it->second) {
       const KeplerEphemeris& e = data_.kepler[i];
-      if (!healthy(e)) continue;
+      if (!record_usable(e, wanted)) continue;
       const double w = window_s(e);
       out.push_back({e.message, toe_must_be_past ? e.toe : e.toe - w, e.toe + w, transmission_time(e)});
     }
@@ -560,7 +552,7 @@ std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const 
   if (const auto it = glonass_index_.find(satellite); it != glonass_index_.end()) {
     for (size_t i : it->second) {
       const GlonassEphemeris& g = data_.glonass[i];
-      if (!healthy(g)) continue;
+      if (!record_usable(g, wanted)) continue;
       const double w = window_s(g);
       out.push_back({NavMessage::kGlonassFdma, g.toe - w, g.toe + w, transmission_time(g)});
     }
@@ -568,7 +560,7 @@ std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const 
   if (const auto it = sbas_index_.find(satellite); it != sbas_index_.end()) {
     for (size_t i : it->second) {
       const SbasEphemeris& r = data_.sbas[i];
-      if (!healthy(r)) continue;
+      if (!record_usable(r, wanted)) continue;
       const double w = window_s(r);
       out.push_back({NavMessage::kSbas, r.toe - w, r.toe + w, transmission_time(r)});
     }
@@ -576,26 +568,29 @@ std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const 
   return out;
 }
 
-const GlonassEphemeris* BroadcastEphemerides::find_glonass(const SatelliteId& satellite, const GnssTime& t) const {
+const GlonassEphemeris* BroadcastEphemerides::find_glonass(const SatelliteId& satellite, const GnssTime& t,
+                                                            std::span<const Signal> wanted) const {
   const auto it = glonass_index_.find(satellite);
   if (it == glonass_index_.end()) return nullptr;
-  const auto accept = [](const GlonassEphemeris& e) { return healthy(e); };
+  const auto accept = [&](const GlonassEphemeris& e) { return record_usable(e, wanted); };
   return select_nearest(data_.glonass, it->second, t, glonass_validity_half_window_s(), accept);
 }
 
-const SbasEphemeris* BroadcastEphemerides::find_sbas(const SatelliteId& satellite, const GnssTime& t) const {
+const SbasEphemeris* BroadcastEphemerides::find_sbas(const SatelliteId& satellite, const GnssTime& t,
+                                                      std::span<const Signal> wanted) const {
   const auto it = sbas_index_.find(satellite);
   if (it == sbas_index_.end()) return nullptr;
-  const auto accept = [](const SbasEphemeris& e) { return healthy(e); };
+  const auto accept = [&](const SbasEphemeris& e) { return record_usable(e, wanted); };
   return select_nearest(data_.sbas, it->second, t, sbas_validity_half_window_s(), accept);
 }
 
 Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const SatelliteId& satellite, const GnssTime& t,
-                                                                   std::optional<NavMessage> message) const {
-  if (const KeplerEphemeris* found = find_kepler(satellite, t, message)) return found;
+                                                                   std::optional<NavMessage> message,
+                                                                   std::span<const Signal> wanted) const {
+  if (const KeplerEphemeris* found = find_kepler(satellite, t, message, wanted)) return found;
   const auto it = kepler_index_.find(satellite);
   if (it == kepler_index_.end()) return no_ephemeris_at_all(satellite);
-  const std::string_view wanted = message ? to_string(*message) : "";
+  const std::string_view wanted_message = message ? to_string(*message) : "";
   const auto matches = [&](const KeplerEphemeris& e) { return !message || e.message == *message; };
   if (satellite.system == GnssSystem::kGalileo) {
     const auto matches_past = [&](const KeplerEphemeris& e) { return matches(e) && e.toe < t; };
@@ -603,26 +598,28 @@ Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const Satelli
     const bool any_match = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches(data_.kepler[i]); });
     const bool any_past = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches_past(data_.kepler[i]); });
     if (any_match && !any_past) {
-      return make_error(ErrorCode::kOutOfRange, "no " + std::string(wanted) + (wanted.empty() ? "" : " ") +
+      return make_error(ErrorCode::kOutOfRange, "no " + std::string(wanted_message) + (wanted_message.empty() ? "" : " ") +
                                                     "ephemeris for " + satellite.to_string() + " at " + format_time(t) +
                                                     " GPST: every record has its toe at or after that time (Galileo data "
                                                     "sets are transmitted after their toe)");
     }
-    return explain_no_record(data_.kepler, indices, satellite, t, wanted, matches_past);
+    return explain_no_record(data_.kepler, indices, satellite, t, wanted_message, matches_past);
   }
-  return explain_no_record(data_.kepler, it->second, satellite, t, wanted, matches);
+  return explain_no_record(data_.kepler, it->second, satellite, t, wanted_message, matches);
 }
 
 Result<const GlonassEphemeris*> BroadcastEphemerides::select_glonass(const SatelliteId& satellite,
-                                                                     const GnssTime& t) const {
-  if (const GlonassEphemeris* found = find_glonass(satellite, t)) return found;
+                                                                     const GnssTime& t,
+                                                                     std::span<const Signal> wanted) const {
+  if (const GlonassEphemeris* found = find_glonass(satellite, t, wanted)) return found;
   const auto it = glonass_index_.find(satellite);
   if (it == glonass_index_.end()) return no_ephemeris_at_all(satellite);
   return explain_no_record(data_.glonass, it->second, satellite, t, "", [](const GlonassEphemeris&) { return true; });
 }
 
-Result<const SbasEphemeris*> BroadcastEphemerides::select_sbas(const SatelliteId& satellite, const GnssTime& t) const {
-  if (const SbasEphemeris* found = find_sbas(satellite, t)) return found;
+Result<const SbasEphemeris*> BroadcastEphemerides::select_sbas(const SatelliteId& satellite, const GnssTime& t,
+                                                               std::span<const Signal> wanted) const {
+  if (const SbasEphemeris* found = find_sbas(satellite, t, wanted)) return found;
   const auto it = sbas_index_.find(satellite);
   if (it == sbas_index_.end()) return no_ephemeris_at_all(satellite);
   return explain_no_record(data_.sbas, it->second, satellite, t, "", [](const SbasEphemeris&) { return true; });
@@ -631,8 +628,18 @@ Result<const SbasEphemeris*> BroadcastEphemerides::select_sbas(const SatelliteId
 Result<SatelliteState> BroadcastEphemerides::state_for_signal(const SatelliteId& satellite, const Signal& signal,
                                                               const GnssTime& t) const {
   if (auto valid = check_signal(satellite, signal); !valid.ok()) return valid.error();
-  if (satellite.system == GnssSystem::kGlonass || satellite.system == GnssSystem::kSbas) return state(satellite, t);
-  auto record = select_with_fallback(*this, satellite, t, message_for(satellite, signal));
+  const std::span<const Signal> wanted(&signal, 1);
+  if (satellite.system == GnssSystem::kGlonass) {
+    auto record = select_glonass(satellite, t, wanted);
+    if (!record.ok()) return record.error();
+    return evaluate_glonass(**record, t);
+  }
+  if (satellite.system == GnssSystem::kSbas) {
+    auto record = select_sbas(satellite, t, wanted);
+    if (!record.ok()) return record.error();
+    return evaluate_sbas(**record, t);
+  }
+  auto record = select_with_fallback(*this, satellite, t, message_for(satellite, signal), wanted);
   if (!record.ok()) return record.error();
   return evaluate_kepler(**record, t);
 }
@@ -640,19 +647,29 @@ Result<SatelliteState> BroadcastEphemerides::state_for_signal(const SatelliteId&
 Result<double> BroadcastEphemerides::group_delay_for_signal(const SatelliteId& satellite, const Signal& signal,
                                                             const GnssTime& t) const {
   if (auto valid = check_signal(satellite, signal); !valid.ok()) return valid.error();
+  const std::span<const Signal> wanted(&signal, 1);
   if (satellite.system == GnssSystem::kGlonass) {
-    auto record = select_glonass(satellite, t);
+    auto record = select_glonass(satellite, t, wanted);
     if (!record.ok()) return record.error();
     return group_delay_s(**record, signal);
   }
   if (satellite.system == GnssSystem::kSbas) {
-    auto record = select_sbas(satellite, t);
+    auto record = select_sbas(satellite, t, wanted);
     if (!record.ok()) return record.error();
     return 0.0;  // SBAS broadcasts no group delay: a_Gf0 refers to its L1 signal
   }
-  auto record = select_with_fallback(*this, satellite, t, message_for(satellite, signal));
+  auto record = select_with_fallback(*this, satellite, t, message_for(satellite, signal), wanted);
   if (!record.ok()) return record.error();
   return group_delay_s(**record, signal);
+}
+
+bool BroadcastEphemerides::has_usable_record(const SatelliteId& satellite, const GnssTime& t,
+                                             std::span<const Signal> wanted) const {
+  switch (satellite.system) {
+    case GnssSystem::kGlonass: return find_glonass(satellite, t, wanted) != nullptr;
+    case GnssSystem::kSbas: return find_sbas(satellite, t, wanted) != nullptr;
+    default: return find_kepler(satellite, t, std::nullopt, wanted) != nullptr;
+  }
 }
 
 std::optional<int> BroadcastEphemerides::glonass_channel(const SatelliteId& satellite) const {

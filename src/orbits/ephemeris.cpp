@@ -147,6 +147,7 @@ void NavigationData::merge(NavigationData other) {
   }
   keep_first(leap_seconds, other.leap_seconds);
   for (auto& file : other.source_files) source_files.push_back(std::move(file));
+  for (auto& warning : other.warnings) warnings.push_back(std::move(warning));
 }
 
 }  // namespace skytrace::orbits

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -163,6 +164,13 @@ class NavReader {
     Status body = major_ == 2 ? parse_body_v2() : major_ == 3 ? parse_body_v3() : parse_body_v4();
     if (!body) return body.error();
     resolve_leap_seconds();
+    if (!skipped_.empty()) {
+      std::string list;
+      for (const auto& [what, count] : skipped_) {
+        list += std::string(list.empty() ? "" : ", ") + what + " (" + std::to_string(count) + ")";
+      }
+      data_.warnings.push_back(text_.name() + ": records defined by RINEX but not used, skipped: " + list);
+    }
     data_.source_files.push_back(text_.name());
     return std::move(data_);
   }
@@ -485,7 +493,11 @@ class NavReader {
       if (pos > start) token[count++] = line.substr(start, pos - start);
     }
     const std::string_view type = token[0];
-    if (type != "EPH" && type != "ION" && type != "STO") return Ok{};  // EOP and future records
+    if (type.empty()) return text_.error_at(head, "record start '>' without a record type (EPH, STO, EOP, ION)");
+    if (type != "EPH" && type != "ION" && type != "STO") {  // EOP and future records
+      ++skipped_[std::string(type) + " records"];
+      return Ok{};
+    }
     if (count < 3) return text_.error_at(head, "record start needs a satellite and a message type: " + quoted(line));
     auto sat = satellite_at(head, token[1]);
     if (!sat) return sat.error();
@@ -542,7 +554,10 @@ class NavReader {
         if (message == "SBAS") kind = Kind::kSbas;
         break;
     }
-    if (kind == Kind::kSkip) return Ok{};  // L1NV, L1OC, L3OC, ... are not used
+    if (kind == Kind::kSkip) {  // GLONASS L1OC/L3OC, NavIC L1NV, ...: not used
+      ++skipped_["EPH " + std::string(system_name(sat.system)) + " " + std::string(message)];
+      return Ok{};
+    }
 
     size_t min_rows = 8, max_rows = 8;
     switch (kind) {
@@ -582,7 +597,10 @@ class NavReader {
     if (sat.system == S::kBeiDou && message == "D1D2") klobuchar = &data_.ionosphere.beidou;
     if (sat.system == S::kNavic && message == "LNAV") klobuchar = &data_.ionosphere.navic;
     const bool nequick = sat.system == S::kGalileo && message == "IFNV";
-    if (klobuchar == nullptr && !nequick) return Ok{};  // BDGIM (CNVX) and others are not used
+    if (klobuchar == nullptr && !nequick) {  // BDGIM (CNVX) and others are not used
+      ++skipped_["ION " + std::string(system_name(sat.system)) + " " + std::string(message)];
+      return Ok{};
+    }
 
     if (auto status = check_rows(head, rows, sat, nequick ? 2 : 3, nequick ? 2 : 3); !status) return status;
     if (auto epoch = parse_epoch(rows.index[0], false); !epoch) return epoch.error();
@@ -950,6 +968,8 @@ class NavReader {
   GnssSystem v2_system_ = GnssSystem::kGps;
   size_t body_start_ = 0;
   std::optional<int> leap_value_;
+  // Records skipped as not used, by kind ("EOP records", "EPH GLONASS L1OC"), with their count.
+  std::map<std::string, size_t> skipped_;
   bool leap_is_bdt_ = false;
   bool leap_system_blank_ = true;
 };

@@ -36,10 +36,13 @@ bool is_beidou_legacy(const Signal& signal) {
           (signal.band == '7' && (signal.attribute == 'I' || signal.attribute == 'Q' || signal.attribute == 'X')));
 }
 
+// Records qualify when the signal they are used for is healthy in them (orbits::record_usable).
 const orbits::KeplerEphemeris* find_with_fallback(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
-                                                  const GnssTime& t, std::optional<orbits::NavMessage> message) {
-  const orbits::KeplerEphemeris* found = ephemerides.find_kepler(sat, t, message);
-  if (found == nullptr && message) found = ephemerides.find_kepler(sat, t, std::nullopt);
+                                                  const GnssTime& t, std::optional<orbits::NavMessage> message,
+                                                  const Signal& signal) {
+  const std::span<const Signal> wanted(&signal, 1);
+  const orbits::KeplerEphemeris* found = ephemerides.find_kepler(sat, t, message, wanted);
+  if (found == nullptr && message) found = ephemerides.find_kepler(sat, t, std::nullopt, wanted);
   return found;
 }
 
@@ -52,11 +55,11 @@ std::optional<Records> select_records(const orbits::BroadcastEphemerides& epheme
   Records out;
   switch (sat.system) {
     case GnssSystem::kGlonass:
-      out.glonass = ephemerides.find_glonass(sat, tag);
+      out.glonass = ephemerides.find_glonass(sat, tag, std::span<const Signal>(&signal, 1));
       if (out.glonass == nullptr) return std::nullopt;
       return out;
     case GnssSystem::kSbas:
-      out.sbas = ephemerides.find_sbas(sat, tag);
+      out.sbas = ephemerides.find_sbas(sat, tag, std::span<const Signal>(&signal, 1));
       if (out.sbas == nullptr) return std::nullopt;
       return out;
     default: break;
@@ -66,12 +69,12 @@ std::optional<Records> select_records(const orbits::BroadcastEphemerides& epheme
   if (is_beidou_legacy(signal)) {
     orbit_message = orbits::is_beidou_geo(sat) ? orbits::NavMessage::kBeiDouD2 : orbits::NavMessage::kBeiDouD1;
   }
-  out.orbit_kepler = find_with_fallback(ephemerides, sat, tag, orbit_message);
+  out.orbit_kepler = find_with_fallback(ephemerides, sat, tag, orbit_message, signal);
   if (out.orbit_kepler == nullptr) return std::nullopt;
   out.clock_kepler = out.orbit_kepler;
   const auto wanted = orbits::preferred_message(signal);
   if (wanted && *wanted != out.orbit_kepler->message) {
-    if (const auto* other = find_with_fallback(ephemerides, sat, tag, wanted)) out.clock_kepler = other;
+    if (const auto* other = find_with_fallback(ephemerides, sat, tag, wanted, signal)) out.clock_kepler = other;
   }
   return out;
 }

@@ -7,7 +7,7 @@ namespace skytrace::receiver {
 std::optional<GnssTime> ephemeris_held_from(const orbits::BroadcastEphemerides& ephemerides,
                                             const SatelliteId& satellite, const GnssTime& acquired,
                                             const std::vector<Signal>& signals) {
-  const std::vector<orbits::RecordAvailability> records = ephemerides.record_availability(satellite);
+  const std::vector<orbits::RecordAvailability> records = ephemerides.record_availability(satellite, signals);
   const auto carried = [&](orbits::NavMessage message) {
     return std::any_of(signals.begin(), signals.end(),
                        [&](const Signal& s) { return orbits::signal_carries(s, message); });

@@ -13,6 +13,7 @@
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/satellite_catalog.hpp"
+#include "skytrace/orbits/signal_health.hpp"
 #include "skytrace/receiver/ephemeris_decoding.hpp"
 #include "skytrace/receiver/link_budget.hpp"
 #include "skytrace/receiver/multipath.hpp"
@@ -38,15 +39,17 @@ struct RecordState {
 // The record a receiver holds at its own time `t_receiver` (the epoch tag, as RTKLIB selects with
 // the observation time), with a Galileo message preference falling back to the other message.
 // nullopt when it holds none (the broadcast layer's select_* explain why, at a cost per call).
+// Only records usable for one of the `wanted` signals qualify (orbits::record_usable).
 std::optional<RecordState> select_record(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
-                                         const GnssTime& t_receiver, std::optional<orbits::NavMessage> message) {
+                                         const GnssTime& t_receiver, std::optional<orbits::NavMessage> message,
+                                         std::span<const Signal> wanted) {
   RecordState out;
   switch (sat.system) {
-    case GnssSystem::kGlonass: out.glonass = ephemerides.find_glonass(sat, t_receiver); break;
-    case GnssSystem::kSbas: out.sbas = ephemerides.find_sbas(sat, t_receiver); break;
+    case GnssSystem::kGlonass: out.glonass = ephemerides.find_glonass(sat, t_receiver, wanted); break;
+    case GnssSystem::kSbas: out.sbas = ephemerides.find_sbas(sat, t_receiver, wanted); break;
     default:
-      out.kepler = ephemerides.find_kepler(sat, t_receiver, message);
-      if (out.kepler == nullptr && message) out.kepler = ephemerides.find_kepler(sat, t_receiver, std::nullopt);
+      out.kepler = ephemerides.find_kepler(sat, t_receiver, message, wanted);
+      if (out.kepler == nullptr && message) out.kepler = ephemerides.find_kepler(sat, t_receiver, std::nullopt, wanted);
       break;
   }
   if (out.kepler == nullptr && out.glonass == nullptr && out.sbas == nullptr) return std::nullopt;
@@ -60,7 +63,8 @@ std::optional<RecordState> select_record(const orbits::BroadcastEphemerides& eph
 // CNAV1/2/3; the other systems have one message. `default_record` is the receiver's default selection
 // (Galileo I/NAV first, other systems any message), reused when it is of the first rank.
 RecordState reference_record(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
-                             const GnssTime& t_receiver, const RecordState& default_record) {
+                             const GnssTime& t_receiver, const RecordState& default_record,
+                             std::span<const Signal> wanted) {
   using M = orbits::NavMessage;
   if (default_record.kepler == nullptr) return default_record;
   static constexpr std::array<M, 2> kGalileo{M::kGalileoInav, M::kGalileoFnav};
@@ -85,11 +89,26 @@ RecordState reference_record(const orbits::BroadcastEphemerides& ephemerides, co
       order.begin() + static_cast<long>(first_rank)) {
     return default_record;  // the closest record of any message is of the reference message
   }
-  for (const M wanted : order) {
-    if (const orbits::KeplerEphemeris* eph = ephemerides.find_kepler(sat, t_receiver, wanted)) {
+  for (const M message_wanted : order) {
+    if (const orbits::KeplerEphemeris* eph = ephemerides.find_kepler(sat, t_receiver, message_wanted, wanted)) {
       RecordState out;
       out.kepler = eph;
       return out;
+    }
+  }
+  return default_record;
+}
+
+// The record a receiver uses for a signal: the one of the message that belongs to it (Galileo E5a:
+// F/NAV; GPS L2C and L5: CNAV), when it holds one usable for its signals, else the satellite's
+// default record. The signal's health is read from it.
+RecordState record_for_signal(const orbits::BroadcastEphemerides& ephemerides, const SatelliteId& sat,
+                              const GnssTime& t_receiver, const RecordState& default_record, const Signal& signal,
+                              std::span<const Signal> receiver_signals) {
+  if (default_record.kepler != nullptr) {
+    const auto message = orbits::preferred_message(signal);
+    if (message && *message != default_record.kepler->message) {
+      if (auto r = select_record(ephemerides, sat, t_receiver, message, receiver_signals)) return *r;
     }
   }
   return default_record;
@@ -104,6 +123,18 @@ void evaluate_record(RecordState& record, const GnssTime& t, orbits::GlonassOrbi
   } else {
     record.state = orbits::evaluate_sbas(*record.sbas, t);
   }
+}
+
+// The signal's health as the record declares it, and why not when unhealthy.
+bool signal_healthy(const RecordState& record, const Signal& signal) {
+  if (record.kepler != nullptr) return orbits::signal_healthy(*record.kepler, signal);
+  if (record.glonass != nullptr) return orbits::signal_healthy(*record.glonass, signal);
+  return orbits::signal_healthy(*record.sbas, signal);
+}
+std::string health_description(const RecordState& record) {
+  if (record.kepler != nullptr) return orbits::health_description(*record.kepler);
+  if (record.glonass != nullptr) return orbits::health_description(*record.glonass);
+  return orbits::health_description(*record.sbas);
 }
 
 double group_delay_of(const RecordState& record, const Signal& signal) {
@@ -223,6 +254,7 @@ std::string_view to_string(SatelliteStatus status) {
     case SatelliteStatus::kNoSignal: return "no_signal";
     case SatelliteStatus::kBlocked: return "blocked";
     case SatelliteStatus::kAttenuated: return "attenuated";
+    case SatelliteStatus::kUnhealthy: return "unhealthy";
   }
   return "?";
 }
@@ -335,7 +367,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const std::optional<orbits::NavMessage> default_message =
         sat.system == GnssSystem::kGalileo ? std::optional(orbits::NavMessage::kGalileoInav) : std::nullopt;
 
-    std::optional<RecordState> record = select_record(ephemerides_, sat, tag, default_message);
+    std::optional<RecordState> record = select_record(ephemerides_, sat, tag, default_message, settings_.signals);
     if (!record) {
       obs.status = SatelliteStatus::kNoEphemeris;
       obs.detail = "no valid broadcast ephemeris";
@@ -345,7 +377,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     }
     // The truth: one orbit and clock per satellite, from its reference record (or the precise
     // products below), whatever record each signal's receiver-side message has.
-    RecordState truth = reference_record(ephemerides_, sat, tag, *record);
+    RecordState truth = reference_record(ephemerides_, sat, tag, *record, settings_.signals);
     // Light-time iteration. The record is evaluated once, at a guess of the transmission time (the
     // last epoch's flight time), and the iteration moves along the second-order expansion of the
     // orbit and clock around it: the step is microseconds after the first epoch, and below 12 ms
@@ -505,11 +537,21 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     // the acquisition threshold and hands the others over: while one signal of the satellite is
     // (or becomes) tracked, the others acquire down to the tracking threshold.
     candidates_.clear();
+    std::vector<RecordState> candidate_records;  // per candidate: the receiver's record for the signal
+    candidate_records.reserve(settings_.signals.size());
     bool satellite_acquirable = false;
     for (const Signal& signal : settings_.signals) {
       // A receiver records only what the satellite transmits (GPS L5 only from Block IIF on, no
       // B2I from BeiDou-3, ...); the answer is kept for the GPST day.
       if (signal.system != sat.system || !transmitted(sat, signal, tag)) continue;
+      // A signal its record declares unusable is not tracked (truth.csv says why).
+      RecordState signal_record = record_for_signal(ephemerides_, sat, tag, *record, signal, settings_.signals);
+      if (!signal_healthy(signal_record, signal)) {
+        arcs_[std::make_pair(sat, signal)].active = false;
+        obs.unhealthy_signals.push_back(UnhealthySignal{signal, health_description(signal_record)});
+        continue;
+      }
+      candidate_records.push_back(std::move(signal_record));
       // Multipath: the loops lock on the composite of the signal's paths.
       MultipathErrors multipath;
       if (!received.empty()) {
@@ -539,7 +581,8 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     // The phase error of the satellite's L1 C/A loop at this epoch, which aided loops follow.
     std::optional<double> aiding_phase_noise_m;
     for (const auto& [signal_pointer, cn0_dbhz] : candidates_) {
-      const MultipathErrors& multipath = multipath_of[candidate_index++];
+      const size_t this_candidate = candidate_index++;
+      const MultipathErrors& multipath = multipath_of[this_candidate];
       const Signal& signal = *signal_pointer;
       const SignalInfo* info = signal_info_.at(signal);
       const auto key = std::make_pair(sat, signal);
@@ -585,16 +628,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
 
       // The receiver side: the record a receiver uses for this signal (the message that belongs to
       // it, Galileo E5a: F/NAV), which nav.rnx must carry.
-      const RecordState* signal_record = &*record;
-      std::optional<RecordState> other_record;
-      if (record->kepler != nullptr) {
-        const auto wanted = orbits::preferred_message(signal);
-        if (wanted && *wanted != record->kepler->message) {
-          auto r = select_record(ephemerides_, sat, tag, wanted);
-          if (r && r->kepler != record->kepler) other_record = std::move(*r);
-          if (other_record) signal_record = &*other_record;
-        }
-      }
+      const RecordState* signal_record = &candidate_records[this_candidate];
       records_used_.emplace_back(signal_record->kepler, signal_record->glonass, signal_record->sbas);
 
       // The truth: the satellite's one clock, and the signal's code delay relative to it from the
@@ -706,6 +740,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       obs.detail = std::string(outcomes[pending_index].blocking_object) + " (indirect paths too weak)";
       obs.path_kind = PathKind::kNone;  // paths.csv still lists them
       arcs_lost(sat);
+    } else if (obs.signals.empty() && candidates_.empty() && !obs.unhealthy_signals.empty()) {
+      obs.status = SatelliteStatus::kUnhealthy;  // every signal it transmits of the listed ones
+      obs.detail = obs.unhealthy_signals.front().reason;
     } else if (obs.signals.empty()) {
       const bool attenuated = attenuation_db > 0.0 && not_tracked_because.starts_with("below");
       obs.status = attenuated ? SatelliteStatus::kAttenuated : SatelliteStatus::kNoSignal;

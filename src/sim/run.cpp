@@ -300,6 +300,14 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
                           : std::string(kNoGeometry);
     };
     const std::string geometry = geometry_with(sat.satellite_clock_m);
+    // A row per signal its navigation record declares unusable (the others may be tracked).
+    for (const auto& unhealthy : sat.unhealthy_signals) {
+      fmt::format_to(std::back_inserter(out), "{},{},{},{},unhealthy,{},,,{},{},{},{},{:.2f},{},{},,,\n", time,
+                     receiver_name, sat_name, unhealthy.signal.to_string(), geometry,
+                     fmt::format("{:.4f}", sat.troposphere_m), rx_clock, kNoSignalValues, receiver_part,
+                     sat.vegetation_attenuation_db, csv_text(unhealthy.reason), receiver::to_string(sat.path_kind));
+    }
+    if (sat.signals.empty() && sat.status == receiver::SatelliteStatus::kUnhealthy) continue;  // said above
     if (sat.signals.empty()) {
       // One row for the satellite: why it is not observed, with the geometry when known.
       const std::string atmosphere = sat.status == receiver::SatelliteStatus::kTracked ||
@@ -371,7 +379,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (!generator) return generator.error();
     rx.generator = std::move(*generator);
     rx.file_name = s.receivers.size() == 1 ? "obs.rnx" : "obs_" + rx.settings->name + ".rnx";
-    rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides);
+    rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides, resources->left_out_systems);
     rx.records = std::make_unique<RinexRecordMaker>(rx.header);
     if (auto st = rx.writer.open(staging->file(rx.file_name), rx.header); !st) {
       return st.error();

@@ -186,31 +186,60 @@ Result<orbits::NavigationData> load_navigation(const Scenario& s) {
   return all;
 }
 
-Status check_coverage(const Scenario& s, const orbits::BroadcastEphemerides& eph, const GnssTime& start,
-                      const GnssTime& end) {
-  std::set<GnssSystem> systems;
+Result<SystemCoverage> check_coverage(const Scenario& s, const orbits::BroadcastEphemerides& eph,
+                                      const GnssTime& start, const GnssTime& end) {
+  std::map<GnssSystem, std::vector<Signal>> wanted;  // the receivers' signals per system
   for (const auto& r : s.receivers) {
-    for (const auto& signal : r.signals) systems.insert(signal.system);
+    for (const auto& signal : r.signals) wanted[signal.system].push_back(signal);
   }
-  for (GnssSystem system : systems) {
+  const auto [first, last] = navigation_span(eph.data());
+  const auto why = [&](GnssSystem system, const char* which, const GnssTime& t) {
+    return fmt::format("the navigation data has no valid {} ephemeris at the scenario's {} ({} GPST); the "
+                       "navigation files cover {} to {} GPST",
+                       system_name(system), which, t.to_iso8601(TimeScale::kGpst, 0),
+                       first.to_iso8601(TimeScale::kGpst, 0), last.to_iso8601(TimeScale::kGpst, 0));
+  };
+  SystemCoverage out;
+  std::vector<std::string> reasons;
+  for (const auto& [system, signals] : wanted) {
     bool at_start = false, at_end = false;
     for (const SatelliteId& sat : eph.satellites()) {
       if (sat.system != system) continue;
-      at_start = at_start || eph.state(sat, start).ok();
-      at_end = at_end || eph.state(sat, end).ok();
+      at_start = at_start || eph.has_usable_record(sat, start, signals);
+      at_end = at_end || eph.has_usable_record(sat, end, signals);
       if (at_start && at_end) break;
     }
-    if (!at_start || !at_end) {
-      const auto [first, last] = navigation_span(eph.data());
-      return make_error(ErrorCode::kOutOfRange,
-                        fmt::format("the navigation data has no valid {} ephemeris at the scenario's {} ({} GPST); the "
-                                    "navigation files cover {} to {} GPST",
-                                    system_name(system), at_start ? "end" : "start",
-                                    (at_start ? end : start).to_iso8601(TimeScale::kGpst, 0),
-                                    first.to_iso8601(TimeScale::kGpst, 0), last.to_iso8601(TimeScale::kGpst, 0)));
+    if (!at_start) {
+      // A receiver tracks what it holds ephemerides for: the system is left out, as it would be.
+      reasons.push_back(why(system, "start", start));
+      out.left_out.emplace(system, reasons.back() + "; its signals are left out");
+    } else if (!at_end) {
+      out.warnings.push_back(why(system, "end", end) + "; its satellites have no ephemeris from some time on");
     }
   }
-  return Ok{};
+  if (!wanted.empty() && out.left_out.size() == wanted.size()) {
+    std::string message;
+    for (const auto& reason : reasons) message += (message.empty() ? "" : "; ") + reason;
+    return make_error(ErrorCode::kOutOfRange, message);
+  }
+  for (const auto& r : s.receivers) {
+    const bool served = std::any_of(r.signals.begin(), r.signals.end(),
+                                    [&](const Signal& signal) { return out.left_out.count(signal.system) == 0; });
+    if (!served) {
+      return make_error(ErrorCode::kOutOfRange,
+                        fmt::format("receiver '{}': none of its systems can be served: {}", r.name,
+                                    out.left_out.at(r.signals.front().system)));
+    }
+  }
+  return out;
+}
+
+std::vector<Signal> served_signals(const ReceiverSettings& receiver, const std::map<GnssSystem, std::string>& left_out) {
+  std::vector<Signal> out;
+  for (const Signal& signal : receiver.signals) {
+    if (left_out.count(signal.system) == 0) out.push_back(signal);
+  }
+  return out;
 }
 
 Result<ScenarioResources> prepare_resources(const Scenario& s) {
@@ -220,6 +249,7 @@ Result<ScenarioResources> prepare_resources(const Scenario& s) {
   r.world = std::move(*world);
   auto navigation = load_navigation(s);
   if (!navigation) return navigation.error();
+  r.warnings = navigation->warnings;
   if (s.models.ionosphere == "ionex") {
     auto maps = atmosphere::read_ionex(*s.models.ionex_file);
     if (!maps) return maps.error();
@@ -247,13 +277,19 @@ Result<ScenarioResources> prepare_resources(const Scenario& s) {
     r.precise = std::make_unique<orbits::PreciseEphemerides>(std::move(*created));
   }
   const GnssTime end = s.time.start + s.time.duration_s;
-  if (auto coverage = check_coverage(s, *r.ephemerides, s.time.start, end); !coverage) {
-    return coverage.error();
-  }
+  auto coverage = check_coverage(s, *r.ephemerides, s.time.start, end);
+  if (!coverage) return coverage.error();
+  for (const auto& [system, warning] : coverage->left_out) r.warnings.push_back(warning);
+  for (auto& warning : coverage->warnings) r.warnings.push_back(std::move(warning));
+  r.left_out_systems = std::move(coverage->left_out);
   if (r.precise) {
     auto precise_coverage = check_precise_coverage(s, *r.ephemerides, *r.precise, s.time.start, end);
     if (!precise_coverage) return precise_coverage.error();
     r.precise_coverage = std::move(*precise_coverage);
+    // Satellites of left-out systems are not observed: nothing to say about their products.
+    const auto left_out = [&](const auto& entry) { return r.left_out_systems.count(entry.first.system) != 0; };
+    std::erase_if(r.precise_coverage->lacking, left_out);
+    std::erase_if(r.precise_coverage->gaps, left_out);
     for (auto& warning : r.precise_coverage->warnings()) r.warnings.push_back(std::move(warning));
   }
   return r;
@@ -321,7 +357,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
     profile->oscillator.h_minus2 = preset->h_minus2;
   }
   receiver::GeneratorSettings g;
-  g.signals = rx.signals;
+  g.signals = served_signals(rx, resources.left_out_systems);
   g.elevation_mask_deg = rx.elevation_mask_deg;
   g.profile = *profile;
   g.ionosphere = resources.ionosphere;
@@ -344,7 +380,8 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
 }
 
 io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverSettings& rx,
-                                              const Eigen::Vector3d& marker_m, const orbits::BroadcastEphemerides& eph) {
+                                              const Eigen::Vector3d& marker_m, const orbits::BroadcastEphemerides& eph,
+                                              const std::map<GnssSystem, std::string>& left_out_systems) {
   io::ObservationHeader h;
   h.version = s.output.rinex_version == "4.00" ? 4.00 : 3.04;
   h.program = "skytrace 0.1.0";
@@ -363,7 +400,7 @@ io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverS
   h.antenna_type = rx.antenna_type;
   h.approx_position_ecef_m = {marker_m.x(), marker_m.y(), marker_m.z()};
   h.antenna_delta_hen_m = {rx.antenna_height_m, rx.antenna_offset_en_m.x(), rx.antenna_offset_en_m.y()};
-  for (const Signal& signal : rx.signals) {
+  for (const Signal& signal : served_signals(rx, left_out_systems)) {
     auto& types = h.observation_types[signal.system];
     for (char kind : {'C', 'L', 'D', 'S'}) types.push_back(io::ObservationType{std::string{kind} + signal.code(), ""});
   }

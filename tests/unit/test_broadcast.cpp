@@ -591,7 +591,7 @@ TEST(BroadcastSelection, ClosestToeWithinWindowPreferringLaterOnTies) {
   NavigationData data;
   const GnssTime day = gpst(2020, 6, 25, 0, 0, 0);
   for (int h : {0, 2, 4}) data.kepler.push_back(gps_at(1, day + h * 3600.0));
-  data.kepler.push_back(gps_at(1, day + 6 * 3600.0, 1));  // unhealthy
+  data.kepler.push_back(gps_at(1, day + 6 * 3600.0, 63));  // unhealthy (NAV data bad, code 31)
   data.kepler.back().iode = 99;
   const BroadcastEphemerides eph(data);
   const SatelliteId g01{GnssSystem::kGps, 1};
@@ -609,7 +609,7 @@ TEST(BroadcastSelection, ClosestToeWithinWindowPreferringLaterOnTies) {
   EXPECT_EQ(late.error().code, ErrorCode::kOutOfRange);
   EXPECT_EQ(late.error().message,
             "no ephemeris for G01 at 2020-06-25T06:30:00 GPST (nearest healthy record toe 2020-06-25T04:00:00, 2.5 h "
-            "away; limit 2.0 h); 1 unhealthy record(s) within the limit (health 1)");
+            "away; limit 2.0 h); 1 unhealthy record(s) within the limit (health 63)");
   const auto early = eph.select_kepler(g01, day - 2.5 * 3600.0);
   ASSERT_FALSE(early.ok());
   EXPECT_EQ(early.error().code, ErrorCode::kOutOfRange);

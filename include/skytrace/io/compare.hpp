@@ -84,6 +84,8 @@ struct SignalComparison {
 struct ComparisonReport {
   std::string real_name;  // file names as given (set by compare_observation_files)
   std::string sim_name;
+  // The readers' notes on both files (types read but not used, e.g. channel numbers X1).
+  std::vector<std::string> warnings;
   size_t real_epochs = 0;  // observation epochs (event epochs not counted)
   size_t sim_epochs = 0;
   size_t common_epochs = 0;  // matched to within 1 ms

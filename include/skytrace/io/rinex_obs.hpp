@@ -24,14 +24,15 @@ namespace skytrace::io {
 
 // One observation type of one system.
 struct ObservationType {
-  // RINEX 3 code: type letter (C code, L phase, D Doppler, S signal strength, X channel), band digit
-  // and attribute, e.g. "C1C", "L2W". Empty when a RINEX 2 code has no RINEX 3 equivalent for the
+  // RINEX 3 code: type letter (C code, L phase, D Doppler, S signal strength, I ionosphere delay,
+  // X receiver channel), band digit and attribute, e.g. "C1C", "L2W"; "X1" and "I5" (RINEX 3.01+:
+  // the attribute of these two is blank). Empty when a RINEX 2 code has no RINEX 3 equivalent for the
   // system (rinex2_code then tells what the column holds).
   std::string code;
   // The two-letter code of a RINEX 2 file ("C1", "P2", "L1"), empty for RINEX 3 and 4 files.
   std::string rinex2_code;
 
-  // 'C', 'L', 'D', 'S', 'X' (a RINEX 2 'P' code counts as 'C'), or '\0' if unknown.
+  // 'C', 'L', 'D', 'S', 'I', 'X' (a RINEX 2 'P' code counts as 'C'), or '\0' if unknown (RINEX 2 'T').
   [[nodiscard]] char kind() const;
   friend bool operator==(const ObservationType&, const ObservationType&) = default;
 };
@@ -153,6 +154,11 @@ struct ObservationHeader {
 struct ObservationFile {
   ObservationHeader header;
   std::vector<ObservationEpoch> epochs;
+  // Reader: what the format defines but skytrace does not use (channel numbers X1, ionosphere
+  // pseudo-observables I, codes of signals outside the catalogue, RINEX 2 types without a RINEX 3
+  // equivalent): one note per file naming them, each prefixed with the file name. Their columns are
+  // read and left alone.
+  std::vector<std::string> warnings;
 };
 
 // Reads a RINEX 2.10/2.11, 3.0x or 4.0x observation file (plain or gzip). Errors name file and line.

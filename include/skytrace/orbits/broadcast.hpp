@@ -4,6 +4,7 @@
 #include <array>
 
 #include <optional>
+#include <span>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
@@ -67,7 +68,7 @@ class GlonassOrbitCache {
 // B2a, CNAV3 on B2b; NavIC LNAV on every signal; GLONASS FDMA on L1 and L2; SBAS on every signal.
 [[nodiscard]] bool signal_carries(const Signal& signal, NavMessage message);
 
-// One healthy record of a satellite as a receiver can come to hold it: its message, the span of
+// One usable record of a satellite as a receiver can come to hold it: its message, the span of
 // receiver time over which ephemeris selection may pick it (toe -/+ the validity half window;
 // Galileo from toe, as selection takes only records whose toe has passed) and when it was
 // transmitted (transmission_time(), nullopt when the file does not say).
@@ -83,19 +84,29 @@ class BroadcastEphemerides final : public SatelliteStateSource {
  public:
   explicit BroadcastEphemerides(NavigationData data);
 
-  // The record a receiver would use at t: healthy, time of ephemeris closest to t and within the
-  // system's validity window, of the requested message type when given (else any). Errors name the
-  // satellite and time and say why none qualifies.
+  // The record a receiver would use at t: usable for the signals it wants (record_usable: one of
+  // `wanted` healthy; any signal of the system when `wanted` names none of it), time of ephemeris
+  // closest to t and within the system's validity window, of the requested message type when given
+  // (else any). Errors name the satellite and time and say why none qualifies.
   [[nodiscard]] Result<const KeplerEphemeris*> select_kepler(const SatelliteId& satellite, const GnssTime& t,
-                                                             std::optional<NavMessage> message = std::nullopt) const;
-  [[nodiscard]] Result<const GlonassEphemeris*> select_glonass(const SatelliteId& satellite, const GnssTime& t) const;
-  [[nodiscard]] Result<const SbasEphemeris*> select_sbas(const SatelliteId& satellite, const GnssTime& t) const;
+                                                             std::optional<NavMessage> message = std::nullopt,
+                                                             std::span<const Signal> wanted = {}) const;
+  [[nodiscard]] Result<const GlonassEphemeris*> select_glonass(const SatelliteId& satellite, const GnssTime& t,
+                                                               std::span<const Signal> wanted = {}) const;
+  [[nodiscard]] Result<const SbasEphemeris*> select_sbas(const SatelliteId& satellite, const GnssTime& t,
+                                                         std::span<const Signal> wanted = {}) const;
   // The same selections without building an explanation: nullptr when no record qualifies (for
   // per-epoch loops, where most misses are satellites simply not broadcasting to this station).
   [[nodiscard]] const KeplerEphemeris* find_kepler(const SatelliteId& satellite, const GnssTime& t,
-                                                   std::optional<NavMessage> message = std::nullopt) const;
-  [[nodiscard]] const GlonassEphemeris* find_glonass(const SatelliteId& satellite, const GnssTime& t) const;
-  [[nodiscard]] const SbasEphemeris* find_sbas(const SatelliteId& satellite, const GnssTime& t) const;
+                                                   std::optional<NavMessage> message = std::nullopt,
+                                                   std::span<const Signal> wanted = {}) const;
+  [[nodiscard]] const GlonassEphemeris* find_glonass(const SatelliteId& satellite, const GnssTime& t,
+                                                     std::span<const Signal> wanted = {}) const;
+  [[nodiscard]] const SbasEphemeris* find_sbas(const SatelliteId& satellite, const GnssTime& t,
+                                               std::span<const Signal> wanted = {}) const;
+  // Whether the receiver holds a record of the satellite usable for `wanted` at t (any message).
+  [[nodiscard]] bool has_usable_record(const SatelliteId& satellite, const GnssTime& t,
+                                       std::span<const Signal> wanted = {}) const;
 
   // State from the record selected for a signal: the preferred message (Galileo: I/NAV or F/NAV to
   // match it; BeiDou B1I/B2I/B3I: D1, or D2 for GEO), falling back to any message when none of the
@@ -105,8 +116,10 @@ class BroadcastEphemerides final : public SatelliteStateSource {
   // Code group delay of the signal from the record selected for it.
   [[nodiscard]] Result<double> group_delay_for_signal(const SatelliteId& satellite, const Signal& signal,
                                                       const GnssTime& t) const;
-  // The satellite's healthy records of every message, in order of toe (Keplerian, GLONASS, SBAS).
-  [[nodiscard]] std::vector<RecordAvailability> record_availability(const SatelliteId& satellite) const;
+  // The satellite's records usable for `wanted` of every message, in order of toe (Keplerian,
+  // GLONASS, SBAS).
+  [[nodiscard]] std::vector<RecordAvailability> record_availability(const SatelliteId& satellite,
+                                                                    std::span<const Signal> wanted = {}) const;
   // GLONASS frequency channel k of a satellite from its records.
   [[nodiscard]] std::optional<int> glonass_channel(const SatelliteId& satellite) const;
 

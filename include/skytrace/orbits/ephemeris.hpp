@@ -189,6 +189,9 @@ struct NavigationData {
   std::vector<TimeSystemCorrection> time_corrections;
   std::optional<int> leap_seconds;  // GPS - UTC from the header, when given
   std::vector<std::string> source_files;
+  // What the readers skipped as defined but not used (RINEX 4 EOP records, GLONASS CDMA and other
+  // messages, BDGIM ionosphere, ...): one note per file, naming the file.
+  std::vector<std::string> warnings;
 
   // Appends another file's content; records identical to ones already present are dropped, and
   // header values already known are kept.

@@ -13,7 +13,8 @@
 namespace skytrace::receiver {
 
 // A satellite acquired at `acquired` (after none of its signals was tracked) is held from the
-// earliest, over its healthy records still valid at or after `acquired`, of
+// earliest, over its records usable for `signals` (orbits::record_usable) still valid at or after
+// `acquired`, of
 //
 //     max(acquired + decode time of the record's message, transmission time of the record)
 //

@@ -80,6 +80,7 @@ enum class SatelliteStatus {
   kNoSignal,    // transmits none of the listed signals
   kBlocked,     // the world blocks the line of sight (detail: the blocking object)
   kAttenuated,  // vegetation lowers every signal below the tracking threshold
+  kUnhealthy,   // the navigation message declares every listed signal it transmits unusable
 };
 [[nodiscard]] std::string_view to_string(SatelliteStatus status);
 
@@ -115,10 +116,18 @@ struct SignalMeasurement {
 enum class PathKind { kNone, kLos, kMultipath, kNlos };
 [[nodiscard]] std::string_view to_string(PathKind kind);
 
+// A listed signal the satellite transmits but its navigation record declares unusable
+// (orbits::signal_healthy): not tracked, not output.
+struct UnhealthySignal {
+  Signal signal;
+  std::string reason;  // the health word decoded, e.g. "GPS LNAV health 23 (L1 signals dead)"
+};
+
 struct SatelliteObservation {
   SatelliteId satellite;
   SatelliteStatus status = SatelliteStatus::kTracked;
   std::string detail;  // why not tracked, for the truth file
+  std::vector<UnhealthySignal> unhealthy_signals;  // left out for their health (the others may be tracked)
   // Tracked, but not output until the receiver holds an ephemeris for it (profile
   // tracking.output_requires_ephemeris; status kNoEphemeris, no signals). Unlike a satellite
   // without any valid record, its geometry and atmosphere are filled in.

@@ -54,14 +54,33 @@ struct ScenarioResources {
   std::optional<PreciseTruthCoverage> precise_coverage;            // with precise: over the scenario's span
   std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;  // nullptr: none
   std::vector<std::string> warnings;                               // for the user (run: stderr, summary)
+  // Systems of the receivers' signals without any usable ephemeris at the start (check_coverage),
+  // with the warning: left out of the generators and the observation headers.
+  std::map<GnssSystem, std::string> left_out_systems;
+};
+
+// What the broadcast records can serve of the receivers' systems over a run.
+struct SystemCoverage {
+  // Systems none of whose satellites has a record usable for the receivers' signals of the system
+  // at the start, with the warning saying so.
+  std::map<GnssSystem, std::string> left_out;
+  // Systems served at the start but not at the end (their satellites lose their ephemerides).
+  std::vector<std::string> warnings;
 };
 
 // Loads everything the scenario names and checks the ephemerides cover [start, end] (the scenario's
 // span by default): the broadcast records (check_coverage) and, when given, the precise products
 // (check_precise_coverage). Errors name the file or key.
 [[nodiscard]] Result<ScenarioResources> prepare_resources(const Scenario& scenario);
-[[nodiscard]] Status check_coverage(const Scenario& scenario, const orbits::BroadcastEphemerides& ephemerides,
-                                    const GnssTime& start, const GnssTime& end);
+// Broadcast coverage of the receivers' systems: a system without a usable record at `start` is left
+// out (as a receiver does), one without at `end` warned about; an error (kOutOfRange, exit 4) naming
+// the systems and the files' span when no system can be served, or a receiver keeps none of its own.
+[[nodiscard]] Result<SystemCoverage> check_coverage(const Scenario& scenario,
+                                                    const orbits::BroadcastEphemerides& ephemerides,
+                                                    const GnssTime& start, const GnssTime& end);
+// A receiver's signals without those of left-out systems.
+[[nodiscard]] std::vector<Signal> served_signals(const ReceiverSettings& receiver,
+                                                 const std::map<GnssSystem, std::string>& left_out_systems);
 // The precise products against the run [start, end]: an error (kOutOfRange, exit 4) naming the key,
 // the files, their span and the run's when the SP3 epochs or the clock file's samples do not reach
 // from start to end (the fraction of a second of flight time before start is extrapolated, as the
@@ -93,9 +112,10 @@ struct ScenarioResources {
     std::shared_ptr<const receiver::KinematicsSource> kinematics);
 
 // The RINEX header of a receiver's observation file.
-[[nodiscard]] io::ObservationHeader make_observation_header(const Scenario& scenario, const ReceiverSettings& receiver,
-                                                            const Eigen::Vector3d& marker_m,
-                                                            const orbits::BroadcastEphemerides& ephemerides);
+// Signals of `left_out_systems` (ScenarioResources) are not listed.
+[[nodiscard]] io::ObservationHeader make_observation_header(
+    const Scenario& scenario, const ReceiverSettings& receiver, const Eigen::Vector3d& marker_m,
+    const orbits::BroadcastEphemerides& ephemerides, const std::map<GnssSystem, std::string>& left_out_systems = {});
 
 // The creation date written into RINEX headers ("YYYYMMDD HHMMSS UTC"): SOURCE_DATE_EPOCH (seconds
 // since 1970, the reproducible-builds convention) when set, else the scenario's start time, so
