@@ -72,7 +72,7 @@ PositionSetting::Kind parse_frame(const Node& node) {
 
 ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& base, const std::string& default_name) {
   node.expect_keys({"name", "position", "trajectory", "antenna_height_m", "antenna_offset_en_m", "elevation_mask_deg",
-                    "profile", "signals", "receiver_type", "antenna_type"});
+                    "profile", "signals", "receiver_type", "antenna_type", "rtk"});
   ReceiverSettings r;
   r.name = default_name;
   if (auto c = node.child("name")) {
@@ -119,6 +119,12 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
   if (r.signals.empty()) signals.fail("list at least one signal");
   if (auto c = node.child("receiver_type")) r.receiver_type = c->as_string();
   if (auto c = node.child("antenna_type")) r.antenna_type = c->as_string();
+  if (auto c = node.child("rtk")) {
+    c->expect_keys({"base"});
+    RtkSettings rtk;
+    rtk.base = c->required("base").as_string();
+    r.rtk = rtk;
+  }
   return r;
 }
 
@@ -248,6 +254,17 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     for (const Node& r : c->elements()) s.receivers.push_back(parse_receiver(r, base, "RX" + std::to_string(++index)));
   }
   if (s.receivers.empty()) root.fail("missing required key 'receiver' (or 'receivers')");
+  for (size_t i = 0; i < s.receivers.size(); ++i) {
+    const auto& r = s.receivers[i];
+    if (!r.rtk) continue;
+    const auto base = std::find_if(s.receivers.begin(), s.receivers.end(),
+                                   [&](const ReceiverSettings& other) { return other.name == r.rtk->base; });
+    const Node where = root.child("receivers") ? root.required("receivers").elements()[i].required("rtk").required("base")
+                                               : root.required("receiver").required("rtk").required("base");
+    if (base == s.receivers.end()) where.fail("rtk base '" + r.rtk->base + "' is not a receiver of this scenario");
+    if (base->name == r.name) where.fail("a receiver cannot be its own rtk base");
+    if (base->rtk) where.fail("rtk base '" + r.rtk->base + "' has an rtk base itself (chains are not supported)");
+  }
   if (auto c = root.child("receivers")) {
     // Each receiver's outputs are named after it (obs_NAME.rnx): two of one name would overwrite.
     const auto elements = c->elements();
@@ -445,6 +462,7 @@ std::string scenario_to_json(const Scenario& s) {
     for (const auto& sig : r.signals) jr["signals"].push_back(sig.to_string());
     jr["receiver_type"] = r.receiver_type;
     jr["antenna_type"] = r.antenna_type;
+    if (r.rtk) jr["rtk"] = {{"base", r.rtk->base}};
     j["receivers"].push_back(jr);
   }
   j["ephemeris"] = {{"navigation", paths(s.ephemeris.navigation)},

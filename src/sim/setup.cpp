@@ -244,6 +244,15 @@ std::vector<Signal> served_signals(const ReceiverSettings& receiver, const std::
 
 Result<ScenarioResources> prepare_resources(const Scenario& s) {
   ScenarioResources r;
+  for (const auto& receiver : s.receivers) {
+    // Said plainly rather than run with a single-point fix the scenario did not ask for.
+    if (receiver.rtk) {
+      return make_error(ErrorCode::kUnsupported,
+                        s.source.string() + ": receiver '" + receiver.name + "': rtk (an RTK solution from base '" +
+                            receiver.rtk->base + "') is not implemented in this version yet; remove the rtk key "
+                            "to simulate the pair's observations");
+    }
+  }
   auto world = load_world(s);
   if (!world) return world.error();
   r.world = std::move(*world);

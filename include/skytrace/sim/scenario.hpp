@@ -39,6 +39,12 @@ struct TrajectorySetting {
   TimeScale time_scale = TimeScale::kGpst;
 };
 
+// receiver.rtk: the receiver computes an RTK solution from its own carrier phases and the
+// corrections of a base (docs/scenario.md).
+struct RtkSettings {
+  std::string base;  // another receiver of the same scenario
+};
+
 struct ReceiverSettings {
   std::string name = "SKYT";  // marker name in RINEX
   std::optional<PositionSetting> position;
@@ -50,6 +56,7 @@ struct ReceiverSettings {
   std::vector<Signal> signals;
   std::string receiver_type = "SKYTRACE";
   std::string antenna_type = "";
+  std::optional<RtkSettings> rtk;
 };
 
 struct EphemerisSettings {
