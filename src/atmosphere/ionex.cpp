@@ -368,11 +368,11 @@ class Parser {
       if (label == "START OF TEC MAP" || label == "START OF RMS MAP") {
         const bool rms = label == "START OF RMS MAP";
         const std::uint64_t per_map = static_cast<std::uint64_t>(maps_.latitude.count()) * maps_.longitude.count();
-        const std::uint64_t file_limit = 10 * input_limits().max_grid_points;
+        const std::uint64_t file_limit = 5 * input_limits().max_grid_points;
         if ((maps_.tec_maps.size() + maps_.rms_maps.size() + 1) * per_map > file_limit) {
           return error_at(i_, cat("the maps of this file hold more than ", file_limit, " grid points together ",
                                   limit_hint(input_limits().max_grid_points, "SKYTRACE_MAX_GRID_POINTS"),
-                                  " (ten times the per-map limit)"));
+                                  " (five times the per-map limit)"));
         }
         auto map = read_map(rms ? "RMS" : "TEC");
         if (!map.ok()) return map.error();

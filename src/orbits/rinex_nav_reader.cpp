@@ -794,7 +794,7 @@ class NavReader {
     e.cus_rad = f.required(2, 2, "Cus");
     // 1000-10000 sqrt(m): semi-major axes from 1,000 to 100,000 km hold every navigation orbit.
     e.sqrt_a_sqrtm = f.required_in(2, 3, "sqrt(A)", 1000.0, 10000.0, "a semi-major axis of 1,000 to 100,000 km");
-    e.toe_sow = f.required(3, 0, "Toe");
+    e.toe_sow = f.required_in(3, 0, "Toe", 0.0, 604800.0, "seconds of the week");
     e.cic_rad = f.required(3, 1, "Cic");
     e.omega0_rad = f.required(3, 2, "OMEGA0");
     e.cis_rad = f.required(3, 3, "Cis");

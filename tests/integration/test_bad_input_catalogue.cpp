@@ -257,7 +257,7 @@ TEST_F(BadInputCatalogue, ToeOf1e40IsRefused) {
   write_text(dir_ / "toe.rnx", join_lines(lines));
   run_case(skytrace_cmd() + " orbits --nav " + q(dir_ / "toe.rnx") +
                " --start 2026-03-01T12:00:00 --duration-s 600 --interval-s 300 --csv " + q(dir_ / "o.csv"),
-           3, "toe.rnx:" + std::to_string(record + 4) + ":");
+           3, "toe.rnx:" + std::to_string(record + 4) + ": field 'Toe'.*seconds of the week");
 }
 
 TEST_F(BadInputCatalogue, OrbitsWithANanosecondStepIsRefusedAtOnce) {
@@ -300,18 +300,27 @@ TEST_F(BadInputCatalogue, SdfModelsIncludingEachOtherAreACycle) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "closes a cycle");
 }
 
-TEST_F(BadInputCatalogue, IonexGridOfATenThousandthDegreeIsRefused) {
+TEST_F(BadInputCatalogue, IonexStepOfATenThousandthDegreeIsRefused) {
+  // F6.1 cannot hold 0.0001: the step reads as 0, which is no grid.
   write_text(dir_ / "tiny.26i",
              ionex_text("  -180.0 180.0 0.0001                                       LON1 / LON2 / DLON\n", kGoodExponent));
   write_text(dir_ / "s.yaml", nominal_scenario() + "models:\n  ionosphere: ionex\n  ionex_file: tiny.26i\n");
-  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "tiny.26i.*grid points");
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "tiny.26i:11: field LON1 / LON2 / DLON: invalid grid");
+}
+
+TEST_F(BadInputCatalogue, IonexGridBeyondTheLimitIsRefusedBeforeAllocation) {
+  // The 3 x 4 grid of the file against a limit lowered to 10 points.
+  write_text(dir_ / "grid.26i", ionex_text(kGoodLon, kGoodExponent));
+  write_text(dir_ / "s.yaml", nominal_scenario() + "models:\n  ionosphere: ionex\n  ionex_file: grid.26i\n");
+  run_case("SKYTRACE_MAX_GRID_POINTS=10 " + run_cmd(dir_ / "s.yaml", dir_ / "out"), 3,
+           "grid.26i: LAT1 / LAT2 / DLAT and LON1 / LON2 / DLON give 12 grid points per map \\(limit 10");
 }
 
 TEST_F(BadInputCatalogue, IonexExponentOf400BlamesTheIonexFile) {
   write_text(dir_ / "exp.26i",
              ionex_text(kGoodLon, "   400                                                      EXPONENT\n"));
   write_text(dir_ / "s.yaml", nominal_scenario() + "models:\n  ionosphere: ionex\n  ionex_file: exp.26i\n");
-  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "exp.26i:11: field EXPONENT");
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "exp.26i:12: field EXPONENT: expected an integer from -9 to 9");
 }
 
 TEST_F(BadInputCatalogue, GzipBombStopsAtTheDecompressionLimit) {
@@ -332,14 +341,14 @@ TEST_F(BadInputCatalogue, OsmWayOfAHundredThousandSelfCrossingNodesFailsFast) {
   osm << "<?xml version='1.0' encoding='UTF-8'?>\n<osm version='0.6' generator='test'>\n";
   constexpr int kNodes = 100000;
   osm.precision(9);
-  for (int i = 1; i <= kNodes; ++i) {
+  for (long long i = 1; i <= kNodes; ++i) {
     // A zigzag that crosses itself everywhere.
-    const double lat = 48.1 + 0.001 * ((i * 7919) % 1000) / 1000.0;
-    const double lon = 11.6 + 0.001 * ((i * 104729) % 1000) / 1000.0;
+    const double lat = 48.1 + 0.001 * static_cast<double>((i * 7919) % 1000) / 1000.0;
+    const double lon = 11.6 + 0.001 * static_cast<double>((i * 104729) % 1000) / 1000.0;
     osm << "  <node id='" << i << "' version='1' lat='" << lat << "' lon='" << lon << "'/>\n";
   }
   osm << "  <way id='1' version='1'>\n";
-  for (int i = 1; i <= kNodes; ++i) osm << "    <nd ref='" << i << "'/>\n";
+  for (long long i = 1; i <= kNodes; ++i) osm << "    <nd ref='" << i << "'/>\n";
   osm << "    <nd ref='1'/>\n    <tag k='building' v='yes'/>\n    <tag k='height' v='10'/>\n  </way>\n</osm>\n";
   write_text(dir_ / "knot.osm", osm.str());
   write_text(dir_ / "s.yaml", nominal_scenario() + "world:\n  osm: knot.osm\n");

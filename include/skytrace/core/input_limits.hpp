@@ -14,7 +14,7 @@ struct InputLimits {
   // day of 1 Hz multi-GNSS RINEX 3 observations is about 600 MiB).
   std::uint64_t max_decompressed_bytes = std::uint64_t{1024} << 20;
   // Grid points of one IONEX map, and of all maps of a file together (SKYTRACE_MAX_GRID_POINTS,
-  // default 10^7 per map, 10x that per file; a global 2.5 x 5 degree map has 5,183).
+  // default 10^7 per map, 5x that per file; a global 2.5 x 5 degree map has 5,183).
   std::uint64_t max_grid_points = 10'000'000;
   // Rows one `skytrace orbits` table may have (SKYTRACE_MAX_TABLE_ROWS, default 10^8).
   std::uint64_t max_table_rows = 100'000'000;
