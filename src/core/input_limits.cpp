@@ -6,7 +6,7 @@
 namespace skytrace {
 namespace {
 
-// A positive whole number from the environment, else `fallback`.
+// A positive whole number from the environment times `unit`, else `fallback` (already in units).
 std::uint64_t from_environment(const char* variable, std::uint64_t fallback, std::uint64_t unit) {
   const char* text = std::getenv(variable);
   if (text == nullptr || *text == '\0') return fallback;
@@ -20,7 +20,7 @@ std::uint64_t from_environment(const char* variable, std::uint64_t fallback, std
 InputLimits read_limits() {
   InputLimits limits;
   limits.max_decompressed_bytes =
-      from_environment("SKYTRACE_MAX_DECOMPRESSED_MB", limits.max_decompressed_bytes >> 20, std::uint64_t{1} << 20);
+      from_environment("SKYTRACE_MAX_DECOMPRESSED_MB", limits.max_decompressed_bytes, std::uint64_t{1} << 20);
   limits.max_grid_points = from_environment("SKYTRACE_MAX_GRID_POINTS", limits.max_grid_points, 1);
   limits.max_table_rows = from_environment("SKYTRACE_MAX_TABLE_ROWS", limits.max_table_rows, 1);
   limits.max_way_nodes = from_environment("SKYTRACE_MAX_WAY_NODES", limits.max_way_nodes, 1);

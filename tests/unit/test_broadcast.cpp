@@ -440,6 +440,18 @@ TEST(BroadcastGlonass, OrbitCacheIsBitIdenticalToTheIntegration) {
   EXPECT_EQ(cache.evaluate(eph, eph.toe + 700.0).position_m, evaluate_glonass(eph, eph.toe + 700.0).position_m);
 }
 
+// A time far from t_b (a pseudorange of 1e308 m puts the transmission there) gives NaNs at once
+// instead of integrating for ever; a day is still integrated.
+TEST(BroadcastGlonass, PropagationIsBoundedToADay) {
+  const GlonassEphemeris eph = glonass_r02();
+  GlonassOrbitCache cache;
+  for (double dt_s : {86400.5, -86400.5, 1e20, -1e300}) {
+    EXPECT_FALSE(evaluate_glonass(eph, eph.toe + dt_s).position_m.allFinite()) << dt_s;
+    EXPECT_FALSE(cache.evaluate(eph, eph.toe + dt_s).position_m.allFinite()) << dt_s;
+  }
+  EXPECT_TRUE(cache.evaluate(eph, eph.toe + 86400.0).position_m.allFinite());
+}
+
 TEST(BroadcastGlonass, VelocityIsTheDerivativeOfPosition) {
   const GlonassEphemeris eph = glonass_r02();
   for (double dt_s : {-700.0, 300.0}) {
