@@ -109,14 +109,19 @@ class BadInputCatalogue : public ::testing::Test {
  protected:
   // One run of the nominal constellation gives the observation and navigation files to spoil.
   static void SetUpTestSuite() {
-    base_ = test::make_temp_dir("bad_input_catalogue_base");
+    // Per process: ctest runs each case as its own process, in parallel.
+    base_ = test::make_temp_dir("bad_input_catalogue_base_" + std::to_string(getpid()));
     write_text(base_ / "scenario.yaml", nominal_scenario());
     const auto r = test::run_command(skytrace_cmd() + " run " + q(base_ / "scenario.yaml") + " --out " + q(base_ / "out") +
                                      " --quiet --no-truth");
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
+  static void TearDownTestSuite() {
+    std::error_code ignored;
+    fs::remove_all(base_, ignored);
+  }
   void SetUp() override {
-    if (!fs::exists(base_ / "out" / "obs.rnx")) GTEST_SKIP() << "the base run failed";
+    ASSERT_TRUE(fs::exists(base_ / "out" / "obs.rnx")) << "the base run failed";
     dir_ = test::make_temp_dir(std::string("bad_input_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   }
   static fs::path obs() { return base_ / "out" / "obs.rnx"; }
