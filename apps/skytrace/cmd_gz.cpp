@@ -2,6 +2,8 @@
 // receiver on a robot of a running Gazebo (docs/gazebo.md). The ignition code lives in
 // apps/gz (skytrace_gz_bridge), linked when the build found Gazebo transport.
 #include <atomic>
+#include <unistd.h>
+
 #include <csignal>
 #include <iostream>
 #include <memory>
@@ -28,7 +30,11 @@ struct GzArgs {
 };
 
 std::atomic<bool> g_stop{false};
-void on_signal(int /*signal*/) { g_stop = true; }
+// Stops the bridge; should it not end within a second, SIGALRM ends the process (as serve does).
+void on_signal(int /*signal*/) {
+  g_stop = true;
+  alarm(1);
+}
 
 int run_gz(const GzArgs& args) {
 #if SKYTRACE_HAVE_GZ
@@ -43,7 +49,9 @@ int run_gz(const GzArgs& args) {
   options.quiet = args.quiet;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  if (auto st = gz::run_bridge(options, g_stop); !st) return report_error(st.error());
+  auto st = gz::run_bridge(options, g_stop);
+  alarm(0);
+  if (!st) return report_error(st.error());
   return kExitOk;
 #else
   (void)args;

@@ -2,8 +2,11 @@
 // with the exit code and message it must give, in bounded time and memory (60 s, 1.5 GB per case),
 // leaving nothing half-written and never replacing what an output path is. Needs no shared data:
 // the inputs are cut from a run of the nominal constellation.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -384,6 +387,63 @@ TEST_F(BadInputCatalogue, DuplicateYamlKeyNamesBothLines) {
 TEST_F(BadInputCatalogue, ServePortAbove65535IsRefused) {
   run_case(skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") + " --nmea-tcp :99999 --duration-s 1", 2,
            "port must be a number from 0 to 65535");
+}
+
+// A free UDP port of the loopback (closed again: a short race with other programs, fine in tests).
+int free_udp_port() {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  socklen_t length = sizeof address;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  close(fd);
+  return ntohs(address.sin_port);
+}
+
+TEST_F(BadInputCatalogue, ServeSurvivesHostilePosesAndStopsWithinASecond) {
+  const int port = free_udp_port();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string line = "exec " + skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") +
+                             " --rate-hz 10 --nmea-tcp 127.0.0.1:0 --pose-udp 127.0.0.1:" + std::to_string(port) + " > " +
+                             q(dir_ / "log") + " 2>&1";
+    execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  for (int i = 0; i < 200 && read_text(dir_ / "log").find("poses on udp port") == std::string::npos; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_NE(read_text(dir_ / "log").find("poses on udp port"), std::string::npos) << read_text(dir_ / "log");
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  const std::vector<std::string> hostile = {"ecef 4180626.8 858159.4 4724696.3 1e18 1e18 1e18",
+                                            "ecef nan nan nan", "llh 1e308 -1e308 1e308", "world 1 2 3",
+                                            std::string(1400, '\x7f'), "ecef 1 2"};
+  for (int round = 0; round < 500; ++round) {
+    for (const auto& datagram : hostile) {
+      sendto(fd, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+    }
+  }
+  close(fd);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, WNOHANG), 0) << "serve died: " << read_text(dir_ / "log");
+  const auto signalled = std::chrono::steady_clock::now();
+  kill(pid, SIGTERM);
+  waitpid(pid, &status, 0);
+  const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  EXPECT_LT(stop_s, 1.0);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const std::string log = read_text(dir_ / "log");
+  EXPECT_NE(log.find("more than 20 km/s"), std::string::npos) << log;
+  EXPECT_NE(log.find("pose datagrams ignored"), std::string::npos) << log;
+  EXPECT_LT(log.size(), 20000u) << "ignored poses must be counted, not each reported";
 }
 
 // ---------------------------------------------------------------- signals and stale staging
