@@ -343,7 +343,7 @@ void RtkEngine::add_state(const Key& key, double value_cycles, double variance_c
   p.topLeftCorner(n, n) = p_;
   p(n, n) = variance_cycles2;
   p_ = std::move(p);
-  ambiguities_[key] = Ambiguity{n, GnssTime{}, key.first.system != GnssSystem::kGlonass || settings_.fix_glonass};
+  ambiguities_[key] = Ambiguity{n, 0, key.first.system != GnssSystem::kGlonass || settings_.fix_glonass};
 }
 
 void RtkEngine::remove_states(const std::vector<Key>& keys) {
@@ -545,8 +545,14 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
   {
     std::vector<Key> drop(rover_new_arcs.begin(), rover_new_arcs.end());
     drop.insert(drop.end(), base_new_arcs.begin(), base_new_arcs.end());
-    for (const auto& [key, amb] : ambiguities_) {
-      if (t - amb.last_seen > settings_.max_outage_s) drop.push_back(key);
+    // Epochs, not seconds: a 30 s file must not lose every ambiguity between its epochs.
+    std::set<Key> observed;
+    for (const Row& row : rows) {
+      if (row.phase_m && row.code_m) observed.insert(row.key);
+    }
+    for (auto& [key, amb] : ambiguities_) {
+      amb.missed_epochs = observed.count(key) > 0 ? 0 : amb.missed_epochs + 1;
+      if (amb.missed_epochs > settings_.max_outage_epochs) drop.push_back(key);
     }
     remove_states(drop);
   }
@@ -557,7 +563,6 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
       add_state(row.key, (*row.phase_m - *row.code_m) / row.wavelength_m,
                 settings_.initial_ambiguity_sigma_cycles * settings_.initial_ambiguity_sigma_cycles);
     }
-    ambiguities_[row.key].last_seen = t;
   }
 
   // ---- The measurement update: double differences per system and band ----

@@ -128,7 +128,7 @@ struct RtkSettings {
   // The given base position must agree with the base's own single-point fix within this: a base
   // position kilometres off would otherwise give a wrong rover position with a confident fix.
   double max_base_position_error_m = 100.0;
-  double max_outage_s = 10.0;                 // an ambiguity not observed for longer is dropped
+  int max_outage_epochs = 5;                  // an ambiguity not observed for more epochs is dropped
   double max_innovation_m = 30.0;             // larger double-difference innovations are rejected
   std::vector<GnssSystem> systems;            // empty: all but SBAS
   SolverSettings single_point;                // both receivers' single-point fixes
@@ -156,7 +156,7 @@ class RtkEngine {
   using Key = std::pair<SatelliteId, char>;  // satellite, band
   struct Ambiguity {
     Eigen::Index index = 0;  // into the state
-    GnssTime last_seen;
+    int missed_epochs = 0;  // consecutive epochs without the ambiguity's phase
     bool fixable = true;
   };
   void reset_filter();
