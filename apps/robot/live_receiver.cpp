@@ -124,7 +124,7 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
   std::set<SatelliteId> used;
   if (e.fix) {
     const positioning::PositionFix& f = *e.fix;
-    out.fix.type = f.type == positioning::FixType::kFix3D ? 3 : f.type == positioning::FixType::kFix2D ? 2 : 0;
+    out.fix.type = positioning::is_3d(f.type) ? 3 : f.type == positioning::FixType::kFix2D ? 2 : 0;
     out.fix.message = f.message;
     out.fix.latitude_deg = f.position.latitude_deg;
     out.fix.longitude_deg = f.position.longitude_deg;

@@ -5,6 +5,8 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,6 +18,8 @@
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
+#include "skytrace/core/frames.hpp"
+#include "skytrace/positioning/rtk.hpp"
 #include "skytrace/positioning/spp.hpp"
 
 namespace skytrace::cli {
@@ -31,7 +35,49 @@ struct PositionArgs {
   bool reject_outliers = false;
   bool no_ionosphere = false;
   bool no_troposphere = false;
+  // RTK: a base station's observations and position.
+  std::string base_path;
+  std::string base_position;  // X,Y,Z (m, ECEF) of the base antenna reference point
+  std::string ambiguity_mode = "fix-and-hold";
+  std::string dynamics = "kinematic";
+  double ratio_threshold = 3.0;
+  double rtk_elevation_mask_deg = 15.0;
 };
+
+// The base's antenna reference point: --base-position, else the header's APPROX POSITION XYZ plus
+// its ANTENNA: DELTA H/E/N (up, east, north from the marker).
+Result<Eigen::Vector3d> base_position(const PositionArgs& args, const io::ObservationHeader& header) {
+  if (!args.base_position.empty()) {
+    std::vector<double> values;
+    std::string text = args.base_position;
+    for (char& c : text) {
+      if (c == ',') c = ' ';
+    }
+    std::istringstream in(text);
+    for (double v = 0.0; in >> v;) values.push_back(v);
+    if (!in.eof() || values.size() != 3 || Eigen::Vector3d(values[0], values[1], values[2]).norm() < 6.0e6 ||
+        Eigen::Vector3d(values[0], values[1], values[2]).norm() > 7.0e6) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "--base-position: expected X,Y,Z in metres (ECEF, near the Earth's surface), got '" +
+                            args.base_position + "'");
+    }
+    return Eigen::Vector3d(values[0], values[1], values[2]);
+  }
+  if (!header.approx_position_ecef_m) {
+    return make_error(ErrorCode::kInvalidArgument, args.base_path +
+                                                       ": no APPROX POSITION XYZ in the header: give the base "
+                                                       "position with --base-position X,Y,Z");
+  }
+  const auto& p = *header.approx_position_ecef_m;
+  const Eigen::Vector3d marker(p[0], p[1], p[2]);
+  if (marker.norm() < 6.0e6 || marker.norm() > 7.0e6) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      args.base_path + ": APPROX POSITION XYZ is not a place on the Earth: give the base position "
+                                       "with --base-position X,Y,Z");
+  }
+  const auto& d = header.antenna_delta_hen_m;
+  return enu_to_ecef(Eigen::Vector3d(d[1], d[2], d[0]), ecef_to_geodetic(marker));
+}
 
 int run_position(const PositionArgs& args) {
   positioning::SolverSettings settings;
@@ -77,13 +123,55 @@ int run_position(const PositionArgs& args) {
   const io::MeasurementExtractor extractor(observations->header);
   positioning::SinglePointSolver solver(ephemerides, settings, klobuchar);
 
+  // RTK with a base: its epochs, position and the engine.
+  std::optional<io::ObservationFile> base_observations;
+  std::optional<io::MeasurementExtractor> base_extractor;
+  std::optional<positioning::RtkEngine> rtk;
+  Eigen::Vector3d base_m = Eigen::Vector3d::Zero();
+  if (!args.base_path.empty()) {
+    auto base = io::read_rinex_obs(args.base_path);
+    if (!base) return report_error(base.error());
+    for (const auto& warning : base->warnings) std::cerr << "skytrace position: warning: " << warning << "\n";
+    auto position = base_position(args, base->header);
+    if (!position) return report_error(position.error());
+    base_m = *position;
+    base_extractor.emplace(base->header);
+    base_observations = std::move(*base);
+    positioning::RtkSettings rtk_settings;
+    rtk_settings.single_point = settings;
+    rtk_settings.systems = settings.systems;
+    rtk_settings.elevation_mask_deg = args.rtk_elevation_mask_deg;
+    rtk_settings.ratio_threshold = args.ratio_threshold;
+    rtk_settings.ambiguity_mode = args.ambiguity_mode == "float"        ? positioning::AmbiguityMode::kFloat
+                                  : args.ambiguity_mode == "continuous" ? positioning::AmbiguityMode::kContinuous
+                                                                        : positioning::AmbiguityMode::kFixAndHold;
+    rtk_settings.dynamics =
+        args.dynamics == "static" ? positioning::RtkDynamics::kStatic : positioning::RtkDynamics::kKinematic;
+    rtk.emplace(ephemerides, rtk_settings, klobuchar);
+  } else if (!args.base_position.empty()) {
+    return report_error(make_error(ErrorCode::kInvalidArgument, "--base-position needs --base"));
+  }
+  size_t base_next = 0;  // the first base epoch not yet passed
+  std::optional<positioning::BaseEpoch> base_epoch;
+
   std::string csv = io::fix_csv_header();
   size_t epochs = 0, fixes = 0;
   std::string first_failure;
   for (const io::ObservationEpoch& epoch : observations->epochs) {
     if (epoch.flag != io::EpochFlag::kOk && epoch.flag != io::EpochFlag::kPowerFailure) continue;
     ++epochs;
-    auto fix = solver.solve(extractor.measurements(epoch));
+    if (rtk) {
+      // The latest base epoch at or before the rover's (within a millisecond): the engine says
+      // when it is too old.
+      const auto& list = base_observations->epochs;
+      while (base_next < list.size() && list[base_next].time - epoch.time <= 1e-3) {
+        const io::ObservationEpoch& b = list[base_next++];
+        if (b.flag != io::EpochFlag::kOk && b.flag != io::EpochFlag::kPowerFailure) continue;
+        base_epoch = positioning::BaseEpoch{base_extractor->measurements(b), base_m};
+      }
+    }
+    auto fix = rtk ? rtk->solve(extractor.measurements(epoch), base_epoch ? &*base_epoch : nullptr)
+                   : solver.solve(extractor.measurements(epoch));
     if (!fix) return report_error(fix.error().with_context(args.obs_path));
     if (fix->type != positioning::FixType::kNone) {
       ++fixes;
@@ -126,6 +214,22 @@ void register_position_command(CLI::App& app, int& exit_code) {
                 "Exclude the worst satellite while the chi-square residual test fails (p = 0.001)");
   cmd->add_flag("--no-ionosphere", args->no_ionosphere, "Do not apply the Klobuchar model");
   cmd->add_flag("--no-troposphere", args->no_troposphere, "Do not apply the Saastamoinen model");
+  cmd->add_option("--base", args->base_path,
+                  "RTK: base station observation file; the rover's fixes become rtk_fixed / rtk_float / dgnss");
+  cmd->add_option("--base-position", args->base_position,
+                  "RTK: base antenna reference point X,Y,Z (m, ECEF); default: the base header's APPROX POSITION "
+                  "XYZ plus its antenna delta");
+  cmd->add_option("--ambiguity-mode", args->ambiguity_mode, "RTK: fix-and-hold, continuous or float")
+      ->check(CLI::IsMember({"fix-and-hold", "continuous", "float"}))
+      ->capture_default_str();
+  cmd->add_option("--dynamics", args->dynamics, "RTK: kinematic or static rover")
+      ->check(CLI::IsMember({"kinematic", "static"}))
+      ->capture_default_str();
+  cmd->add_option("--ratio-threshold", args->ratio_threshold, "RTK: ambiguity ratio test threshold")
+      ->check(CLI::Range(1.0, 100.0))
+      ->capture_default_str();
+  cmd->add_option("--rtk-elevation-mask-deg", args->rtk_elevation_mask_deg, "RTK: elevation mask of the double differences")
+      ->capture_default_str();
   cmd->footer(
       "One code per satellite (L1 C/A, E1, B1I, G1 first) with its broadcast group delay, one receiver "
       "clock per system, elevation-dependent weights; velocity and clock drift from Doppler. Rows of "

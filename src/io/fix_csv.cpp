@@ -10,7 +10,21 @@ namespace {
 constexpr const char* kFixCsvHeader =
     "time_gpst,week,tow_s,fix,satellites_used,latitude_deg,longitude_deg,height_m,x_m,y_m,z_m,"
     "sigma_east_m,sigma_north_m,sigma_up_m,velocity_east_mps,velocity_north_mps,velocity_up_mps,"
-    "clock_bias_m,clock_drift_mps,gdop,pdop,hdop,vdop,tdop,system_clocks_m,rejected,message\n";
+    "clock_bias_m,clock_drift_mps,gdop,pdop,hdop,vdop,tdop,system_clocks_m,rejected,message,"
+    "ratio,fixed_ambiguities,age_s,baseline_east_m,baseline_north_m,baseline_up_m\n";
+
+// The relative-positioning cells (empty without an RTK engine).
+std::string relative_cells(const positioning::PositionFix& fix) {
+  if (!fix.relative) return ",,,,,";
+  const auto& r = *fix.relative;
+  std::string out = fmt::format("{:.2f},{},{:.3f},", r.ratio, r.fixed_ambiguities, r.age_s);
+  if (r.baseline_valid) {
+    out += fmt::format("{:.4f},{:.4f},{:.4f}", r.baseline_enu_m.x(), r.baseline_enu_m.y(), r.baseline_enu_m.z());
+  } else {
+    out += ",,";
+  }
+  return out;
+}
 
 // A CSV field that may hold commas or quotes.
 std::string csv_field(const std::string& text) {
@@ -39,7 +53,8 @@ std::string fix_csv_row(const positioning::PositionFix& fix) {
     if (use.rejected) rejected += (rejected.empty() ? "" : " ") + use.satellite.to_string();
   }
   if (fix.type == positioning::FixType::kNone) {
-    return row + std::string(20, ',') + csv_field(rejected) + "," + csv_field(fix.message) + "\n";
+    return row + std::string(20, ',') + csv_field(rejected) + "," + csv_field(fix.message) + "," +
+           relative_cells(fix) + "\n";
   }
   const auto& p = fix.position;
   const auto& x = fix.position_ecef_m;
@@ -60,7 +75,7 @@ std::string fix_csv_row(const positioning::PositionFix& fix) {
   for (const auto& [system, bias_m] : fix.clock_bias_m) {
     clocks += fmt::format("{}{}={:.4f}", clocks.empty() ? "" : " ", system_letter(system), bias_m);
   }
-  return row + clocks + "," + csv_field(rejected) + "," + csv_field(fix.message) + "\n";
+  return row + clocks + "," + csv_field(rejected) + "," + csv_field(fix.message) + "," + relative_cells(fix) + "\n";
 }
 
 }  // namespace skytrace::io

@@ -142,7 +142,7 @@ std::vector<std::string> gsa(const positioning::PositionFix& fix, const std::str
     if (s.used && has_fix(fix) && id) ids.push_back(*id);
   }
   if (used_by_system.empty()) used_by_system[1] = {};
-  const char mode = fix.type == positioning::FixType::kFix3D ? '3' : fix.type == positioning::FixType::kFix2D ? '2' : '1';
+  const char mode = positioning::is_3d(fix.type) ? '3' : fix.type == positioning::FixType::kFix2D ? '2' : '1';
   const std::string dops =
       has_fix(fix) ? fmt::format("{:.2f},{:.2f},{:.2f}", fix.pdop, fix.hdop, fix.vdop) : std::string(",,");
   std::vector<std::string> bodies;

@@ -27,7 +27,8 @@ MeasurementExtractor::MeasurementExtractor(const ObservationHeader& header) {
       auto signal = Signal::from_code(system, code.substr(1));
       if (!signal) continue;  // a code the catalogue does not know carries no usable range
       columns_[system].push_back(Column{*signal, i, same_signal_column(types, 'D', *signal),
-                                        same_signal_column(types, 'S', *signal)});
+                                        same_signal_column(types, 'S', *signal),
+                                        same_signal_column(types, 'L', *signal)});
     }
   }
   for (const auto& slot : header.glonass_slots) glonass_channels_[slot.slot] = slot.channel;
@@ -53,6 +54,14 @@ positioning::EpochMeasurements MeasurementExtractor::measurements(const Observat
       m.pseudorange_m = *code;
       m.doppler_hz = value(column.doppler);
       if (m.doppler_hz && *m.doppler_hz == 0.0) m.doppler_hz.reset();  // blank in some writers
+      if (column.phase && *column.phase < sat.values.size()) {
+        const ObservationValue& phase = sat.values[*column.phase];
+        if (phase.value && *phase.value != 0.0) {
+          m.carrier_phase_cycles = phase.value;
+          m.loss_of_lock = (phase.lli & 1U) != 0;
+          m.half_cycle_unresolved = (phase.lli & 2U) != 0;
+        }
+      }
       if (strength_in_dbhz_) m.cn0_dbhz = value(column.strength).value_or(0.0);
       if (sat.satellite.system == GnssSystem::kGlonass) {
         const auto channel = glonass_channels_.find(sat.satellite.number);

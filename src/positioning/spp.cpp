@@ -104,6 +104,7 @@ struct Geometry {
   Eigen::Vector3d satellite_m;     // at transmission, rotated into the frame at reception
   Eigen::Vector3d satellite_velocity_mps;  // likewise
   double clock_correction_m = 0.0; // c (dt_sv + dt_rel - group delay) at transmission
+  double satellite_clock_m = 0.0;  // c (dt_sv + dt_rel) at transmission
   Eigen::Vector3d line_of_sight;   // unit, receiver to satellite (ECEF)
   double range_m = 0.0;
   double elevation_deg = 90.0;
@@ -118,7 +119,8 @@ Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, co
   Geometry g;
   const auto move_to = [&](double step_s) {
     g.satellite_m = c.position_m + c.velocity_mps * step_s + 0.5 * c.acceleration_mps2 * step_s * step_s;
-    g.clock_correction_m = kC * (c.clock_s + c.clock_rate_s_per_s * step_s - c.group_delay_s);
+    g.satellite_clock_m = kC * (c.clock_s + c.clock_rate_s_per_s * step_s);
+    g.clock_correction_m = g.satellite_clock_m - kC * c.group_delay_s;
     return step_s;
   };
   double step_s = move_to(c.clock_step_s());
@@ -192,6 +194,9 @@ std::string_view to_string(FixType type) {
     case FixType::kNone: return "none";
     case FixType::kFix2D: return "2d";
     case FixType::kFix3D: return "3d";
+    case FixType::kDgnss: return "dgnss";
+    case FixType::kRtkFloat: return "rtk_float";
+    case FixType::kRtkFixed: return "rtk_fixed";
   }
   return "?";
 }
@@ -601,6 +606,10 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     use.residual_m = st.residual_m;
     use.sigma_m = std::sqrt(st.variance_m2);
     use.note = st.note;
+    // Geometry at the receiver's estimate (the Earth's centre until a solution converged: none).
+    use.has_geometry = solution.converged && st.geometry.range_m > 0.0;
+    use.satellite_position_m = st.geometry.satellite_m;
+    use.satellite_clock_m = st.geometry.satellite_clock_m;
   }
   if (!solution.converged) {
     fix.message = solution.message;

@@ -90,7 +90,7 @@ OscillatorSettings parse_oscillator(const Field& node) {
 
 ReceiverProfile parse_root(const Field& root, const std::string& source) {
   root.expect_keys({"name", "description", "signals", "signal_extra_loss_db", "channels", "elevation_mask_deg",
-                    "antenna", "front_end", "tracking", "oscillator"});
+                    "antenna", "front_end", "tracking", "oscillator", "rtk"});
   ReceiverProfile p;
   p.source = source;
   p.name = root.required("name").as_string();
@@ -153,6 +153,22 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   }
 
   p.oscillator = parse_oscillator(root.required("oscillator"));
+  if (auto rtk = root.child("rtk")) {
+    rtk->expect_keys({"elevation_mask_deg", "min_cn0_dbhz", "ratio_threshold", "ambiguity_mode", "dynamics",
+                      "estimate_velocity", "sigma_phase_m", "code_phase_ratio", "acceleration_noise_mps2",
+                      "ambiguity_noise_cycles"});
+    RtkProfile& r = p.rtk;
+    if (auto c = rtk->child("elevation_mask_deg")) r.elevation_mask_deg = c->as_double_in(0.0, 60.0);
+    if (auto c = rtk->child("min_cn0_dbhz")) r.min_cn0_dbhz = c->as_double_in(0.0, 60.0);
+    if (auto c = rtk->child("ratio_threshold")) r.ratio_threshold = c->as_double_in(1.0, 100.0);
+    if (auto c = rtk->child("ambiguity_mode")) r.ambiguity_mode = c->as_choice({"fix-and-hold", "continuous", "float"});
+    if (auto c = rtk->child("dynamics")) r.dynamics = c->as_choice({"kinematic", "static"});
+    if (auto c = rtk->child("estimate_velocity")) r.estimate_velocity = c->as_bool();
+    if (auto c = rtk->child("sigma_phase_m")) r.sigma_phase_m = c->as_double_in(0.0001, 0.1);
+    if (auto c = rtk->child("code_phase_ratio")) r.code_phase_ratio = c->as_double_in(1.0, 10000.0);
+    if (auto c = rtk->child("acceleration_noise_mps2")) r.acceleration_noise_mps2 = c->as_double_in(0.0, 100.0);
+    if (auto c = rtk->child("ambiguity_noise_cycles")) r.ambiguity_noise_cycles = c->as_double_in(0.0, 10.0);
+  }
   return p;
 }
 

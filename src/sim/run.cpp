@@ -218,6 +218,10 @@ struct ReceiverRun {
   io::RinexObsWriter writer;
   std::string file_name;
   std::unique_ptr<RunStreams> streams;  // obs.rtcm3 / fix.nmea when output.rtcm3 / output.nmea
+  // RTK: the base of this rover (index into the receivers), and for a base its latest epoch.
+  std::optional<size_t> base_index;
+  bool is_base = false;
+  std::optional<positioning::BaseEpoch> base_epoch;
 };
 
 constexpr const char* kTruthHeader =
@@ -384,10 +388,22 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (auto st = rx.writer.open(staging->file(rx.file_name), rx.header); !st) {
       return st.error();
     }
+    std::optional<positioning::RtkSettings> rtk;
+    if (rx.settings->rtk && (s.output.nmea || s.output.fix)) {
+      auto settings = rtk_settings(s, i, ephemerides);
+      if (!settings) return settings.error();
+      rtk = std::move(*settings);
+      for (size_t j = 0; j < s.receivers.size(); ++j) {
+        if (s.receivers[j].name == rx.settings->rtk->base) rx.base_index = j;
+      }
+    }
     if (s.output.rtcm3 || s.output.nmea || s.output.fix) {
       rx.streams = std::make_unique<RunStreams>(ephemerides, *rx.settings, rx.marker_m, s.output.rtcm3, s.output.nmea,
-                                                s.output.fix);
+                                                s.output.fix, std::move(rtk));
     }
+  }
+  for (const ReceiverRun& rx : receivers) {
+    if (rx.base_index) receivers[*rx.base_index].is_base = true;
   }
 
   std::ofstream truth;
@@ -417,6 +433,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (auto st = rx.writer.write_epoch(record); !st) return st.error();
     if (rx.streams) {
       if (auto st = rx.streams->add(epoch); !st) return st.error();
+    }
+    if (rx.is_base) {
+      // The base's known position: its marker's antenna reference point.
+      rx.base_epoch = positioning::BaseEpoch{to_measurements(epoch), antenna_point(rx.marker_m, *rx.settings)};
+    }
+    if (receiver_index + 1 == receivers.size()) {
+      // Every receiver's epoch is in: the rovers' RTK fixes with their bases' epochs of this instant.
+      for (ReceiverRun& rover : receivers) {
+        if (!rover.base_index || !rover.streams) continue;
+        const auto& base = receivers[*rover.base_index].base_epoch;
+        if (auto st = rover.streams->add_base(base ? &*base : nullptr); !st) return st.error();
+      }
     }
     for (const auto& sat : epoch.satellites) {
       if (sat.status != receiver::SatelliteStatus::kTracked) continue;

@@ -244,15 +244,6 @@ std::vector<Signal> served_signals(const ReceiverSettings& receiver, const std::
 
 Result<ScenarioResources> prepare_resources(const Scenario& s) {
   ScenarioResources r;
-  for (const auto& receiver : s.receivers) {
-    // Said plainly rather than run with a single-point fix the scenario did not ask for.
-    if (receiver.rtk) {
-      return make_error(ErrorCode::kUnsupported,
-                        s.source.string() + ": receiver '" + receiver.name + "': rtk (an RTK solution from base '" +
-                            receiver.rtk->base + "') is not implemented in this version yet; remove the rtk key "
-                            "to simulate the pair's observations");
-    }
-  }
   auto world = load_world(s);
   if (!world) return world.error();
   r.world = std::move(*world);
@@ -497,6 +488,9 @@ positioning::EpochMeasurements to_measurements(const receiver::EpochObservations
       pm.doppler_hz = m.doppler_hz;
       pm.carrier_hz = m.carrier_hz;
       pm.cn0_dbhz = m.cn0_dbhz;
+      if (m.carrier_phase_cycles != 0.0) pm.carrier_phase_cycles = m.carrier_phase_cycles;
+      pm.loss_of_lock = m.loss_of_lock;
+      pm.half_cycle_unresolved = m.half_cycle_unresolved;
       out.signals.push_back(pm);
     }
   }

@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "skytrace/core/text_file.hpp"
+#include "skytrace/receiver/profile.hpp"
 #include "skytrace/sim/setup.hpp"
 
 namespace skytrace::sim {
@@ -80,14 +81,68 @@ positioning::SolverSettings default_solver_settings(const ReceiverSettings& rece
   return settings;
 }
 
+Result<positioning::RtkSettings> rtk_settings(const Scenario& s, size_t rover_index,
+                                              const orbits::BroadcastEphemerides& ephemerides) {
+  const ReceiverSettings& rover = s.receivers.at(rover_index);
+  if (!rover.rtk) return make_error(ErrorCode::kInvalidArgument, "receiver '" + rover.name + "' has no rtk key");
+  const auto base = std::find_if(s.receivers.begin(), s.receivers.end(),
+                                 [&](const ReceiverSettings& r) { return r.name == rover.rtk->base; });
+  if (base == s.receivers.end()) {
+    return make_error(ErrorCode::kInvalidArgument, "receiver '" + rover.name + "': no base '" + rover.rtk->base + "'");
+  }
+  auto profile = receiver::load_profile(rover.profile, s.source.parent_path());
+  if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
+  auto base_profile = receiver::load_profile(base->profile, s.source.parent_path());
+  if (!base_profile) return base_profile.error().with_context(s.source.string() + ": receiver.profile");
+  const receiver::RtkProfile& p = profile->rtk;
+  positioning::RtkSettings out;
+  out.single_point = default_solver_settings(rover, ephemerides);
+  out.elevation_mask_deg = std::max(p.elevation_mask_deg, rover.elevation_mask_deg);
+  out.min_cn0_dbhz = p.min_cn0_dbhz;
+  out.ratio_threshold = p.ratio_threshold;
+  out.ambiguity_mode = p.ambiguity_mode == "float"        ? positioning::AmbiguityMode::kFloat
+                       : p.ambiguity_mode == "continuous" ? positioning::AmbiguityMode::kContinuous
+                                                          : positioning::AmbiguityMode::kFixAndHold;
+  out.dynamics = p.dynamics == "static" ? positioning::RtkDynamics::kStatic : positioning::RtkDynamics::kKinematic;
+  out.estimate_velocity = p.estimate_velocity;
+  out.sigma_phase_zenith_m = out.sigma_phase_elevation_m = p.sigma_phase_m;
+  out.code_phase_ratio = p.code_phase_ratio;
+  out.acceleration_noise_mps2 = p.acceleration_noise_mps2;
+  out.ambiguity_noise_cycles = p.ambiguity_noise_cycles;
+  // GLONASS inter-frequency biases differ between receiver designs: integers only within one.
+  out.fix_glonass = profile->name == base_profile->name;
+  return out;
+}
+
 RunStreams::RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
-                       const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv)
+                       const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv,
+                       std::optional<positioning::RtkSettings> rtk)
     : ephemerides_(ephemerides), nmea_(nmea), fix_csv_(fix_csv) {
   if (rtcm3) rtcm_.emplace(io::Rtcm3StreamSettings{}, rtcm_station(marker_m, receiver));
   if (fix_csv) fix_text_ = io::fix_csv_header();
   if (nmea || fix_csv) {
-    solver_.emplace(ephemerides, default_solver_settings(receiver, ephemerides), ephemerides.data().ionosphere.gps);
+    if (rtk) {
+      rtk_.emplace(ephemerides, std::move(*rtk), ephemerides.data().ionosphere.gps);
+    } else {
+      solver_.emplace(ephemerides, default_solver_settings(receiver, ephemerides), ephemerides.data().ionosphere.gps);
+    }
   }
+}
+
+Status RunStreams::emit(const positioning::PositionFix& fix) {
+  if (nmea_) {
+    for (const auto& sentence : io::nmea_epoch(fix)) nmea_text_ += sentence;
+  }
+  if (fix_csv_) fix_text_ += io::fix_csv_row(fix);
+  return Ok{};
+}
+
+Status RunStreams::add_base(const positioning::BaseEpoch* base) {
+  if (!rtk_ || !pending_) return Ok{};
+  auto fix = rtk_->solve(*pending_, base);
+  pending_.reset();
+  if (!fix) return fix.error();
+  return emit(*fix);
 }
 
 Status RunStreams::add(const receiver::EpochObservations& epoch) {
@@ -97,13 +152,12 @@ Status RunStreams::add(const receiver::EpochObservations& epoch) {
     if (!bytes) return bytes.error();
     rtcm_bytes_.insert(rtcm_bytes_.end(), bytes->begin(), bytes->end());
   }
-  if (solver_) {
+  if (rtk_) {
+    pending_ = to_measurements(epoch);
+  } else if (solver_) {
     auto fix = solver_->solve(to_measurements(epoch));
     if (!fix) return fix.error();
-    if (nmea_) {
-      for (const auto& sentence : io::nmea_epoch(*fix)) nmea_text_ += sentence;
-    }
-    if (fix_csv_) fix_text_ += io::fix_csv_row(*fix);
+    return emit(*fix);
   }
   return Ok{};
 }

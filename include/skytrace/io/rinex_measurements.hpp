@@ -16,7 +16,7 @@ class MeasurementExtractor {
   // Doppler and signal strength of the same code (else of the same band).
   explicit MeasurementExtractor(const ObservationHeader& header);
 
-  // Every signal with a non-zero pseudorange. GLONASS carriers come from the header's SLOT / FRQ #
+  // Every signal with a non-zero pseudorange, with the carrier phase and its LLI flags. GLONASS carriers come from the header's SLOT / FRQ #
   // (else 0: the solver takes the channel from the ephemerides). C/N0 only when the signal
   // strength unit is DBHZ or not given.
   [[nodiscard]] positioning::EpochMeasurements measurements(const ObservationEpoch& epoch) const;
@@ -27,6 +27,7 @@ class MeasurementExtractor {
     size_t code = 0;
     std::optional<size_t> doppler;
     std::optional<size_t> strength;
+    std::optional<size_t> phase;  // carrier phase of the same code, else of the same band
   };
   std::map<GnssSystem, std::vector<Column>> columns_;
   std::map<int, int> glonass_channels_;  // slot -> channel

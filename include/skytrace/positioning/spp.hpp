@@ -31,6 +31,10 @@ struct SignalMeasurement {
   std::optional<double> doppler_hz;  // receiver convention: positive when approaching
   double carrier_hz = 0.0;           // for Doppler to range rate (GLONASS: the channel's frequency)
   double cn0_dbhz = 0.0;
+  // Carrier phase for relative positioning (RTK); the single-point engine does not use it.
+  std::optional<double> carrier_phase_cycles;  // RINEX sign convention (that of the pseudorange)
+  bool loss_of_lock = false;           // RINEX LLI bit 0: the phase arc may have slipped here
+  bool half_cycle_unresolved = false;  // RINEX LLI bit 1: phase polarity not yet known
 };
 
 struct EpochMeasurements {
@@ -38,8 +42,13 @@ struct EpochMeasurements {
   std::vector<SignalMeasurement> signals;
 };
 
-enum class FixType { kNone, kFix2D, kFix3D };
-[[nodiscard]] std::string_view to_string(FixType type);  // "none", "2d", "3d"
+// Solution types, worst to best: single-point fixes (2D, 3D), code-differential (dgnss: relative
+// positioning on code alone), RTK with float or integer-fixed ambiguities.
+enum class FixType { kNone, kFix2D, kFix3D, kDgnss, kRtkFloat, kRtkFixed };
+// "none", "2d", "3d", "dgnss", "rtk_float", "rtk_fixed"
+[[nodiscard]] std::string_view to_string(FixType type);
+// A position in three dimensions (3D, differential or RTK).
+[[nodiscard]] inline bool is_3d(FixType type) { return type != FixType::kNone && type != FixType::kFix2D; }
 
 struct SatelliteUse {
   SatelliteId satellite;
@@ -50,6 +59,11 @@ struct SatelliteUse {
   bool rejected = false;       // excluded as an outlier
   double residual_m = 0.0;     // post-fit code residual
   double sigma_m = 0.0;        // a-priori standard deviation of the corrected code
+  // The satellite as the fix saw it (when has_geometry): position at transmission rotated into the
+  // Earth-fixed frame at reception, c (dt_sv + dt_rel) at transmission (no group delay).
+  bool has_geometry = false;
+  Eigen::Vector3d satellite_position_m = Eigen::Vector3d::Zero();
+  double satellite_clock_m = 0.0;
   std::string note;            // why it is not used ("below the elevation mask", "no ephemeris", ...)
 };
 
@@ -78,6 +92,15 @@ struct PositionFix {
   int iterations = 0;  // Gauss-Newton iterations of the final solution
   std::vector<SatelliteUse> satellites;  // every satellite considered, used or not
   std::string message;  // why there is no fix when type == kNone; else a warning or empty
+  // Relative positioning (types dgnss, rtk_float, rtk_fixed, or an RTK engine's fallback).
+  struct Relative {
+    double ratio = 0.0;              // ambiguity ratio test (second best / best), 0 when not tried
+    int fixed_ambiguities = 0;       // double-differenced ambiguities fixed to integers
+    double age_s = 0.0;              // rover time tag minus the base epoch's
+    Eigen::Vector3d baseline_enu_m = Eigen::Vector3d::Zero();  // rover minus base, at the base
+    bool baseline_valid = false;
+  };
+  std::optional<Relative> relative;
 };
 
 struct SolverSettings {

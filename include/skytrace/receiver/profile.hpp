@@ -51,6 +51,21 @@ struct TrackedSignal {
   double extra_loss_db = 0.0;
 };
 
+// How the receiver's navigation engine computes RTK (scenario key receivers[].rtk): the profile's
+// optional `rtk:` section, every value defaulted (docs/profiles.md).
+struct RtkProfile {
+  double elevation_mask_deg = 15.0;
+  double min_cn0_dbhz = 0.0;            // 0: no C/N0 mask
+  double ratio_threshold = 3.0;
+  std::string ambiguity_mode = "fix-and-hold";  // fix-and-hold, continuous, float
+  std::string dynamics = "kinematic";           // kinematic, static
+  bool estimate_velocity = false;       // kinematic: constant-velocity states
+  double sigma_phase_m = 0.003;         // a and b of a^2 + b^2 / sin^2(el), per receiver
+  double code_phase_ratio = 100.0;
+  double acceleration_noise_mps2 = 1.0; // with estimate_velocity
+  double ambiguity_noise_cycles = 1e-4; // per sqrt(s)
+};
+
 struct ReceiverProfile {
   std::string name;
   std::string source;  // the file it was read from
@@ -86,6 +101,7 @@ struct ReceiverProfile {
   // tracked meanwhile (channel, lock time, arcs); receiver/ephemeris_decoding.hpp says when.
   bool output_requires_ephemeris = false;
   OscillatorSettings oscillator;
+  RtkProfile rtk;  // the optional rtk section
 
   // The profile's entry for a signal, or nullptr when the receiver cannot track it.
   [[nodiscard]] const TrackedSignal* tracked(const Signal& signal) const;

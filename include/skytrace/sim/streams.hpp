@@ -14,6 +14,7 @@
 #include "skytrace/io/nmea.hpp"
 #include "skytrace/io/rtcm3.hpp"
 #include "skytrace/orbits/broadcast.hpp"
+#include "skytrace/positioning/rtk.hpp"
 #include "skytrace/positioning/spp.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/scenario.hpp"
@@ -42,14 +43,24 @@ struct RecordsInUse {
 [[nodiscard]] positioning::SolverSettings default_solver_settings(const ReceiverSettings& receiver,
                                                                   const orbits::BroadcastEphemerides& ephemerides);
 
+// The RTK engine's settings for a rover of a scenario (receivers[].rtk): the rover profile's `rtk`
+// section, the elevation mask at least the receiver's, GLONASS ambiguities fixed only when base and
+// rover are of one profile, single-point settings as default_solver_settings.
+[[nodiscard]] Result<positioning::RtkSettings> rtk_settings(const Scenario& scenario, size_t rover_index,
+                                                            const orbits::BroadcastEphemerides& ephemerides);
+
 // The stream outputs of one receiver of `skytrace run`: the RTCM 3 stream a reference receiver
 // would send (obs.rtcm3), and the position engine's fixes as NMEA sentences (fix.nmea) and as CSV
 // (fix.csv), built epoch by epoch and written at the end.
 class RunStreams {
  public:
   RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
-             const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv = false);
+             const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv = false,
+             std::optional<positioning::RtkSettings> rtk = std::nullopt);
+  // An RTK rover's fix waits for its base's epoch: add_base (or add_base(nullptr)) completes it.
   [[nodiscard]] Status add(const receiver::EpochObservations& epoch);
+  [[nodiscard]] bool is_rtk_rover() const { return rtk_.has_value(); }
+  [[nodiscard]] Status add_base(const positioning::BaseEpoch* base);
   // Writes the files asked for (atomically) into `dir`; `suffix` goes before the extension.
   [[nodiscard]] Status write(const std::filesystem::path& dir, const std::string& suffix = "") const;
   [[nodiscard]] const std::vector<std::uint8_t>& rtcm3_bytes() const { return rtcm_bytes_; }
@@ -59,6 +70,9 @@ class RunStreams {
   const orbits::BroadcastEphemerides& ephemerides_;
   std::optional<io::Rtcm3Stream> rtcm_;
   std::optional<positioning::SinglePointSolver> solver_;
+  std::optional<positioning::RtkEngine> rtk_;
+  std::optional<positioning::EpochMeasurements> pending_;  // the rover's epoch awaiting its base
+  [[nodiscard]] Status emit(const positioning::PositionFix& fix);
   std::vector<std::uint8_t> rtcm_bytes_;
   std::string nmea_text_;
   bool nmea_ = false;

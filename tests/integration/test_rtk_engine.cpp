@@ -1,0 +1,249 @@
+// The RTK engine end to end: the contract pair simulated in one scenario (the rover's fix.csv from
+// its base's epochs), the same pair as two RINEX files through `skytrace position --base` beside
+// RTKLIB's rnx2rtkp (kinematic, fix-and-hold, same masks), a real GEONET pair beside rnx2rtkp
+// (static, L1+L2), and bad base input (a position kilometres off, no common epochs).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "process.hpp"
+#include "rtklib.hpp"
+#include "skytrace/core/frames.hpp"
+#include "test_support.hpp"
+
+namespace skytrace {
+namespace {
+
+struct FixRow {
+  std::string time;  // ISO 8601 to the millisecond
+  double tow_s = 0.0;
+  std::string fix;
+  Eigen::Vector3d ecef_m = Eigen::Vector3d::Zero();
+  std::string message;
+};
+
+// fix.csv rows (the columns this test needs; messages hold no commas here).
+std::vector<FixRow> read_fix_csv(const std::filesystem::path& path) {
+  std::vector<FixRow> rows;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream fields(line);
+    for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+    if (cells.size() < 27) continue;
+    FixRow row;
+    row.time = cells[0];
+    row.tow_s = std::stod(cells[2]);
+    row.fix = cells[3];
+    if (!cells[8].empty()) row.ecef_m = Eigen::Vector3d(std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
+    row.message = cells[26];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// RTKLIB solutions by time of day "hh:mm:ss" (its xyz output), quality 1 fix, 2 float.
+std::map<std::string, test::RtklibSolution> rtklib_by_time(const std::filesystem::path& path) {
+  std::map<std::string, test::RtklibSolution> out;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '%') continue;
+    std::istringstream fields(line);
+    std::string date, time;
+    test::RtklibSolution s;
+    fields >> date >> time >> s.ecef_m.x() >> s.ecef_m.y() >> s.ecef_m.z() >> s.quality;
+    if (fields) out[time.substr(0, 8)] = s;
+  }
+  return out;
+}
+
+struct Agreement {
+  size_t epochs = 0, same_type = 0, skytrace_fixed = 0, rtklib_fixed = 0;
+  std::vector<double> fixed_differences_m;
+};
+
+Agreement compare(const std::vector<FixRow>& rows, const std::map<std::string, test::RtklibSolution>& rtklib) {
+  Agreement a;
+  for (const FixRow& row : rows) {
+    ++a.epochs;
+    const auto it = rtklib.find(row.time.substr(11, 8));
+    const int theirs = it == rtklib.end() ? 0 : it->second.quality;
+    const int mine = row.fix == "rtk_fixed" ? 1 : row.fix == "rtk_float" ? 2 : 5;
+    if (mine == 1) ++a.skytrace_fixed;
+    if (theirs == 1) ++a.rtklib_fixed;
+    if (mine == theirs || (theirs == 0 && mine == 5)) ++a.same_type;
+    if (mine == 1 && theirs == 1) a.fixed_differences_m.push_back((row.ecef_m - it->second.ecef_m).norm());
+  }
+  return a;
+}
+
+std::string rtklib_config(const std::string& mode, const std::string& armode, int navsys, double mask_deg,
+                          const Eigen::Vector3d& base) {
+  std::ostringstream c;
+  c.precision(4);
+  c << std::fixed << "pos1-posmode=" << mode << "\npos1-frequency=l1+2\npos1-soltype=forward\npos1-elmask=" << mask_deg
+    << "\npos1-ionoopt=brdc\npos1-tropopt=saas\npos1-sateph=brdc\npos1-navsys=" << navsys << "\npos2-armode=" << armode
+    << "\nant2-postype=xyz\nant2-pos1=" << base.x() << "\nant2-pos2=" << base.y() << "\nant2-pos3=" << base.z()
+    << "\nout-solformat=xyz\n";
+  return c.str();
+}
+
+std::filesystem::path contract_dir() { return test::shared_data_dir().parent_path() / "contract"; }
+
+bool contract_available() {
+  return std::filesystem::exists(contract_dir() / "rtk-pair.yaml") &&
+         std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx");
+}
+
+void run_scenario(const std::string& name, const std::filesystem::path& out) {
+  const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                   test::shell_quote((contract_dir() / (name + ".yaml")).string()) + " --out " +
+                                   test::shell_quote(out.string()) + " --quiet --no-truth");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST(RtkEngineEndToEnd, ContractPairInOneScenarioFixesAndLandsOnTheRover) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_pair");
+  run_scenario("rtk-pair", dir / "pair");
+  const auto rows = read_fix_csv(dir / "pair/fix_ROVR.csv");
+  ASSERT_EQ(rows.size(), 1801u);
+  const Eigen::Vector3d rover = geodetic_to_ecef(Geodetic{55.4935, 8.4880, 75.0});
+  size_t after_first_minute = 0, fixed = 0;
+  std::vector<double> errors_m;
+  for (const FixRow& row : rows) {
+    if (row.tow_s < rows.front().tow_s + 60.0) continue;
+    ++after_first_minute;
+    if (row.fix != "rtk_fixed") continue;
+    ++fixed;
+    errors_m.push_back((row.ecef_m - rover).norm());
+  }
+  const double fixed_ratio = static_cast<double>(fixed) / static_cast<double>(after_first_minute);
+  std::printf("[ figures ] skytrace run rtk-pair: %.1f %% rtk_fixed after the first minute, fixed error median %.4f m\n",
+              100.0 * fixed_ratio, median(errors_m));
+  EXPECT_GE(fixed_ratio, 0.95);
+  EXPECT_LE(median(errors_m), 0.01);
+  // The base's own fix.csv stays single-point.
+  const auto base_rows = read_fix_csv(dir / "pair/fix_BASE.csv");
+  ASSERT_FALSE(base_rows.empty());
+  EXPECT_EQ(base_rows.back().fix, "3d");
+}
+
+TEST(RtkEngineEndToEnd, ContractRinexPairAgreesWithRnx2rtkpKinematicFixAndHold) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  if (!test::program_available("rnx2rtkp")) GTEST_SKIP() << "rnx2rtkp (Debian package rtklib) is not installed";
+  const auto dir = test::make_temp_dir("rtk_rinex_pair");
+  run_scenario("rtk-base", dir / "base");
+  run_scenario("rtk-rover", dir / "rover");
+  const Eigen::Vector3d base(3582105.2910, 532589.7313, 5232754.8054);
+  std::ofstream(dir / "rtk.conf") << rtklib_config("kinematic", "fix-and-hold", 1 + 8, 15.0, base);
+  const auto rover_obs = test::shell_quote((dir / "rover/obs.rnx").string());
+  const auto base_obs = test::shell_quote((dir / "base/obs.rnx").string());
+  const auto nav = test::shell_quote((dir / "rover/nav.rnx").string());
+  const auto r = test::run_command("rnx2rtkp -k " + test::shell_quote((dir / "rtk.conf").string()) + " -o " +
+                                   test::shell_quote((dir / "rtk.pos").string()) + " " + rover_obs + " " + base_obs +
+                                   " " + nav);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // The same masks (15 degrees), GPS + Galileo, base position from the header (the marker).
+  const auto s = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " position " + rover_obs +
+                                   " --nav " + nav + " --base " + base_obs + " --systems G,E --out " +
+                                   test::shell_quote((dir / "rtk.csv").string()));
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  const Agreement a = compare(read_fix_csv(dir / "rtk.csv"), rtklib_by_time(dir / "rtk.pos"));
+  std::printf("[ figures ] rtk-rover/rtk-base, kinematic fix-and-hold G+E: %zu epochs, skytrace fixed %zu, rnx2rtkp "
+              "fixed %zu, same type %.1f %%, fixed positions apart median %.4f m max %.4f m\n",
+              a.epochs, a.skytrace_fixed, a.rtklib_fixed, 100.0 * a.same_type / a.epochs,
+              median(a.fixed_differences_m),
+              a.fixed_differences_m.empty() ? NAN : *std::max_element(a.fixed_differences_m.begin(), a.fixed_differences_m.end()));
+  EXPECT_EQ(a.epochs, 1801u);
+  EXPECT_GE(static_cast<double>(a.same_type) / a.epochs, 0.95);
+  ASSERT_GE(a.fixed_differences_m.size(), 1700u);
+  EXPECT_LE(*std::max_element(a.fixed_differences_m.begin(), a.fixed_differences_m.end()), 0.01);
+}
+
+TEST(RtkEngineEndToEnd, RealGeonetPairAgreesWithRnx2rtkpStatic) {
+  const auto data = test::shared_data_dir() / "real/gsi_0759_3040_2005092";
+  if (!std::filesystem::exists(data / "07590920.05o")) GTEST_SKIP() << "GEONET data absent (set SKYTRACE_SHARED_DATA)";
+  if (!test::program_available("rnx2rtkp")) GTEST_SKIP() << "rnx2rtkp (Debian package rtklib) is not installed";
+  const auto dir = test::make_temp_dir("rtk_geonet");
+  const Eigen::Vector3d base(-3978242.4348, 3382841.1715, 3649902.7667);  // 3040's header position
+  std::ofstream(dir / "rtk.conf") << rtklib_config("static", "continuous", 1, 15.0, base);
+  const auto rover_obs = test::shell_quote((data / "07590920.05o").string());
+  const auto base_obs = test::shell_quote((data / "30400920.05o").string());
+  const auto nav = test::shell_quote((data / "07590920.05n").string());
+  const auto r = test::run_command("rnx2rtkp -k " + test::shell_quote((dir / "rtk.conf").string()) + " -o " +
+                                   test::shell_quote((dir / "rtk.pos").string()) + " " + rover_obs + " " + base_obs +
+                                   " " + nav);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto s = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " position " + rover_obs +
+                                   " --nav " + nav + " --base " + base_obs +
+                                   " --dynamics static --ambiguity-mode continuous --out " +
+                                   test::shell_quote((dir / "rtk.csv").string()));
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  auto rows = read_fix_csv(dir / "rtk.csv");
+  ASSERT_GE(rows.size(), 120u);
+  rows.resize(120);
+  const Agreement a = compare(rows, rtklib_by_time(dir / "rtk.pos"));
+  std::printf("[ figures ] GEONET 0759/3040 static L1+L2, first 120 epochs: skytrace fixed %zu, rnx2rtkp fixed %zu, "
+              "both fixed %zu, apart median %.4f m max %.4f m\n",
+              a.skytrace_fixed, a.rtklib_fixed, a.fixed_differences_m.size(), median(a.fixed_differences_m),
+              a.fixed_differences_m.empty() ? NAN : *std::max_element(a.fixed_differences_m.begin(), a.fixed_differences_m.end()));
+  EXPECT_GE(a.skytrace_fixed, 110u);
+  ASSERT_GE(a.fixed_differences_m.size(), 100u);
+  EXPECT_LE(*std::max_element(a.fixed_differences_m.begin(), a.fixed_differences_m.end()), 0.02);
+}
+
+TEST(RtkEngineEndToEnd, BadBaseInputGivesAClearStateNeverAWrongFix) {
+  const auto data = test::shared_data_dir() / "real/gsi_0759_3040_2005092";
+  if (!std::filesystem::exists(data / "07590920.05o")) GTEST_SKIP() << "GEONET data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_bad_base");
+  const std::string position = test::shell_quote(test::skytrace_executable().string()) + " position " +
+                               test::shell_quote((data / "07590920.05o").string()) + " --nav " +
+                               test::shell_quote((data / "07590920.05n").string());
+  // The base position 3 km off: single-point fixes that say why.
+  auto r = test::run_command(position + " --base " + test::shell_quote((data / "30400920.05o").string()) +
+                             " --base-position=-3980242.4348,3384841.1715,3649902.7667 --out " +
+                             test::shell_quote((dir / "off.csv").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const FixRow& row : read_fix_csv(dir / "off.csv")) {
+    ASSERT_EQ(row.fix, "3d") << row.time;
+    ASSERT_NE(row.message.find("base position"), std::string::npos) << row.message;
+  }
+  // A "base" that is the rover's own file shifted by a day: no base epoch near any rover epoch.
+  std::ifstream in(data / "30400920.05o");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string shifted = text.str();
+  for (size_t at = 0; (at = shifted.find("\n 05  4  2 ", at)) != std::string::npos; ++at) shifted.replace(at, 11, "\n 05  4  1 ");
+  std::ofstream(dir / "old.05o") << shifted;
+  r = test::run_command(position + " --base " + test::shell_quote((dir / "old.05o").string()) + " --out " +
+                        test::shell_quote((dir / "old.csv").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const FixRow& row : read_fix_csv(dir / "old.csv")) {
+    ASSERT_EQ(row.fix, "3d") << row.time;
+    ASSERT_NE(row.message.find("base observations"), std::string::npos) << row.message;
+  }
+  // A malformed --base-position is an option error.
+  r = test::run_command(position + " --base " + test::shell_quote((data / "30400920.05o").string()) +
+                        " --base-position 1,2 --out " + test::shell_quote((dir / "x.csv").string()));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--base-position"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace skytrace
