@@ -1,6 +1,8 @@
 // Observation synthesis: what one receiver records at one epoch, from the satellite orbits and
 // clocks, the atmosphere and the receiver's own state. The truth of every term is kept beside the
-// measurement; nothing overwrites it.
+// measurement; nothing overwrites it. The generator composes the stages of receiver/stages/:
+// geometry and light time, propagation paths, signal power, tracking state, measurement errors
+// and observables; a model belongs to one stage.
 #pragma once
 
 #include <Eigen/Core>
@@ -23,15 +25,16 @@
 #include "skytrace/core/signal.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/receiver/clock.hpp"
+#include "skytrace/receiver/observations.hpp"
+#include "skytrace/receiver/stages/geometry.hpp"
+#include "skytrace/receiver/stages/measurement_errors.hpp"
+#include "skytrace/receiver/stages/propagation.hpp"
+#include "skytrace/receiver/stages/records.hpp"
+#include "skytrace/receiver/stages/signal_power.hpp"
+#include "skytrace/receiver/stages/tracking.hpp"
 #include "skytrace/receiver/profile.hpp"
 
 namespace skytrace::receiver {
-
-// True antenna (reference point) position and velocity in ECEF at a true time.
-struct Kinematics {
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
-};
 
 // Where the receiver is at a true (GPST) time: a static point or an interpolated trajectory.
 class KinematicsSource {
@@ -73,93 +76,6 @@ struct GeneratorSettings {
   std::set<SatelliteId> broadcast_truth;
 };
 
-enum class SatelliteStatus {
-  kTracked,     // at least one signal observed
-  kBelowMask,   // below the elevation mask
-  kNoEphemeris, // the receiver holds no valid ephemeris (or, waiting_for_ephemeris, has not decoded one yet)
-  kNoSignal,    // transmits none of the listed signals
-  kBlocked,     // the world blocks the line of sight (detail: the blocking object)
-  kAttenuated,  // vegetation lowers every signal below the tracking threshold
-  kUnhealthy,   // the navigation message declares every listed signal it transmits unusable
-};
-[[nodiscard]] std::string_view to_string(SatelliteStatus status);
-
-struct SignalMeasurement {
-  Signal signal;
-  double carrier_hz = 0.0;
-  // Measurements, as the receiver reports them.
-  double pseudorange_m = 0.0;
-  double carrier_phase_cycles = 0.0;
-  double doppler_hz = 0.0;
-  double cn0_dbhz = 0.0;
-  bool loss_of_lock = false;  // RINEX LLI bit 0: a new carrier-phase arc starts here
-  bool half_cycle_unresolved = false;  // RINEX LLI bit 1: data signal whose phase polarity is not yet known
-  double lock_time_s = 0.0;            // continuous carrier tracking up to this epoch
-  // Truth of the terms.
-  double satellite_clock_m = 0.0;   // c * the satellite's clock (one per satellite: reference record or precise)
-  double group_delay_m = 0.0;       // c * code group delay of the signal relative to that clock
-  double ionosphere_code_m = 0.0;   // code delay (the phase is advanced by the same amount)
-  double code_noise_m = 0.0;
-  double phase_noise_m = 0.0;
-  double doppler_noise_mps = 0.0;
-  std::int64_t ambiguity_cycles = 0;
-  // Multipath errors over the direct path (models.multipath): code (DLL), carrier phase (range
-  // units), range rate, and the prompt power relative to the unobstructed direct signal.
-  double code_multipath_m = 0.0;
-  double phase_multipath_m = 0.0;
-  double range_rate_multipath_mps = 0.0;
-  double multipath_power_db = 0.0;
-};
-
-// How a satellite's signals arrive (models.multipath): only the direct path, the direct path and
-// others (reflections, diffraction), or no direct path at all.
-enum class PathKind { kNone, kLos, kMultipath, kNlos };
-[[nodiscard]] std::string_view to_string(PathKind kind);
-
-// A listed signal the satellite transmits but its navigation record declares unusable
-// (orbits::signal_healthy): not tracked, not output.
-struct UnhealthySignal {
-  Signal signal;
-  std::string reason;  // the health word decoded, e.g. "GPS LNAV health 23 (L1 signals dead)"
-};
-
-struct SatelliteObservation {
-  SatelliteId satellite;
-  SatelliteStatus status = SatelliteStatus::kTracked;
-  std::string detail;  // why not tracked, for the truth file
-  std::vector<UnhealthySignal> unhealthy_signals;  // left out for their health (the others may be tracked)
-  // Tracked, but not output until the receiver holds an ephemeris for it (profile
-  // tracking.output_requires_ephemeris; status kNoEphemeris, no signals). Unlike a satellite
-  // without any valid record, its geometry and atmosphere are filled in.
-  bool waiting_for_ephemeris = false;
-  int glonass_channel = 0;
-  AzimuthElevation direction;
-  double range_m = 0.0;            // geometric, transmit to receive, Sagnac included
-  double range_rate_mps = 0.0;
-  double satellite_clock_m = 0.0;  // c * clock: the reference record's polynomial, or the precise clock
-  double relativistic_m = 0.0;     // c * periodic relativistic clock term
-  double troposphere_m = 0.0;
-  double ionosphere_l1_m = 0.0;    // group delay on 1575.42 MHz
-  double vegetation_path_m = 0.0;  // path length through vegetation
-  double vegetation_attenuation_db = 0.0;
-  Eigen::Vector3d satellite_position_m = Eigen::Vector3d::Zero();  // at transmission, frame at reception
-  std::vector<SignalMeasurement> signals;
-  // Multipath: the paths (world frame, amplitudes before the antenna), each path's arrival
-  // direction at the antenna (local east-north-up) and its excess-delay rate.
-  PathKind path_kind = PathKind::kNone;
-  std::vector<SignalPath> paths;
-  std::vector<AzimuthElevation> path_directions;
-  std::vector<double> path_delay_rates_mps;
-};
-
-struct EpochObservations {
-  GnssTime receiver_time;  // epoch tag (receiver clock)
-  GnssTime true_time;      // = receiver_time - receiver clock bias
-  Kinematics receiver;
-  ClockState receiver_clock;
-  std::vector<SatelliteObservation> satellites;  // every satellite of the signals' systems
-};
-
 // Generates one receiver's observations epoch by epoch (in increasing time), keeping the carrier
 // arcs, the receiver clock and the noise streams from one epoch to the next.
 class ObservationGenerator {
@@ -189,37 +105,18 @@ class ObservationGenerator {
   [[nodiscard]] const std::vector<Signal>& untrackable_signals() const { return untrackable_; }
 
  private:
-  // Tracking state and carrier arc of one signal of one satellite.
-  struct Arc {
-    std::int64_t ambiguity_cycles = 0;
-    int index = 0;
-    GnssTime last_tag;       // last epoch it was tracked
-    bool active = false;     // tracked at last_tag
-    GnssTime lock_start;     // acquisition or last slip
-    std::optional<GnssTime> above_since;  // acquiring: above the acquisition threshold since
-    GnssTime acquiring_tag;  // last epoch it was seen acquiring
-  };
-  struct SignalStreams {
-    RandomStream noise;
-    RandomStream slips;
-    // Unit-variance loop outputs of the code, phase and Doppler noise (first-order Gauss-Markov,
-    // profile.hpp), and the receiver time they were last drawn at.
-    LoopNoiseState loops;
-    SignalStreams(std::uint64_t noise_key, std::uint64_t slip_key) : noise(noise_key), slips(slip_key) {}
+  // A satellite above the mask, waiting for the world's verdict before its signals are measured.
+  struct Pending {
+    size_t index = 0;              // in the epoch's satellites
+    stages::RecordState record;    // the receiver's default record (nav.rnx)
+    stages::RecordState truth;     // the satellite's reference record, its state at transmission
+    bool precise_truth = false;
+    stages::LightTime light_time;
   };
 
-  // Whether the receiver holds an ephemeris for a satellite it tracks at `tag`, when the profile
-  // outputs only such satellites (output_requires_ephemeris); `acquired` is when this epoch's new
-  // arcs of it were acquired. Starts decoding at a first acquisition, holds at once at the run's
-  // first epoch. Not held: says why in obs.detail; held for the first time after decoding: sets
-  // the loss-of-lock flag of every signal (a new arc for the user).
-  bool holds_ephemeris(SatelliteObservation& obs, const GnssTime& tag, const std::optional<GnssTime>& acquired);
-  // Ends every carrier arc of a satellite (its signals are blocked).
-  void arcs_lost(const SatelliteId& sat);
-  // Whether the satellite transmits the signal, cached per GPST day.
-  bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
-  // What the satellite's block delivers beyond the signal's ICD row (link_budget.hpp), cached per day.
-  double satellite_power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
+  // Stages 2 to 6 for one satellite above the mask (`pending_index` in this epoch's batch).
+  void observe_satellite(EpochObservations& epoch, size_t pending_index, const Eigen::Matrix3d& rx_to_enu,
+                         int& channels_used);
 
   GeneratorSettings settings_;
   std::map<Signal, const SignalInfo*> signal_info_;
@@ -227,20 +124,6 @@ class ObservationGenerator {
   std::map<Signal, bool> data_modulated_;
   std::vector<Signal> untrackable_;
   double elevation_mask_deg_ = 0.0;  // the scenario's and the profile's, whichever is higher
-  std::vector<std::pair<const Signal*, double>> candidates_;  // a satellite's signals and C/N0 (scratch)
-  // Per (satellite, signal) state, looked up several times per signal and epoch: hashed.
-  using SignalKey = std::pair<SatelliteId, Signal>;
-  struct SignalKeyHash {
-    std::size_t operator()(const SignalKey& k) const noexcept {
-      return std::hash<std::uint32_t>{}(static_cast<std::uint32_t>(k.first.system) << 24 |
-                                        static_cast<std::uint32_t>(k.first.number) << 16 |
-                                        static_cast<std::uint32_t>(static_cast<unsigned char>(k.second.band)) << 8 |
-                                        static_cast<std::uint32_t>(static_cast<unsigned char>(k.second.attribute)));
-    }
-  };
-  std::unordered_map<SignalKey, std::pair<std::int64_t, bool>, SignalKeyHash> transmits_cache_;
-  // block_power_offset_db of (satellite, signal) for a GPST day, like transmits_cache_.
-  std::unordered_map<SignalKey, std::pair<std::int64_t, double>, SignalKeyHash> power_offset_cache_;
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
@@ -250,21 +133,22 @@ class ObservationGenerator {
   ReceiverClock clock_;
   std::optional<GnssTime> last_tag_;
   std::vector<SatelliteId> satellites_;
-  std::unordered_map<SignalKey, Arc, SignalKeyHash> arcs_;
-  std::unordered_map<SignalKey, SignalStreams, SignalKeyHash> streams_;
-  // output_requires_ephemeris: per tracked satellite, whether the receiver holds an ephemeris, or
-  // when it will (decoding since its acquisition). Dropped when lost before it is held.
-  struct EphemerisState {
-    bool held = false;
-    bool decoding = false;
-    std::optional<GnssTime> held_from;  // while decoding; nullopt: no record to decode
-    GnssTime tracked_tag;               // last epoch it was tracked
-  };
-  std::unordered_map<SatelliteId, EphemerisState> ephemeris_state_;
+  // The stages' state from one epoch to the next.
+  stages::SatelliteSignals satellite_signals_;
+  stages::TrackingState tracking_;
+  stages::LoopNoise loop_noise_;
+  stages::EphemerisDecoding ephemeris_decoding_;
+  orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
+  // Scratch of one epoch and one satellite, kept to avoid allocations per epoch.
+  std::vector<Pending> pending_;
+  std::vector<Eigen::Vector3d> lines_of_sight_;
+  std::vector<Eigen::Vector3d> world_directions_;
+  stages::WorldOutcomes world_outcomes_;
+  std::vector<size_t> order_;
+  std::vector<stages::Candidate> candidates_;
   // The records a satellite's signals used this epoch, entered into used_* once it is output.
   std::vector<std::tuple<const orbits::KeplerEphemeris*, const orbits::GlonassEphemeris*, const orbits::SbasEphemeris*>>
       records_used_;
-  orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
   std::set<const orbits::KeplerEphemeris*> used_kepler_;
   std::set<const orbits::GlonassEphemeris*> used_glonass_;
   std::set<const orbits::SbasEphemeris*> used_sbas_;

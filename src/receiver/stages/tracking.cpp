@@ -1,0 +1,154 @@
+#include "skytrace/receiver/stages/tracking.hpp"
+
+#include <cmath>
+
+#include "skytrace/receiver/ephemeris_decoding.hpp"
+
+namespace skytrace::receiver::stages {
+
+bool TrackingState::tracked_at(const SatelliteId& sat, const Signal& signal, const std::optional<GnssTime>& last_tag) {
+  const Arc& arc = arcs_[SignalKey{sat, signal}];
+  return arc.active && last_tag && arc.last_tag == *last_tag;
+}
+
+void TrackingState::drop(const SatelliteId& sat, const Signal& signal) { arcs_[SignalKey{sat, signal}].active = false; }
+
+void TrackingState::lost(const SatelliteId& sat, std::span<const Signal> signals) {
+  for (const Signal& signal : signals) {
+    if (const auto it = arcs_.find(SignalKey{sat, signal}); it != arcs_.end()) it->second.active = false;
+  }
+}
+
+TrackingState::Lock TrackingState::lock(const ReceiverProfile& profile, const SatelliteId& sat, const Signal& signal,
+                                        double cn0_dbhz, const GnssTime& tag, const std::optional<GnssTime>& last_tag,
+                                        int& channels_used, SatelliteAcquisition& satellite) {
+  Arc& arc = arcs_[SignalKey{sat, signal}];
+  const bool was_tracked = arc.active && last_tag && arc.last_tag == *last_tag;
+  if (profile.channel_count > 0 && channels_used >= profile.channel_count) {
+    arc.active = false;
+    arc.above_since.reset();
+    satellite.not_tracked_because = "no free channel";
+    return Lock::kNone;
+  }
+  if (was_tracked) {
+    if (cn0_dbhz < profile.tracking_threshold_dbhz) {
+      arc.active = false;
+      arc.above_since.reset();
+      satellite.not_tracked_because = "below the tracking threshold";
+      return Lock::kNone;
+    }
+    ++channels_used;
+    return Lock::kContinuing;
+  }
+  arc.active = false;
+  if (cn0_dbhz < satellite.acquisition_threshold_dbhz) {
+    arc.above_since.reset();
+    satellite.not_tracked_because = "below the acquisition threshold";
+    return Lock::kNone;
+  }
+  ++channels_used;  // a channel searches for it
+  if (!arc.above_since || !last_tag || arc.acquiring_tag != *last_tag) {
+    // Rose (or reappeared) since the last epoch: assume halfway. At the first epoch the receiver
+    // has been running before the scenario starts and tracks already.
+    arc.above_since = last_tag ? *last_tag + 0.5 * (tag - *last_tag) : tag - 1e9;
+  }
+  arc.acquiring_tag = tag;
+  if (tag - *arc.above_since < profile.acquisition_time_s) {
+    satellite.not_tracked_because = "acquiring";
+    return Lock::kNone;
+  }
+  const GnssTime signal_acquired = *arc.above_since + profile.acquisition_time_s;
+  if (!satellite.acquired || signal_acquired < *satellite.acquired) satellite.acquired = signal_acquired;
+  return Lock::kNewArc;
+}
+
+TrackingState::CarrierArc TrackingState::carrier_arc(const ReceiverProfile& profile, const SatelliteId& sat,
+                                                     const Signal& signal, bool new_arc, double cn0_dbhz, bool aided,
+                                                     bool data, const GnssTime& tag,
+                                                     const std::optional<GnssTime>& last_tag) {
+  const SignalKey key{sat, signal};
+  Arc& arc = arcs_[key];
+  CarrierArc out;
+  if (new_arc) {
+    ++arc.index;
+    RandomStream ambiguity(stream_key(seed_, {hash_name("ambiguity"), static_cast<std::uint64_t>(receiver_index_),
+                                              satellite_key(sat), signal_key(signal),
+                                              static_cast<std::uint64_t>(arc.index)}));
+    arc.ambiguity_cycles = ambiguity.uniform_int(-1000000, 1000000);
+    arc.lock_start = tag;
+    out.loss_of_lock = true;
+  } else if (slips_ && profile.pll_bandwidth_hz > 0.0) {
+    auto stream = slip_streams_.find(key);
+    if (stream == slip_streams_.end()) {
+      stream = slip_streams_
+                   .emplace(key, RandomStream(stream_key(seed_, {hash_name("cycle-slips"),
+                                                                 static_cast<std::uint64_t>(receiver_index_),
+                                                                 satellite_key(sat), signal_key(signal)})))
+                   .first;
+    }
+    RandomStream& slips = stream->second;
+    const double loop_bandwidth_hz = aided ? profile.semicodeless_aiding_bandwidth_hz : profile.pll_bandwidth_hz;
+    const double mean_s =
+        mean_time_to_slip_s(pll_jitter_rad(profile, cn0_dbhz, loop_bandwidth_hz), loop_bandwidth_hz, data);
+    const double probability = -std::expm1(-(tag - *last_tag) / mean_s);
+    if (slips.uniform() < probability) {
+      // The slip is a whole number of cycles (half cycles of a Costas loop resolve again).
+      const std::int64_t size = slips.uniform_int(1, 5);
+      arc.ambiguity_cycles += slips.uniform() < 0.5 ? -size : size;
+      ++arc.index;
+      arc.lock_start = tag;
+      out.loss_of_lock = true;
+    }
+  }
+  arc.active = true;
+  arc.above_since.reset();
+  arc.last_tag = tag;
+  out.ambiguity_cycles = arc.ambiguity_cycles;
+  out.lock_time_s = tag - arc.lock_start;
+  out.half_cycle_unresolved = data && out.lock_time_s < profile.half_cycle_resolution_s;
+  return out;
+}
+
+bool EphemerisDecoding::holds(const orbits::BroadcastEphemerides& ephemerides, SatelliteObservation& obs,
+                              const GnssTime& tag, bool first_epoch, const std::optional<GnssTime>& acquired,
+                              std::span<const Candidate> candidates) {
+  const SatelliteId& sat = obs.satellite;
+  State& state = states_[sat];
+  state.tracked_tag = tag;
+  if (state.held) return true;
+  if (first_epoch) {
+    // The run's first epoch: the receiver ran before and holds the ephemerides of what it tracks.
+    state.held = true;
+    return true;
+  }
+  if (!state.decoding) {
+    state.decoding = true;
+    std::vector<Signal> signals;  // what the receiver tracks of the satellite
+    signals.reserve(candidates.size());
+    for (const Candidate& candidate : candidates) signals.push_back(*candidate.signal);
+    state.held_from = ephemeris_held_from(ephemerides, sat, acquired.value_or(tag), signals);
+  }
+  if (state.held_from && tag >= *state.held_from) {
+    // The first output: the carrier was tracked since the acquisition (the lock time says so), but
+    // for the user the arcs start here; the NetR9 flags them (LLI 1), as at any acquisition.
+    state.held = true;
+    for (SignalMeasurement& m : obs.signals) m.loss_of_lock = true;
+    return true;
+  }
+  obs.detail = state.held_from ? "navigation message not yet decoded (ephemeris held from " +
+                                     state.held_from->to_iso8601(TimeScale::kGpst, 0) + " GPST)"
+                               : "navigation message not yet decoded (no record to decode)";
+  return false;
+}
+
+void EphemerisDecoding::end_epoch(const GnssTime& tag) {
+  for (auto it = states_.begin(); it != states_.end();) {
+    if (!it->second.held && it->second.tracked_tag != tag) {
+      it = states_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+}  // namespace skytrace::receiver::stages

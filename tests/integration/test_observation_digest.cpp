@@ -1,0 +1,82 @@
+// Guards the observation model against unintended change: short runs of the quick-start scenario
+// (nominal constellation, no downloaded data; courtyard world, loop noise, cycle slips, the PolarX5
+// clock; once with multipath) must give the recorded FNV-1a 64 digests of the observation records
+// of obs.rnx (after END OF HEADER, so that a version or header change does not count) and of
+// truth.csv. The generator was split into stages (issue #13) with these outputs byte-identical.
+//
+// When a model change is intended: check the new outputs (skytrace compare, the report), then
+// record the digests this test prints on failure, and say so in the commit message.
+//
+// Floating point: the digests hold for the same compiler and flags (the CI's GCC 12, -O3, x86-64
+// without -march, so no FMA contraction); another compiler, -ffast-math, -march=native (FMA) or
+// another libm may change the last bits of some numbers and so the digests without any model
+// change. Then compare the outputs numerically and re-record.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+
+#include "process.hpp"
+#include "test_support.hpp"
+
+namespace skytrace {
+namespace {
+
+std::uint64_t fnv1a64(const std::string& bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (const unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string hex(std::uint64_t v) {
+  std::ostringstream s;
+  s << std::hex << v;
+  return s.str();
+}
+
+struct Digests {
+  std::string obs_records;
+  std::string truth;
+};
+
+Digests run_quickstart(const std::string& name, const std::string& sets) {
+  const auto out = test::make_temp_dir("observation_digest_" + name);
+  const auto scenario = test::source_dir() / "examples" / "quickstart.yaml";
+  // SOURCE_DATE_EPOCH would change the header only; unset anyway so the run is the reference one.
+  const auto r = test::run_command("env -u SOURCE_DATE_EPOCH " + test::shell_quote(test::skytrace_executable().string()) +
+                                   " run " + test::shell_quote(scenario.string()) + " --out " +
+                                   test::shell_quote(out.string()) + " --quiet " + sets);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const std::string obs = read_bytes(out / "obs.rnx");
+  const auto header_end = obs.find("END OF HEADER");
+  EXPECT_NE(header_end, std::string::npos);
+  const std::string records = header_end == std::string::npos ? obs : obs.substr(obs.find('\n', header_end) + 1);
+  EXPECT_GT(records.size(), 10000u);
+  return Digests{hex(fnv1a64(records)), hex(fnv1a64(read_bytes(out / "truth.csv")))};
+}
+
+TEST(ObservationDigest, QuickstartMinute) {
+  const Digests d = run_quickstart("quick", "--set time.duration_s=60");
+  EXPECT_EQ(d.obs_records, "2fdf0f5af25a5d42") << "obs.rnx records changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "cc151a397e1ae7ad") << "truth.csv changed (see the comment at the top to re-record)";
+}
+
+TEST(ObservationDigest, QuickstartMultipath) {
+  const Digests d = run_quickstart("multipath", "--set time.duration_s=30 --set models.multipath=true");
+  EXPECT_EQ(d.obs_records, "a651348b96316f4e") << "obs.rnx records changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "f200ca0bd9227390") << "truth.csv changed (see the comment at the top to re-record)";
+}
+
+}  // namespace
+}  // namespace skytrace
