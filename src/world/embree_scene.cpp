@@ -221,8 +221,6 @@ struct PlaneLanes {
   StoredFloatLanes nx, ny, nz, offset_m;
 };
 
-// Lane-wise maximum and minimum, and the same over all lanes (every lane holds the result).
-// Always inlined into the kernel's clones, so the vector calling convention (-Wpsabi) never applies.
 // Lanes permuted by constant indices: GCC's __builtin_shuffle takes them as a vector, clang's
 // __builtin_shufflevector as arguments (GCC keeps the form its kernel was tuned with).
 #if defined(__clang__)
@@ -230,12 +228,24 @@ struct PlaneLanes {
 #else
 #define SKYTRACE_PERMUTE_LANES(v, a, b, c, d, e, f, g, h) __builtin_shuffle(v, IntLanes{a, b, c, d, e, f, g, h})
 #endif
+// clang checks the vector calling convention even of always-inlined calls, and refuses it in the
+// clone without AVX; a reference has none. GCC keeps the by-value form.
+#if defined(__clang__)
+using FloatLanesArg = const FloatLanes&;
+using IntLanesArg = const IntLanes&;
+#else
+using FloatLanesArg = FloatLanes;
+using IntLanesArg = IntLanes;
+#endif
+// Lane-wise maximum and minimum, and the same over all lanes (every lane holds the result).
+// Always inlined into the kernel's clones, so the vector calling convention (-Wpsabi) never applies.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpragmas"
 #pragma GCC diagnostic ignored "-Wunknown-warning-option"
 #pragma GCC diagnostic ignored "-Wpsabi"
 // Butterflies over the eight lanes: after the three steps every lane holds the result.
-[[gnu::always_inline]] inline float max_over_lanes(FloatLanes v) {
+[[gnu::always_inline]] inline float max_over_lanes(FloatLanesArg lanes) {
+  FloatLanes v = lanes;
   FloatLanes o = SKYTRACE_PERMUTE_LANES(v, 4, 5, 6, 7, 0, 1, 2, 3);
   v = v > o ? v : o;
   o = SKYTRACE_PERMUTE_LANES(v, 2, 3, 0, 1, 6, 7, 4, 5);
@@ -243,7 +253,8 @@ struct PlaneLanes {
   o = SKYTRACE_PERMUTE_LANES(v, 1, 0, 3, 2, 5, 4, 7, 6);
   return std::max(v[0], o[0]);
 }
-[[gnu::always_inline]] inline float min_over_lanes(FloatLanes v) {
+[[gnu::always_inline]] inline float min_over_lanes(FloatLanesArg lanes) {
+  FloatLanes v = lanes;
   FloatLanes o = SKYTRACE_PERMUTE_LANES(v, 4, 5, 6, 7, 0, 1, 2, 3);
   v = v < o ? v : o;
   o = SKYTRACE_PERMUTE_LANES(v, 2, 3, 0, 1, 6, 7, 4, 5);
@@ -251,7 +262,8 @@ struct PlaneLanes {
   o = SKYTRACE_PERMUTE_LANES(v, 1, 0, 3, 2, 5, 4, 7, 6);
   return std::min(v[0], o[0]);
 }
-[[gnu::always_inline]] inline std::int32_t min_over_lanes(IntLanes v) {
+[[gnu::always_inline]] inline std::int32_t min_over_lanes(IntLanesArg lanes) {
+  IntLanes v = lanes;
   IntLanes o = SKYTRACE_PERMUTE_LANES(v, 4, 5, 6, 7, 0, 1, 2, 3);
   v = v < o ? v : o;
   o = SKYTRACE_PERMUTE_LANES(v, 2, 3, 0, 1, 6, 7, 4, 5);
@@ -260,7 +272,8 @@ struct PlaneLanes {
   return std::min(v[0], o[0]);
 }
 // A ray parallel to a face outside it, or entering after it has left: a miss.
-[[gnu::always_inline]] inline bool misses(FloatLanes best_entry, FloatLanes best_exit, IntLanes parallel_outside) {
+[[gnu::always_inline]] inline bool misses(FloatLanesArg best_entry, FloatLanesArg best_exit,
+                                          IntLanesArg parallel_outside) {
   return min_over_lanes(parallel_outside) != 0 || max_over_lanes(best_entry) > min_over_lanes(best_exit);
 }
 #pragma GCC diagnostic pop
