@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "skytrace/core/time.hpp"
 #include "skytrace/io/rinex_obs.hpp"
+#include "skytrace/io/rtcm3.hpp"
 #include "skytrace/orbits/fetch.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 
@@ -80,6 +83,71 @@ TEST(FuzzFindings, TimeConversionsOfAbsurdDoublesAreDefined) {
   EXPECT_EQ(*GnssTime::checked_week_tow(TimeScale::kBdt, 800, 3600.5), GnssTime::from_week_tow(TimeScale::kBdt, 800, 3600.5));
   const CalendarTime c{2016, 12, 31, 23, 59, 60.25};
   EXPECT_EQ(*GnssTime::checked_calendar(c, TimeScale::kUtc), GnssTime::from_calendar(c, TimeScale::kUtc));
+}
+
+// Codes packed least-significant bit first, as in Unix compress data.
+class LzwPacker {
+ public:
+  void put(std::uint32_t code, int width) {
+    for (int b = 0; b < width; ++b, ++position_bits_) {
+      if (position_bits_ / 8 >= bytes_.size()) bytes_.push_back('\0');
+      if ((code >> b) & 1U) bytes_[position_bits_ / 8] = static_cast<char>(bytes_[position_bits_ / 8] | (1 << (position_bits_ % 8)));
+    }
+  }
+  // Zero bits up to the next multiple of `bits`.
+  void pad_to(std::size_t bits) {
+    while (position_bits_ % bits != 0) put(0, 1);
+  }
+  [[nodiscard]] const std::string& bytes() const { return bytes_; }
+
+ private:
+  std::string bytes_;
+  std::size_t position_bits_ = 0;
+};
+
+// ASan: with a 9-bit maximum the table is full at 512 entries while the width still grows to 10
+// bits (as compress writes it); a code 512 then became the previous code and the next one read
+// one entry past the 512-entry tables.
+TEST(FuzzFindings, LzwCodeEqualToTheFullTableSizeIsCorruptData) {
+  LzwPacker codes;
+  for (std::uint32_t k = 0; k < 257; ++k) codes.put('a' + k % 26, 9);  // 256 new entries: 256..511
+  codes.pad_to(9 * 8);  // the group of eight 9-bit codes ends before the width grows
+  codes.put(512, 10);
+  codes.put(512, 10);
+  const std::string data = std::string{'\x1f', '\x9d', '\x09'} + codes.bytes();
+  const auto text = orbits::uncompress_lzw(data);
+  ASSERT_FALSE(text.ok());
+  EXPECT_EQ(text.error().code, ErrorCode::kParse);
+  EXPECT_TRUE(contains(text.error().message, "code 512 is beyond the table")) << text.error().message;
+
+  // The same table, full, followed by codes it holds decodes (the 9-bit files compress writes).
+  LzwPacker valid;
+  for (std::uint32_t k = 0; k < 257; ++k) valid.put('a' + k % 26, 9);
+  valid.pad_to(9 * 8);
+  valid.put(300, 10);
+  const auto decoded = orbits::uncompress_lzw(std::string{'\x1f', '\x9d', '\x09'} + valid.bytes());
+  ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+  // Entry 300 was made from the literals 44 and 45 ('s', 't').
+  EXPECT_EQ(decoded->size(), 257u + 2u);
+  EXPECT_EQ(decoded->substr(257), "st");
+}
+
+// UBSan: BitReader::get_signed shifted by -1 for a 0-bit field and overflowed computing the value
+// of a negative 63-bit field.
+TEST(FuzzFindings, RtcmBitReaderFieldsOfAnyWidthAreDefined) {
+  const std::vector<std::uint8_t> ones(16, 0xFF);
+  io::BitReader reader(ones);
+  EXPECT_EQ(reader.get_signed(0), 0);
+  EXPECT_EQ(reader.get_sign_magnitude(0), 0);
+  EXPECT_EQ(reader.position(), 0u);
+  EXPECT_EQ(reader.get_signed(63), -1);
+  EXPECT_EQ(reader.get_signed(64), -1);
+  EXPECT_FALSE(reader.overrun());
+  const std::vector<std::uint8_t> sign_only{0x80, 0, 0, 0, 0, 0, 0, 0};
+  io::BitReader high(sign_only);
+  EXPECT_EQ(high.get_signed(63), -(std::int64_t{1} << 62));
+  io::BitReader magnitude(ones);
+  EXPECT_EQ(magnitude.get_sign_magnitude(64), -std::numeric_limits<std::int64_t>::max());
 }
 
 }  // namespace
