@@ -24,7 +24,6 @@
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -266,47 +265,6 @@ class PseudoTerminal {
   std::filesystem::path link_;
 };
 
-// A pose datagram (one line of text):
-//   ecef X Y Z [VX VY VZ]      metres, m/s in ECEF
-//   world X Y Z [VX VY VZ]     metres in the session's world frame (Gazebo world / local ENU)
-//   llh LAT_DEG LON_DEG H_M    WGS84, ellipsoidal height
-struct PoseDatagram {
-  enum class Frame { kEcef, kWorld } frame = Frame::kEcef;
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  std::optional<Eigen::Vector3d> velocity;
-};
-
-Result<PoseDatagram> parse_pose(std::string_view text) {
-  std::istringstream in{std::string(text)};
-  std::string kind;
-  in >> kind;
-  std::vector<double> values;
-  for (std::string token; in >> token;) {
-    try {
-      size_t used = 0;
-      values.push_back(std::stod(token, &used));
-      if (used != token.size()) throw std::invalid_argument(token);
-    } catch (const std::exception&) {
-      return make_error(ErrorCode::kParse, fmt::format("pose datagram '{}': '{}' is not a number", text, token));
-    }
-  }
-  PoseDatagram pose;
-  if (kind == "llh" && values.size() == 3) {
-    pose.position = geodetic_to_ecef(Geodetic{values[0], values[1], values[2]});
-    return pose;
-  }
-  if ((kind == "ecef" || kind == "world") && (values.size() == 3 || values.size() == 6)) {
-    pose.frame = kind == "ecef" ? PoseDatagram::Frame::kEcef : PoseDatagram::Frame::kWorld;
-    pose.position = Eigen::Vector3d(values[0], values[1], values[2]);
-    if (values.size() == 6) pose.velocity = Eigen::Vector3d(values[3], values[4], values[5]);
-    return pose;
-  }
-  return make_error(ErrorCode::kParse,
-                    fmt::format("pose datagram '{}': expected 'ecef X Y Z [VX VY VZ]', 'world X Y Z [VX VY VZ]' "
-                                "or 'llh LAT LON H'",
-                                text));
-}
-
 int serve(const ServeArgs& args) {
   if (!(args.rate_hz > 0.0 && args.rate_hz <= 100.0)) {
     return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--rate-hz {}: expected 0 < R <= 100", args.rate_hz)));
@@ -398,13 +356,11 @@ int serve(const ServeArgs& args) {
         for (size_t datagrams = 0; datagrams < kMaxDatagramsPerWakeup; ++datagrams) {
           const ssize_t n = recv(pose_fd, buffer, sizeof buffer, MSG_DONTWAIT);
           if (n <= 0) break;
-          std::string_view text(buffer, static_cast<size_t>(n));
-          while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.remove_suffix(1);
-          auto pose = parse_pose(text);
+          auto pose = sim::parse_pose_datagram(std::string_view(buffer, static_cast<size_t>(n)));
           Status applied = Ok{};
           if (!pose) {
             applied = pose.error();
-          } else if (pose->frame == PoseDatagram::Frame::kWorld) {
+          } else if (pose->frame == sim::PoseDatagram::Frame::kWorld) {
             applied = live.set_antenna_pose_world(tag_at(Clock::now()), pose->position, pose->velocity);
           } else {
             applied = live.set_antenna_pose_ecef(tag_at(Clock::now()), pose->position, pose->velocity);

@@ -33,7 +33,6 @@ constexpr Modulation kBoc152{K::kBoc, 15, 2.5};
 constexpr Modulation kBoc105{K::kBoc, 10, 5};
 constexpr Modulation kAltBoc{K::kAltBoc, 15, 10};
 constexpr Modulation kBoc52{K::kBoc, 5, 2};
-constexpr Modulation kBoc1010{K::kBoc, 10, 10};
 
 // RINEX 3.05 / 4.00 observation-code table (section 5.1 and tables A2-A9).
 constexpr auto kCatalogue = std::to_array<SignalInfo>({

@@ -155,6 +155,13 @@ CalendarFields calendar_fields(const UtcView& view) {
           static_cast<int>((sod % 3600) / 60), static_cast<int>(sod % 60) + (view.in_leap_second ? 1 : 0)};
 }
 
+// Seconds limited to +-kMaxTimeOffset_s (NaN to the upper limit), so that their whole part
+// always has an int64 (a cast of 1e40 or NaN would be undefined).
+double clamped_offset_s(double seconds) {
+  if (std::isnan(seconds)) return kMaxTimeOffset_s;
+  return std::clamp(seconds, -kMaxTimeOffset_s, kMaxTimeOffset_s);
+}
+
 }  // namespace
 
 std::string_view to_string(TimeScale scale) {
@@ -189,6 +196,7 @@ Result<TimeScale> parse_time_scale(std::string_view name) {
 
 GnssTime GnssTime::from_gpst_seconds(std::int64_t whole_s, double fraction_s) {
   GnssTime t;
+  fraction_s = clamped_offset_s(fraction_s);
   const double whole_of_fraction = std::floor(fraction_s);
   t.whole_s_ = whole_s + static_cast<std::int64_t>(whole_of_fraction);
   t.fraction_s_ = fraction_s - whole_of_fraction;
@@ -205,6 +213,7 @@ GnssTime& GnssTime::operator+=(double dt_s) {
 }
 
 GnssTime GnssTime::from_week_tow(TimeScale scale, int week, double tow_s) {
+  tow_s = clamped_offset_s(tow_s);
   const std::int64_t whole_tow = static_cast<std::int64_t>(std::floor(tow_s));
   const std::int64_t scale_count = (week + week_offset(scale)) * kSecondsPerWeek + whole_tow;
   const double fraction = tow_s - static_cast<double>(whole_tow);
@@ -216,8 +225,9 @@ GnssTime GnssTime::from_week_tow(TimeScale scale, int week, double tow_s) {
 }
 
 GnssTime GnssTime::from_calendar(const CalendarTime& c, TimeScale scale) {
-  const double whole_second = std::floor(c.second);
-  const double fraction = c.second - whole_second;
+  const double second = clamped_offset_s(c.second);
+  const double whole_second = std::floor(second);
+  const double fraction = second - whole_second;
   const std::int64_t count = calendar_count_s(c.year, c.month, c.day) + c.hour * 3600LL +
                              c.minute * 60LL + static_cast<std::int64_t>(whole_second);
   if (!has_leap_seconds(scale)) return from_gpst_seconds(count - fixed_offset_s(scale), fraction);
@@ -226,6 +236,26 @@ GnssTime GnssTime::from_calendar(const CalendarTime& c, TimeScale scale) {
   // Inside a leap second (second >= 60) the offset still has its old value.
   const std::int64_t lookup = whole_second >= 60.0 ? utc_count - 1 : utc_count;
   return from_gpst_seconds(utc_count + gps_minus_utc_at_utc_count(lookup), fraction);
+}
+
+Result<GnssTime> GnssTime::checked_week_tow(TimeScale scale, int week, double tow_s) {
+  if (!time_offset_in_range(tow_s)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "time of week " + std::to_string(tow_s) + " s is not a time (expected a finite number of seconds)");
+  }
+  return from_week_tow(scale, week, tow_s);
+}
+
+Result<GnssTime> GnssTime::checked_calendar(const CalendarTime& c, TimeScale scale) {
+  if (c.month < 1 || c.month > 12 || c.day < 1 || c.day > 31) {
+    return make_error(ErrorCode::kInvalidArgument, "invalid date: month " + std::to_string(c.month) + ", day " +
+                                                       std::to_string(c.day) + " (expected 1-12 and 1-31)");
+  }
+  if (!time_offset_in_range(c.second)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "second " + std::to_string(c.second) + " is not a time (expected a finite number of seconds)");
+  }
+  return from_calendar(c, scale);
 }
 
 Result<GnssTime> GnssTime::parse_iso8601(std::string_view text, TimeScale scale) {

@@ -272,11 +272,13 @@ class Parser {
     auto version = double_field(0, 0, 9, "RINEX VERSION / TYPE version");
     if (!version) return version.error();
     h.version = *version;
-    major_ = static_cast<int>(std::floor(h.version));
-    if (major_ < 2 || major_ > 4) {
+    // Range first: a version such as 2E11 has no int (the cast would be undefined).
+    if (!(h.version >= 2.0 && h.version < 5.0)) {
       return make_error(ErrorCode::kUnsupported, lines_.where(0) + ": RINEX version " +
-                                                     std::string(field(first, 0, 9)) + " is not supported");
+                                                     std::string(field(first, 0, 9)) +
+                                                     " is not supported (2.x, 3.x and 4.x are read)");
     }
+    major_ = static_cast<int>(std::floor(h.version));
     const char type = first.size() > 20 ? first[20] : ' ';
     if (type != 'O' && type != 'o') return error(0, "not an observation file (type '" + std::string(1, type) + "')");
     const char system_char = first.size() > 40 ? first[40] : ' ';

@@ -214,14 +214,18 @@ std::uint64_t BitReader::get_unsigned(int bits) {
 }
 
 std::int64_t BitReader::get_signed(int bits) {
+  if (bits <= 0) return 0;  // an empty field (and no sign bit to shift to)
   const std::uint64_t raw = get_unsigned(bits);
-  if (bits < 64 && (raw >> (bits - 1)) & 1U) return static_cast<std::int64_t>(raw) - (std::int64_t{1} << bits);
+  // Sign extension by setting the bits above the field (raw - 2^bits overflows for 63 bits).
+  if (bits < 64 && (raw >> (bits - 1)) & 1U) return static_cast<std::int64_t>(raw | (~std::uint64_t{0} << bits));
   return static_cast<std::int64_t>(raw);
 }
 
 std::int64_t BitReader::get_sign_magnitude(int bits) {
+  if (bits <= 0) return 0;
   const bool negative = get_unsigned(1) != 0;
-  const auto magnitude = static_cast<std::int64_t>(get_unsigned(bits - 1));
+  // At most 63 bits of magnitude, so that its negation exists (fields are at most 64 bits).
+  const auto magnitude = static_cast<std::int64_t>(get_unsigned(bits - 1) & ~(std::uint64_t{1} << 63));
   return negative ? -magnitude : magnitude;
 }
 

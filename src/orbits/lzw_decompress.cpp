@@ -103,7 +103,10 @@ Result<std::string> uncompress_lzw(std::string_view data) {
     const std::uint32_t this_code = code;
     stack.clear();
     if (code >= next_free) {
-      if (code > next_free) {
+      // With the table full (next_free == table_size, reachable at 9 bits, where the width still
+      // grows to 10 as in compress) no entry code == next_free is ever made: refuse it, else it
+      // would become `previous` and index one past the tables.
+      if (code > next_free || next_free == table_size) {
         return make_error(ErrorCode::kParse, "corrupt .Z data: code " + std::to_string(code) +
                                                  " is beyond the table (next free entry " + std::to_string(next_free) +
                                                  ") at byte " + std::to_string(3 + (position_bits >> 3)));

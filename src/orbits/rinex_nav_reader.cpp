@@ -111,6 +111,15 @@ class FieldReader {
     }
     return value;
   }
+  // Seconds of week: more than a week outside [0, 604800) is corruption, not a time (1e40 has no
+  // whole seconds in an int64).
+  double seconds_of_week(size_t row, int slot, std::string_view name) {
+    const double value_s = required(row, slot, name);
+    if (!error_ && !(value_s >= -kWeek_s && value_s <= 2.0 * kWeek_s)) {
+      fail(row, name, "out of range: " + std::to_string(value_s) + " s (expected seconds of week, 0 to 604800)");
+    }
+    return value_s;
+  }
 
   [[nodiscard]] const std::optional<Error>& error() const { return error_; }
 
@@ -184,7 +193,8 @@ class NavReader {
     const std::string_view first = text_[0];
     auto version = parse_fortran_double(field(first, 0, 9));
     if (!version) return text_.error_at(0, "field 'format version': not a number " + quoted(field(first, 0, 9)));
-    major_ = static_cast<int>(std::floor(*version));
+    // Range first: a version such as 2E11 has no int (the cast would be undefined).
+    major_ = *version >= 2.0 && *version < 5.0 ? static_cast<int>(std::floor(*version)) : 0;
     const char type = first.size() > 20 ? static_cast<char>(std::toupper(static_cast<unsigned char>(first[20]))) : ' ';
     file_system_ = first.size() > 40 ? static_cast<char>(std::toupper(static_cast<unsigned char>(first[40]))) : ' ';
     if (major_ == 2) {
@@ -794,7 +804,7 @@ class NavReader {
     e.cus_rad = f.required(2, 2, "Cus");
     // 1000-10000 sqrt(m): semi-major axes from 1,000 to 100,000 km hold every navigation orbit.
     e.sqrt_a_sqrtm = f.required_in(2, 3, "sqrt(A)", 1000.0, 10000.0, "a semi-major axis of 1,000 to 100,000 km");
-    e.toe_sow = f.required_in(3, 0, "Toe", 0.0, 604800.0, "seconds of the week");
+    e.toe_sow = f.seconds_of_week(3, 0, "Toe");
     e.cic_rad = f.required(3, 1, "Cic");
     e.omega0_rad = f.required(3, 2, "OMEGA0");
     e.cis_rad = f.required(3, 3, "Cis");

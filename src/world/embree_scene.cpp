@@ -221,40 +221,63 @@ struct PlaneLanes {
   StoredFloatLanes nx, ny, nz, offset_m;
 };
 
+// Lanes permuted by constant indices: GCC's __builtin_shuffle takes them as a vector, clang's
+// __builtin_shufflevector as arguments (GCC keeps the form its kernel was tuned with).
+#if defined(__clang__)
+#define SKYTRACE_PERMUTE_LANES(v, a, b, c, d, e, f, g, h) __builtin_shufflevector(v, v, a, b, c, d, e, f, g, h)
+#else
+#define SKYTRACE_PERMUTE_LANES(v, a, b, c, d, e, f, g, h) __builtin_shuffle(v, IntLanes{a, b, c, d, e, f, g, h})
+#endif
+// clang checks the vector calling convention even of always-inlined calls, and refuses it in the
+// clone without AVX; a reference has none. GCC keeps the by-value form.
+#if defined(__clang__)
+using FloatLanesArg = const FloatLanes&;
+using IntLanesArg = const IntLanes&;
+#else
+using FloatLanesArg = FloatLanes;
+using IntLanesArg = IntLanes;
+#endif
 // Lane-wise maximum and minimum, and the same over all lanes (every lane holds the result).
 // Always inlined into the kernel's clones, so the vector calling convention (-Wpsabi) never applies.
 #pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpragmas"
+#pragma GCC diagnostic ignored "-Wunknown-warning-option"
 #pragma GCC diagnostic ignored "-Wpsabi"
 // Butterflies over the eight lanes: after the three steps every lane holds the result.
-[[gnu::always_inline]] inline float max_over_lanes(FloatLanes v) {
-  FloatLanes o = __builtin_shuffle(v, IntLanes{4, 5, 6, 7, 0, 1, 2, 3});
+[[gnu::always_inline]] inline float max_over_lanes(FloatLanesArg lanes) {
+  FloatLanes v = lanes;
+  FloatLanes o = SKYTRACE_PERMUTE_LANES(v, 4, 5, 6, 7, 0, 1, 2, 3);
   v = v > o ? v : o;
-  o = __builtin_shuffle(v, IntLanes{2, 3, 0, 1, 6, 7, 4, 5});
+  o = SKYTRACE_PERMUTE_LANES(v, 2, 3, 0, 1, 6, 7, 4, 5);
   v = v > o ? v : o;
-  o = __builtin_shuffle(v, IntLanes{1, 0, 3, 2, 5, 4, 7, 6});
+  o = SKYTRACE_PERMUTE_LANES(v, 1, 0, 3, 2, 5, 4, 7, 6);
   return std::max(v[0], o[0]);
 }
-[[gnu::always_inline]] inline float min_over_lanes(FloatLanes v) {
-  FloatLanes o = __builtin_shuffle(v, IntLanes{4, 5, 6, 7, 0, 1, 2, 3});
+[[gnu::always_inline]] inline float min_over_lanes(FloatLanesArg lanes) {
+  FloatLanes v = lanes;
+  FloatLanes o = SKYTRACE_PERMUTE_LANES(v, 4, 5, 6, 7, 0, 1, 2, 3);
   v = v < o ? v : o;
-  o = __builtin_shuffle(v, IntLanes{2, 3, 0, 1, 6, 7, 4, 5});
+  o = SKYTRACE_PERMUTE_LANES(v, 2, 3, 0, 1, 6, 7, 4, 5);
   v = v < o ? v : o;
-  o = __builtin_shuffle(v, IntLanes{1, 0, 3, 2, 5, 4, 7, 6});
+  o = SKYTRACE_PERMUTE_LANES(v, 1, 0, 3, 2, 5, 4, 7, 6);
   return std::min(v[0], o[0]);
 }
-[[gnu::always_inline]] inline std::int32_t min_over_lanes(IntLanes v) {
-  IntLanes o = __builtin_shuffle(v, IntLanes{4, 5, 6, 7, 0, 1, 2, 3});
+[[gnu::always_inline]] inline std::int32_t min_over_lanes(IntLanesArg lanes) {
+  IntLanes v = lanes;
+  IntLanes o = SKYTRACE_PERMUTE_LANES(v, 4, 5, 6, 7, 0, 1, 2, 3);
   v = v < o ? v : o;
-  o = __builtin_shuffle(v, IntLanes{2, 3, 0, 1, 6, 7, 4, 5});
+  o = SKYTRACE_PERMUTE_LANES(v, 2, 3, 0, 1, 6, 7, 4, 5);
   v = v < o ? v : o;
-  o = __builtin_shuffle(v, IntLanes{1, 0, 3, 2, 5, 4, 7, 6});
+  o = SKYTRACE_PERMUTE_LANES(v, 1, 0, 3, 2, 5, 4, 7, 6);
   return std::min(v[0], o[0]);
 }
 // A ray parallel to a face outside it, or entering after it has left: a miss.
-[[gnu::always_inline]] inline bool misses(FloatLanes best_entry, FloatLanes best_exit, IntLanes parallel_outside) {
+[[gnu::always_inline]] inline bool misses(FloatLanesArg best_entry, FloatLanesArg best_exit,
+                                          IntLanesArg parallel_outside) {
   return min_over_lanes(parallel_outside) != 0 || max_over_lanes(best_entry) > min_over_lanes(best_exit);
 }
 #pragma GCC diagnostic pop
+#undef SKYTRACE_PERMUTE_LANES
 
 // The faces that bound the part of a ray inside a convex volume: the entering face with the
 // largest distance and the leaving face with the smallest (-1: none), found in float over all
@@ -301,8 +324,8 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) bo
   constexpr std::int32_t kNone = std::numeric_limits<std::int32_t>::max();
   const FloatLanes entry_m = FloatLanes{} + max_over_lanes(best_entry);
   const FloatLanes exit_m = FloatLanes{} + min_over_lanes(best_exit);
-  const std::int32_t entry = min_over_lanes((entry_index >= 0) & (best_entry == entry_m) ? entry_index : kNone);
-  const std::int32_t exit = min_over_lanes((exit_index >= 0) & (best_exit == exit_m) ? exit_index : kNone);
+  const std::int32_t entry = min_over_lanes(((entry_index >= 0) & (best_entry == entry_m)) ? entry_index : kNone);
+  const std::int32_t exit = min_over_lanes(((exit_index >= 0) & (best_exit == exit_m)) ? exit_index : kNone);
   entry_face = entry == kNone ? -1 : entry;
   exit_face = exit == kNone ? -1 : exit;
   return true;

@@ -265,7 +265,7 @@ TEST_F(BadInputCatalogue, ToeOf1e40IsRefused) {
   write_text(dir_ / "toe.rnx", join_lines(lines));
   run_case(skytrace_cmd() + " orbits --nav " + q(dir_ / "toe.rnx") +
                " --start 2026-03-01T12:00:00 --duration-s 600 --interval-s 300 --csv " + q(dir_ / "o.csv"),
-           3, "toe.rnx:" + std::to_string(record + 4) + ": field 'Toe'.*seconds of the week");
+           3, "toe.rnx:" + std::to_string(record + 4) + ": field 'Toe': out of range");
 }
 
 TEST_F(BadInputCatalogue, OrbitsWithANanosecondStepIsRefusedAtOnce) {

@@ -84,8 +84,8 @@ class BroadcastVsPrecise : public ::testing::Test {
                   "clock RMS %.2f m\n",
                   std::string(system_name(system)).c_str(), f.satellites.size(), f.orbit_3d_m.size(),
                   median(f.orbit_3d_m),
-                  [&] {
-                    auto v = f.orbit_3d_m;
+                  [orbit_3d_m = f.orbit_3d_m] {  // a copy: clang 14 cannot capture a structured binding
+                    auto v = orbit_3d_m;
                     std::sort(v.begin(), v.end());
                     return v.empty() ? NAN : v[v.size() * 95 / 100];
                   }(),

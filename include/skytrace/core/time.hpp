@@ -53,6 +53,18 @@ struct RoundedCalendarTime {
   int decimals = 0;            // 0-15
 };
 
+// Seconds given as a double to a conversion (time of week, second of a calendar reading, an offset
+// added to a GnssTime) are taken within +-kMaxTimeOffset_s, about 31,700 years: far beyond any
+// GNSS product, far inside the int64 whole seconds. The plain conversions clamp anything else
+// (NaN to the upper limit) instead of invoking undefined behaviour, which only moves garbage to a
+// far-away time; input from files goes through time_offset_in_range or the checked_ forms, which
+// refuse it with an error.
+inline constexpr double kMaxTimeOffset_s = 1.0e12;
+// Whether `seconds` is finite and within +-kMaxTimeOffset_s.
+[[nodiscard]] constexpr bool time_offset_in_range(double seconds) {
+  return seconds >= -kMaxTimeOffset_s && seconds <= kMaxTimeOffset_s;  // false for NaN
+}
+
 struct WeekTow {
   int week = 0;        // continuous week number of the scale's own numbering (no rollover)
   double tow_s = 0.0;  // seconds of week [0, 604800)
@@ -69,6 +81,10 @@ class GnssTime {
   // From a week and time of week in the given scale's own week numbering.
   [[nodiscard]] static GnssTime from_week_tow(TimeScale scale, int week, double tow_s);
   [[nodiscard]] static GnssTime from_calendar(const CalendarTime& calendar, TimeScale scale);
+  // The same for values read from outside: a time of week or a second out of time_offset_in_range,
+  // a month outside 1-12 or a day outside 1-31 is a kInvalidArgument error.
+  [[nodiscard]] static Result<GnssTime> checked_week_tow(TimeScale scale, int week, double tow_s);
+  [[nodiscard]] static Result<GnssTime> checked_calendar(const CalendarTime& calendar, TimeScale scale);
   // "YYYY-MM-DDThh:mm:ss[.fff]" (a space may replace T; a trailing Z is accepted for UTC).
   [[nodiscard]] static Result<GnssTime> parse_iso8601(std::string_view text, TimeScale scale);
 

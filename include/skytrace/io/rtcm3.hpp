@@ -44,7 +44,7 @@ class BitWriter {
   size_t bits_ = 0;
 };
 
-// Reading fields back (tests, stream checks).
+// Reading fields back (tests, stream checks). A field of 0 bits (or fewer) reads nothing and is 0.
 class BitReader {
  public:
   explicit BitReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "skytrace/core/error.hpp"
 #include "skytrace/core/frames.hpp"
@@ -35,6 +36,19 @@ struct LiveEpoch {
   bool pose_stale = false;  // the external pose had timed out (diagnostic for the caller)
   bool restarted = false;   // the time went backwards (simulation reset): tracking started anew
 };
+
+// An antenna pose sent from outside as one line of text (`skytrace serve --pose-udp`):
+//   ecef X Y Z [VX VY VZ]      metres, m/s in ECEF
+//   world X Y Z [VX VY VZ]     metres in the session's world frame (Gazebo world / local ENU)
+//   llh LAT_DEG LON_DEG H_M    WGS84, ellipsoidal height
+struct PoseDatagram {
+  enum class Frame { kEcef, kWorld } frame = Frame::kEcef;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Vector3d> velocity;
+};
+// Parses a datagram (trailing blanks and line ends ignored). Values are only checked to be
+// numbers: LiveSession::set_antenna_pose_* refuses non-finite or implausible poses.
+[[nodiscard]] Result<PoseDatagram> parse_pose_datagram(std::string_view text);
 
 class LiveSession {
  public:
