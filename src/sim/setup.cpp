@@ -192,7 +192,10 @@ Result<SystemCoverage> check_coverage(const Scenario& s, const orbits::Broadcast
   for (const auto& r : s.receivers) {
     for (const auto& signal : r.signals) wanted[signal.system].push_back(signal);
   }
-  const auto [first, last] = navigation_span(eph.data());
+  // Not a structured binding: clang 14 cannot capture those in the lambda below.
+  const auto span = navigation_span(eph.data());
+  const GnssTime& first = span.first;
+  const GnssTime& last = span.second;
   const auto why = [&](GnssSystem system, const char* which, const GnssTime& t) {
     return fmt::format("the navigation data has no valid {} ephemeris at the scenario's {} ({} GPST); the "
                        "navigation files cover {} to {} GPST",
