@@ -29,6 +29,7 @@
 #include <sstream>
 
 #include "skytrace/core/input_limits.hpp"
+#include "skytrace/core/text_file.hpp"
 #include "skytrace/world/loaders.hpp"
 
 namespace skytrace::world {
@@ -773,6 +774,65 @@ void centre_mesh(WorldObject& object) {
 
 }  // namespace
 
+namespace {
+
+// libosmium's XML coordinate parser scales the digits by the exponent in a 64-bit integer without
+// an overflow check (osmium/osm/location.hpp; fuzzing found lat="48.135E5744"): a lat or lon
+// attribute with more digits than a coordinate has, or an exponent beyond 10^3, is refused here,
+// naming its line, before libosmium reads the file.
+bool plausible_coordinate_text(std::string_view value) {
+  constexpr int kMaxDigits = 18;      // 7 decimals in OSM, 15-17 from converters
+  constexpr int kMaxExponent = 3;     // 1.8e2 is still a longitude
+  constexpr int kMinExponent = -30;   // tiny values near the equator or the meridian
+  int digits = 0;
+  size_t i = 0;
+  if (i < value.size() && (value[i] == '-' || value[i] == '+')) ++i;
+  for (; i < value.size() && (std::isdigit(static_cast<unsigned char>(value[i])) || value[i] == '.'); ++i) {
+    if (value[i] != '.') ++digits;
+  }
+  if (digits > kMaxDigits) return false;
+  if (i < value.size() && (value[i] == 'e' || value[i] == 'E')) {
+    ++i;
+    const bool negative = i < value.size() && value[i] == '-';
+    if (i < value.size() && (value[i] == '-' || value[i] == '+')) ++i;
+    int exponent = 0;
+    for (; i < value.size() && std::isdigit(static_cast<unsigned char>(value[i])); ++i) {
+      exponent = std::min(exponent * 10 + (value[i] - '0'), 1000);
+    }
+    if (negative ? -exponent < kMinExponent : exponent > kMaxExponent) return false;
+  }
+  return true;  // anything else malformed is libosmium's to report
+}
+
+Status check_osm_xml_coordinates(const std::filesystem::path& path) {
+  const std::string name = path.filename().string();
+  if (!(name.ends_with(".osm") || name.ends_with(".osm.gz") || name.ends_with(".xml"))) {
+    return Ok{};  // PBF and O5M carry integers; bz2 XML is left to libosmium
+  }
+  auto text = read_text_file(path);
+  if (!text) return text.error();
+  const std::string& t = *text;
+  for (const char* attribute : {"lat=", "lon="}) {
+    for (size_t at = t.find(attribute); at != std::string::npos; at = t.find(attribute, at + 4)) {
+      const bool quoted = at + 4 < t.size() && (t[at + 4] == '"' || t[at + 4] == '\'');
+      const bool whole_name = at == 0 || std::isspace(static_cast<unsigned char>(t[at - 1]));
+      if (!quoted || !whole_name) continue;
+      const size_t end = t.find(t[at + 4], at + 5);
+      if (end == std::string::npos) break;
+      const std::string_view value(t.data() + at + 5, end - at - 5);
+      if (!plausible_coordinate_text(value)) {
+        const auto line = std::count(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(at), '\n') + 1;
+        return make_error(ErrorCode::kParse, path.string() + ":" + std::to_string(line) + ": " +
+                                                 std::string(attribute, 3) + "=\"" + std::string(value.substr(0, 40)) +
+                                                 "\" is no coordinate (at most 18 digits and an exponent up to 3)");
+      }
+    }
+  }
+  return Ok{};
+}
+
+}  // namespace
+
 Result<WorldModel> load_osm_world(const std::filesystem::path& path,
                                   const OsmLoadOptions& options) {
   std::error_code ec;
@@ -789,6 +849,7 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path,
             ": OSM options: heights and diameters must be positive, crown base fraction in [0, 1)");
   }
 
+  if (auto st = check_osm_xml_coordinates(path); !st) return st.error();
   Collector collector;
   collector.load_woods = options.load_woods;
   collector.load_trees = options.load_trees;

@@ -364,6 +364,15 @@ TEST_F(BadInputCatalogue, OsmWayOfAHundredThousandSelfCrossingNodesFailsFast) {
   EXPECT_LT(r.wall_s, 30.0);
 }
 
+TEST_F(BadInputCatalogue, OsmCoordinateWithAHugeExponentNamesItsLine) {
+  // Found by fuzzing: libosmium's parser overflows on it (undefined behaviour in the library).
+  write_text(dir_ / "exp.osm", "<?xml version='1.0' encoding='UTF-8'?>\n<osm version='0.6'>\n"
+                               "  <node id='1' version='1' lat='48.1' lon='11.6'/>\n"
+                               "  <node id='2' version='1' lat='48.135E5744' lon='11.6'/>\n</osm>\n");
+  write_text(dir_ / "s.yaml", nominal_scenario() + "world:\n  osm: exp.osm\n");
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "exp.osm:4: lat=\"48.135E5744\" is no coordinate");
+}
+
 // ---------------------------------------------------------------- configuration mistakes
 
 TEST_F(BadInputCatalogue, TwoReceiversOfOneNameAreRefused) {
