@@ -257,13 +257,13 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   for (size_t i = 0; i < s.receivers.size(); ++i) {
     const auto& r = s.receivers[i];
     if (!r.rtk) continue;
-    const auto base = std::find_if(s.receivers.begin(), s.receivers.end(),
+    const auto base_receiver = std::find_if(s.receivers.begin(), s.receivers.end(),
                                    [&](const ReceiverSettings& other) { return other.name == r.rtk->base; });
     const Node where = root.child("receivers") ? root.required("receivers").elements()[i].required("rtk").required("base")
                                                : root.required("receiver").required("rtk").required("base");
-    if (base == s.receivers.end()) where.fail("rtk base '" + r.rtk->base + "' is not a receiver of this scenario");
-    if (base->name == r.name) where.fail("a receiver cannot be its own rtk base");
-    if (base->rtk) where.fail("rtk base '" + r.rtk->base + "' has an rtk base itself (chains are not supported)");
+    if (base_receiver == s.receivers.end()) where.fail("rtk base '" + r.rtk->base + "' is not a receiver of this scenario");
+    if (base_receiver->name == r.name) where.fail("a receiver cannot be its own rtk base");
+    if (base_receiver->rtk) where.fail("rtk base '" + r.rtk->base + "' has an rtk base itself (chains are not supported)");
   }
   if (auto c = root.child("receivers")) {
     // Each receiver's outputs are named after it (obs_NAME.rnx): two of one name would overwrite.
