@@ -50,7 +50,10 @@ std::string fix_csv_row(const positioning::PositionFix& fix) {
                                 week_tow.tow_s, positioning::to_string(fix.type), fix.satellites_used);
   std::string rejected;
   for (const auto& use : fix.satellites) {
-    if (use.rejected) rejected += (rejected.empty() ? "" : " ") + use.satellite.to_string();
+    if (!use.rejected) continue;
+    // Appended piece by piece: "a" + b here draws a false -Wrestrict from GCC 12.
+    if (!rejected.empty()) rejected += ' ';
+    rejected += use.satellite.to_string();
   }
   if (fix.type == positioning::FixType::kNone) {
     return row + std::string(20, ',') + csv_field(rejected) + "," + csv_field(fix.message) + "," +
