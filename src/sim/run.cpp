@@ -89,8 +89,12 @@ class StagingDir {
     const auto path = out_dir / fmt::format("{}{}-{:08x}", kStagingPrefix, ::getpid(), rd());
     std::filesystem::create_directory(path, ec);
     if (ec) return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + ec.message() + ")");
-    const int lock_fd = ::open((path / kStagingLockName).c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (lock_fd < 0 || ::flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+    // Locked under another name, then renamed: a later run never sees an unlocked `.lock` of a
+    // live run (the lock belongs to the open file, not to its name).
+    const auto unlocked_name = path / (std::string(kStagingLockName) + ".new");
+    const int lock_fd = ::open(unlocked_name.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (lock_fd < 0 || ::flock(lock_fd, LOCK_EX | LOCK_NB) != 0 ||
+        ::rename(unlocked_name.c_str(), (path / kStagingLockName).c_str()) != 0) {
       const std::string why = std::strerror(errno);
       if (lock_fd >= 0) ::close(lock_fd);
       std::filesystem::remove_all(path, ec);
