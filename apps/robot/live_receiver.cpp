@@ -160,6 +160,8 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
     s.elevation_deg = sat.direction.elevation_deg;
     s.vegetation_path_m = sat.vegetation_path_m;
     s.vegetation_attenuation_db = sat.vegetation_attenuation_db;
+    s.nlos = sat.path_kind == receiver::PathKind::kNlos;
+    s.multipath = sat.path_kind == receiver::PathKind::kMultipath;
     s.used_in_fix = used.count(sat.satellite) > 0;
     if (sat.status != receiver::SatelliteStatus::kNoEphemeris || sat.waiting_for_ephemeris) {
       s.direction_world = to_array((to_world * (sat.satellite_position_m - antenna_ecef)).normalized());

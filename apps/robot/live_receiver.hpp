@@ -40,6 +40,8 @@ struct SatelliteView {
   double elevation_deg = 0.0;
   double vegetation_path_m = 0.0;
   double vegetation_attenuation_db = 0.0;
+  bool nlos = false;       // tracked on reflected or diffracted paths only (models.multipath)
+  bool multipath = false;  // the direct path with reflections beside it
   bool used_in_fix = false;
   Vec3 direction_world{};  // unit vector from the antenna to the satellite, world frame
   std::vector<SignalView> signals;  // tracked signals

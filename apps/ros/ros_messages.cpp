@@ -112,8 +112,8 @@ skytrace_msgs::Observations to_observations(const live::EpochView& epoch, const 
       o.lock_time_s = m.lock_time_s;
       o.azimuth_deg = sat.azimuth_deg;
       o.elevation_deg = sat.elevation_deg;
-      o.los = !vegetation;
-      o.nlos = false;  // the observation engine has no reflected-only paths yet
+      o.los = !vegetation && !sat.nlos;
+      o.nlos = sat.nlos;  // reflected or diffracted paths only (models.multipath)
       o.vegetation = vegetation;
       o.blocked = false;  // blocked satellites are not tracked (they are on /skytrace/sky)
       o.vegetation_path_m = sat.vegetation_path_m;
