@@ -5,40 +5,15 @@
 #include <filesystem>
 #include <memory>
 
-#include "skytrace/io/rinex_measurements.hpp"
-#include "skytrace/io/rinex_obs.hpp"
-#include "skytrace/orbits/rinex_nav.hpp"
+#include "bench_support.hpp"
 #include "skytrace/positioning/spp.hpp"
 
 namespace {
 
 using namespace skytrace;
 
-struct Data {
-  std::unique_ptr<orbits::BroadcastEphemerides> ephemerides;
-  std::optional<orbits::KlobucharCoefficients> klobuchar;
-  std::vector<positioning::EpochMeasurements> epochs;
-  std::string error;
-};
-
-const Data& data() {
-  static const Data d = [] {
-    Data out;
-    const std::filesystem::path dir = std::filesystem::path(SKYTRACE_DEFAULT_SHARED_DATA) / "real/esbc_2020177";
-    auto nav = orbits::read_rinex_nav(dir / "ESBC00DNK_R_20201770000_01D_MN.rnx");
-    auto obs = io::read_rinex_obs(dir / "ESBC00DNK_R_20201770000_01D_30S_MO_first1h.rnx");
-    if (!nav || !obs) {
-      out.error = !nav ? nav.error().message : obs.error().message;
-      return out;
-    }
-    out.klobuchar = nav->ionosphere.gps;
-    out.ephemerides = std::make_unique<orbits::BroadcastEphemerides>(std::move(*nav));
-    const io::MeasurementExtractor extractor(obs->header);
-    for (const auto& epoch : obs->epochs) out.epochs.push_back(extractor.measurements(epoch));
-    return out;
-  }();
-  return d;
-}
+using Data = bench::EsbcFirstHour;
+const Data& data() { return bench::esbc_first_hour(); }
 
 positioning::SolverSettings settings(bool reject_outliers) {
   positioning::SolverSettings s;

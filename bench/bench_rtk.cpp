@@ -7,18 +7,17 @@
 #include <filesystem>
 #include <memory>
 
-#include "skytrace/io/rinex_measurements.hpp"
-#include "skytrace/io/rinex_obs.hpp"
-#include "skytrace/orbits/rinex_nav.hpp"
+#include "bench_support.hpp"
 #include "skytrace/positioning/rtk.hpp"
 
 namespace {
 
 using namespace skytrace;
 
+// The ESBC hour with two frequencies per system, as most RTK receivers track: L1/L2, E1/E5a,
+// B1I/B2I, G1/G2; the header position is the base's.
 struct Data {
-  std::unique_ptr<orbits::BroadcastEphemerides> ephemerides;
-  std::optional<orbits::KlobucharCoefficients> klobuchar;
+  const bench::EsbcFirstHour* hour = nullptr;
   std::vector<positioning::EpochMeasurements> epochs;
   Eigen::Vector3d base_m = Eigen::Vector3d::Zero();
   std::string error;
@@ -27,19 +26,10 @@ struct Data {
 const Data& data() {
   static const Data d = [] {
     Data out;
-    const std::filesystem::path dir = std::filesystem::path(SKYTRACE_DEFAULT_SHARED_DATA) / "real/esbc_2020177";
-    auto nav = orbits::read_rinex_nav(dir / "ESBC00DNK_R_20201770000_01D_MN.rnx");
-    auto obs = io::read_rinex_obs(dir / "ESBC00DNK_R_20201770000_01D_30S_MO_first1h.rnx");
-    if (!nav || !obs || !obs->header.approx_position_ecef_m) {
-      out.error = !nav ? nav.error().message : !obs ? obs.error().message : "no header position";
-      return out;
-    }
-    out.klobuchar = nav->ionosphere.gps;
-    out.ephemerides = std::make_unique<orbits::BroadcastEphemerides>(std::move(*nav));
-    const io::MeasurementExtractor extractor(obs->header);
-    for (const auto& epoch : obs->epochs) {
-      // Two frequencies per system, as most RTK receivers track: L1/L2, E1/E5a, B1I/B2I, G1/G2.
-      positioning::EpochMeasurements m = extractor.measurements(epoch);
+    out.hour = &bench::esbc_first_hour();
+    out.error = out.hour->error.empty() && !out.hour->approx_position_m ? "no header position" : out.hour->error;
+    if (!out.error.empty()) return out;
+    for (positioning::EpochMeasurements m : out.hour->epochs) {
       std::erase_if(m.signals, [](const positioning::SignalMeasurement& s) {
         const char band = s.signal.band;
         switch (s.signal.system) {
@@ -50,8 +40,7 @@ const Data& data() {
       });
       out.epochs.push_back(std::move(m));
     }
-    const auto& p = *obs->header.approx_position_ecef_m;
-    out.base_m = Eigen::Vector3d(p[0], p[1], p[2]);
+    out.base_m = *out.hour->approx_position_m;
     return out;
   }();
   return d;
@@ -71,7 +60,7 @@ void BM_RtkEpoch(benchmark::State& state) {
     settings.systems.push_back(GnssSystem::kGlonass);
   }
   settings.single_point.systems = settings.systems;
-  positioning::RtkEngine engine(*d.ephemerides, settings, d.klobuchar);
+  positioning::RtkEngine engine(*d.hour->ephemerides, settings, d.hour->klobuchar);
   std::vector<positioning::BaseEpoch> bases;
   for (const auto& e : d.epochs) bases.push_back(positioning::BaseEpoch{e, d.base_m});
   size_t i = 0, satellites = 0, fixed = 0, solved = 0;
