@@ -173,14 +173,10 @@ TEST_F(BadInputCatalogue, PositionIntoFifoWritesThrough) {
   ASSERT_EQ(mkfifo(fifo.c_str(), 0644), 0);
   const fs::path copy = dir_ / "copy.csv";
   // A reader on the FIFO, as a pipeline would have.
-  const pid_t reader = fork();
-  if (reader == 0) {
-    execl("/bin/sh", "sh", "-c", ("exec cat " + q(fifo) + " > " + q(copy)).c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  test::Background reader("cat " + q(fifo), copy);
   run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(nav()) + " --out " + q(fifo), 0, "");
-  int status = 0;
-  waitpid(reader, &status, 0);
+  for (int i = 0; i < 500 && reader.running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_FALSE(reader.running()) << "the reader never saw the end of the file";
   struct stat info {};
   ASSERT_EQ(stat(fifo.c_str(), &info), 0);
   EXPECT_TRUE(S_ISFIFO(info.st_mode));
@@ -413,14 +409,9 @@ int free_udp_port() {
 
 TEST_F(BadInputCatalogue, ServeSurvivesHostilePosesAndStopsWithinASecond) {
   const int port = free_udp_port();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const std::string line = "exec " + skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") +
-                             " --rate-hz 10 --nmea-tcp 127.0.0.1:0 --pose-udp 127.0.0.1:" + std::to_string(port) + " > " +
-                             q(dir_ / "log") + " 2>&1";
-    execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  test::Background server(skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") +
+                              " --rate-hz 10 --nmea-tcp 127.0.0.1:0 --pose-udp 127.0.0.1:" + std::to_string(port),
+                          dir_ / "log");
   for (int i = 0; i < 200 && read_text(dir_ / "log").find("poses on udp port") == std::string::npos; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
@@ -440,15 +431,12 @@ TEST_F(BadInputCatalogue, ServeSurvivesHostilePosesAndStopsWithinASecond) {
   }
   close(fd);
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, WNOHANG), 0) << "serve died: " << read_text(dir_ / "log");
+  ASSERT_TRUE(server.running()) << "serve died: " << read_text(dir_ / "log");
   const auto signalled = std::chrono::steady_clock::now();
-  kill(pid, SIGTERM);
-  waitpid(pid, &status, 0);
+  const int exit_code = server.stop(SIGTERM);
   const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
   EXPECT_LT(stop_s, 1.0);
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(exit_code, 0) << "-1: ended by a signal";
   const std::string log = read_text(dir_ / "log");
   EXPECT_NE(log.find("more than 20 km/s"), std::string::npos) << log;
   EXPECT_NE(log.find("pose datagrams ignored"), std::string::npos) << log;
@@ -462,23 +450,15 @@ TEST_F(BadInputCatalogue, SigtermMidRunLeavesNothingBehind) {
                                  "  interval_s: 1\nreceiver:\n  position:\n    lla_deg_m: [48.1, 11.6, 520.0]\n"
                                  "  signals: [G1C, G2W, R1C, E1C, E5Q, C2I]\nephemeris:\n  nominal: true\n");
   const fs::path out = dir_ / "out";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const std::string line = "exec " + run_cmd(dir_ / "long.yaml", out) + " > " + q(dir_ / "log") + " 2>&1";
-    execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  test::Background run(run_cmd(dir_ / "long.yaml", out), dir_ / "log");
   // Wait until the run writes into its staging folder, then stop it.
   for (int i = 0; i < 600 && !has_staging_folder(out); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   ASSERT_TRUE(has_staging_folder(out)) << read_text(dir_ / "log");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const auto signalled = std::chrono::steady_clock::now();
-  kill(pid, SIGTERM);
-  int status = 0;
-  waitpid(pid, &status, 0);
+  const int exit_code = run.stop(SIGTERM);
   const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
-  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM) << read_text(dir_ / "log");
+  EXPECT_EQ(exit_code, 128 + SIGTERM) << read_text(dir_ / "log");
   EXPECT_NE(read_text(dir_ / "log").find("stopped by SIGTERM"), std::string::npos) << read_text(dir_ / "log");
   EXPECT_LT(stop_s, 5.0);
   EXPECT_FALSE(has_staging_folder(out));

@@ -28,45 +28,7 @@ namespace {
 
 const Eigen::Vector3d kEsbcMarker(3582105.2910, 532589.7313, 5232754.8054);
 
-// A program running in the background, stopped (SIGTERM, then SIGKILL) when destroyed.
-class Background {
- public:
-  Background(const std::string& command, const std::filesystem::path& log) {
-    pid_ = fork();
-    if (pid_ == 0) {
-      setpgid(0, 0);
-      const std::string line = "exec " + command + " > " + test::shell_quote(log.string()) + " 2>&1";
-      execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
-      _exit(127);
-    }
-  }
-  ~Background() { stop(); }
-  Background(const Background&) = delete;
-  Background& operator=(const Background&) = delete;
-  // Sends the signal and waits up to 10 s; the exit status (-1 when it had to be killed).
-  int stop(int signal_number = SIGTERM) {
-    if (pid_ <= 0) return status_;
-    kill(pid_, signal_number);
-    for (int i = 0; i < 100; ++i) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        return status_;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    kill(-pid_, SIGKILL);
-    kill(pid_, SIGKILL);
-    waitpid(pid_, nullptr, 0);
-    pid_ = -1;
-    return status_ = -1;
-  }
-
- private:
-  pid_t pid_ = -1;
-  int status_ = -1;
-};
+using test::Background;
 
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path);

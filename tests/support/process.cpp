@@ -71,6 +71,46 @@ MeasuredProcess run_measured(const std::string& command_line, double timeout_s) 
   return result;
 }
 
+Background::Background(const std::string& command, const std::filesystem::path& log) {
+  pid_ = fork();
+  if (pid_ == 0) {
+    setpgid(0, 0);
+    const std::string line = "exec " + command + " > " + shell_quote(log.string()) + " 2>&1";
+    execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+}
+
+bool Background::running() {
+  if (pid_ <= 0) return false;
+  int status = 0;
+  if (waitpid(pid_, &status, WNOHANG) == pid_) {
+    pid_ = -1;
+    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return false;
+  }
+  return true;
+}
+
+int Background::stop(int signal_number) {
+  if (pid_ <= 0) return status_;
+  kill(pid_, signal_number);
+  for (int i = 0; i < 1000; ++i) {
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) == pid_) {
+      pid_ = -1;
+      status_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      return status_;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  kill(-pid_, SIGKILL);
+  kill(pid_, SIGKILL);
+  waitpid(pid_, nullptr, 0);
+  pid_ = -1;
+  return status_ = -1;
+}
+
 std::string shell_quote(const std::string& argument) {
   std::string quoted = "'";
   for (char c : argument) {

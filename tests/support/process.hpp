@@ -32,4 +32,23 @@ std::filesystem::path skytrace_executable();
 // Whether a program is on PATH.
 bool program_available(const std::string& name);
 
+// A program running in the background through /bin/sh in a process group of its own, its output
+// in `log`; stopped (the signal, then SIGKILL after 10 s) when destroyed.
+class Background {
+ public:
+  Background(const std::string& command, const std::filesystem::path& log);
+  ~Background() { stop(); }
+  Background(const Background&) = delete;
+  Background& operator=(const Background&) = delete;
+  // Sends the signal and waits up to 10 s; the exit status (-1 when it ended by a signal or had to
+  // be killed).
+  int stop(int signal_number = 15 /* SIGTERM */);
+  // Whether it is still running (reaps it when it has ended).
+  [[nodiscard]] bool running();
+
+ private:
+  int pid_ = -1;
+  int status_ = -1;
+};
+
 }  // namespace skytrace::test
