@@ -142,6 +142,26 @@ class BadInputCatalogue : public ::testing::Test {
     }
     return r;
   }
+  // A copy of obs.rnx at `copy` whose first GLONASS observation value (an F14.3 field) is `text`;
+  // returns its 1-based line.
+  static size_t spoil_first_glonass_value(const fs::path& copy, const std::string& text) {
+    auto lines = split_lines(read_text(obs()));
+    const size_t line = find_line(lines, "R", find_line(lines, "END OF HEADER") + 2);
+    EXPECT_LT(line, lines.size());
+    if (line < lines.size()) lines[line].replace(3, 14, text);
+    write_text(copy, join_lines(lines));
+    return line + 1;
+  }
+  // A copy of nav.rnx at `copy` whose first GPS record has `text` (D19.12) in broadcast-orbit row
+  // `row`, slot `slot`; returns the 1-based line.
+  static size_t spoil_first_gps_field(const fs::path& copy, size_t row, size_t slot, const std::string& text) {
+    auto lines = split_lines(read_text(nav()));
+    const size_t record = find_line(lines, "G", find_line(lines, "END OF HEADER") + 1);
+    EXPECT_LT(record + row, lines.size());
+    if (record + row < lines.size()) lines[record + row].replace(4 + slot * 19, 19, text);
+    write_text(copy, join_lines(lines));
+    return record + row + 1;
+  }
   std::string run_cmd(const fs::path& scenario, const fs::path& out) {
     return skytrace_cmd() + " run " + q(scenario) + " --out " + q(out) + " --quiet";
   }
@@ -214,35 +234,23 @@ TEST_F(BadInputCatalogue, RunOutputsThroughSymlinksKeepTheLinks) {
 // ---------------------------------------------------------------- absurd numbers
 
 TEST_F(BadInputCatalogue, NanObservationNamesItsLine) {
-  auto lines = split_lines(read_text(obs()));
-  const size_t line = find_line(lines, "R", find_line(lines, "END OF HEADER") + 2);
-  ASSERT_LT(line, lines.size());
-  lines[line].replace(3, 14, "           nan");
-  write_text(dir_ / "nan.rnx", join_lines(lines));
+  const size_t line = spoil_first_glonass_value(dir_ / "nan.rnx", "           nan");
   run_case(skytrace_cmd() + " position " + q(dir_ / "nan.rnx") + " --nav " + q(nav()) + " --out " + q(dir_ / "fix.csv"),
-           3, "nan.rnx:" + std::to_string(line + 1) + ":.*not a");
+           3, "nan.rnx:" + std::to_string(line) + ":.*not a");
   EXPECT_FALSE(fs::exists(dir_ / "fix.csv"));
 }
 
 TEST_F(BadInputCatalogue, GlonassPseudorangeOf1e308IsMalformed) {
-  auto lines = split_lines(read_text(obs()));
-  const size_t line = find_line(lines, "R", find_line(lines, "END OF HEADER") + 2);
-  ASSERT_LT(line, lines.size());
-  lines[line].replace(3, 14, "        1e+308");
-  write_text(dir_ / "huge.rnx", join_lines(lines));
+  const size_t line = spoil_first_glonass_value(dir_ / "huge.rnx", "        1e+308");
   run_case(skytrace_cmd() + " position " + q(dir_ / "huge.rnx") + " --nav " + q(nav()), 3,
-           "huge.rnx:" + std::to_string(line + 1) + ":.*does not fit the F14.3 field");
+           "huge.rnx:" + std::to_string(line) + ":.*does not fit the F14.3 field");
 }
 
 TEST_F(BadInputCatalogue, NavRecordWithSqrtAZeroNamesTheField) {
-  auto lines = split_lines(read_text(nav()));
-  const size_t record = find_line(lines, "G", find_line(lines, "END OF HEADER") + 1);
-  ASSERT_LT(record + 2, lines.size());
-  lines[record + 2].replace(4 + 3 * 19, 19, " 0.000000000000E+00");  // sqrt(A): row 2, slot 3
-  write_text(dir_ / "sqrta.rnx", join_lines(lines));
+  const size_t line = spoil_first_gps_field(dir_ / "sqrta.rnx", 2, 3, " 0.000000000000E+00");  // sqrt(A)
   run_case(skytrace_cmd() + " orbits --nav " + q(dir_ / "sqrta.rnx") +
                " --start 2026-03-01T12:00:00 --duration-s 600 --interval-s 300 --csv " + q(dir_ / "o.csv"),
-           3, "sqrta.rnx:" + std::to_string(record + 3) + ":.*sqrt\\(A\\)");
+           3, "sqrta.rnx:" + std::to_string(line) + ":.*sqrt\\(A\\)");
   EXPECT_FALSE(fs::exists(dir_ / "o.csv"));
 }
 
@@ -254,14 +262,10 @@ TEST_F(BadInputCatalogue, RinexVersion2E11IsRefused) {
 }
 
 TEST_F(BadInputCatalogue, ToeOf1e40IsRefused) {
-  auto lines = split_lines(read_text(nav()));
-  const size_t record = find_line(lines, "G", find_line(lines, "END OF HEADER") + 1);
-  ASSERT_LT(record + 3, lines.size());
-  lines[record + 3].replace(4, 19, " 1.000000000000E+40");  // Toe: row 3, slot 0
-  write_text(dir_ / "toe.rnx", join_lines(lines));
+  const size_t line = spoil_first_gps_field(dir_ / "toe.rnx", 3, 0, " 1.000000000000E+40");  // Toe
   run_case(skytrace_cmd() + " orbits --nav " + q(dir_ / "toe.rnx") +
                " --start 2026-03-01T12:00:00 --duration-s 600 --interval-s 300 --csv " + q(dir_ / "o.csv"),
-           3, "toe.rnx:" + std::to_string(record + 4) + ": field 'Toe': out of range");
+           3, "toe.rnx:" + std::to_string(line) + ": field 'Toe': out of range");
 }
 
 TEST_F(BadInputCatalogue, OrbitsWithANanosecondStepIsRefusedAtOnce) {
