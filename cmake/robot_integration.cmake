@@ -5,6 +5,8 @@
 # find_package() of a message package or of tf2_ros would pull catkin into this non-catkin build,
 # so those are found as plain headers and libraries.
 # Gazebo transport (ignition-transport 11, ignition-msgs 8 of Gazebo Fortress): SKYTRACE_GZ_FOUND.
+# ROS 2 over DDS (Debian's Cyclone DDS; no ROS 2 install): SKYTRACE_ROS2_FOUND, and for its tests
+# the independent peer on Fast DDS 2.9 / Fast CDR: SKYTRACE_FASTDDS_FOUND.
 
 set(SKYTRACE_ROS_FOUND FALSE)
 find_package(roscpp QUIET)
@@ -54,4 +56,23 @@ if(ignition-transport11_FOUND AND ignition-msgs8_FOUND)
   message(STATUS "Gazebo transport bridge: built (ignition-transport 11, ignition-msgs 8)")
 else()
   message(STATUS "Gazebo transport bridge not built: ignition-transport11 / ignition-msgs8 not found")
+endif()
+
+set(SKYTRACE_ROS2_FOUND FALSE)
+if(SKYTRACE_ROS2)
+  find_package(CycloneDDS QUIET)
+  if(CycloneDDS_FOUND)
+    set(SKYTRACE_ROS2_FOUND TRUE)
+    message(STATUS "ROS 2 node: built (Cyclone DDS ${CycloneDDS_VERSION})")
+  else()
+    message(STATUS "ROS 2 node not built: Cyclone DDS not found (cyclonedds-dev; scripts/setup installs it)")
+  endif()
+else()
+  message(STATUS "ROS 2 node not built: SKYTRACE_ROS2 is OFF")
+endif()
+set(SKYTRACE_FASTDDS_FOUND FALSE)
+find_package(fastcdr QUIET)
+find_package(fastrtps QUIET)
+if(fastcdr_FOUND AND fastrtps_FOUND)
+  set(SKYTRACE_FASTDDS_FOUND TRUE)
 endif()

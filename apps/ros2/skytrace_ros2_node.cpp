@@ -1,0 +1,664 @@
+// skytrace_ros2_node: a simulated GNSS receiver on ROS 2 without a ROS 2 install (docs/ros2.md).
+// The ROS 1 node's behaviour and parameters (apps/ros/skytrace_ros_node.cpp) over DDS: Cyclone DDS
+// participant, ROS 2 topic and type names, CDR payloads from skytrace/ros2/messages.hpp, the QoS
+// profiles of rclcpp, and the graph information (ros_discovery_info) that makes `ros2 node list`
+// and `ros2 topic info` show it. One live::Receiver stepped at ~rate_hz on the ROS clock (/clock
+// under use_sim_time), the antenna where the scenario, tf, an odometry or a pose topic puts it.
+// Bad input (NaN or stale poses, unknown frames, the clock going back, incompatible QoS) is
+// reported with throttled warnings, never a crash.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dds.hpp"
+#include "epoch_messages.hpp"
+#include "live_receiver.hpp"
+#include "log.hpp"
+#include "params.hpp"
+#include "skytrace/core/cancellation.hpp"
+#include "skytrace/ros2/messages.hpp"
+#include "tf_buffer.hpp"
+
+namespace skytrace::ros2_node {
+namespace {
+
+// Exit codes of the skytrace CLI (README "Exit codes").
+constexpr int kExitUsage = 2;
+constexpr int kExitInput = 3;
+constexpr int kExitOutput = 5;
+constexpr int kExitNetwork = 6;
+
+// Stops the loop; should it not end within a second (a step that does not return, DDS stuck),
+// SIGALRM ends the process: SIGINT and SIGTERM always end the node promptly.
+void on_signal(int signal_number) {
+  request_cancellation(signal_number);
+  alarm(1);
+}
+
+constexpr const char* kUsage = R"(usage: skytrace_ros2_node [--ros-args] [--params-file FILE]... [-p NAME:=VALUE]...
+                          [-r __ns:=/NAMESPACE] [-r __node:=NAME] [-r FROM:=TO]...
+
+A simulated GNSS receiver on ROS 2 (DDS, no ROS 2 install needed). Parameters (docs/ros2.md):
+  scenario (required), pose_source (scenario|tf|odometry|pose), world_frame, antenna_frame,
+  frame_id, pose_topic, odom_topic, antenna_offset_m, rate_hz, start_time, start_time_scale,
+  pose_timeout_s, ray_length_m, moving_models, rinex_out, latency_report, use_sim_time,
+  ros_distro (humble|jazzy), rtcm3, gnss_comm.
+Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS,
+  CYCLONEDDS_URI.
+)";
+
+enum class PoseSource { kScenario, kTf, kOdometry, kPose };
+
+struct Config {
+  std::string scenario;
+  PoseSource pose_source = PoseSource::kScenario;
+  std::string world_frame = "world";
+  std::string antenna_frame = "gnss_antenna";
+  std::string frame_id;  // of the fix and velocity; the antenna frame by default
+  std::string pose_topic = "antenna_pose";
+  std::string odom_topic = "odom";
+  Eigen::Vector3d antenna_offset_m = Eigen::Vector3d::Zero();  // in the body frame of pose/odometry
+  double rate_hz = 1.0;
+  std::string start_time;
+  std::string start_time_scale = "GPST";
+  double pose_timeout_s = 1.0;
+  double ray_length_m = 100.0;
+  std::vector<std::string> moving_models;  // tf frames of movable world models
+  std::string rinex_out;
+  std::string latency_report;
+  bool use_sim_time = false;
+  ros2::RosDistro distro = ros2::RosDistro::kJazzy;
+  bool rtcm3 = true;
+  bool gnss_comm = true;
+};
+
+#define SKYTRACE_READ(expr, target) \
+  do {                              \
+    auto value_ = (expr);           \
+    if (!value_) return value_.error(); \
+    target = *value_;               \
+  } while (false)
+
+Result<Config> read_config(const Parameters& p) {
+  Config c;
+  SKYTRACE_READ(p.get_string("scenario", ""), c.scenario);
+  if (c.scenario.empty()) {
+    return Error{ErrorCode::kInvalidArgument, "parameter scenario is required: the path of a skytrace scenario file (YAML)"};
+  }
+  std::string source;
+  SKYTRACE_READ(p.get_string("pose_source", "scenario"), source);
+  if (source == "scenario") {
+    c.pose_source = PoseSource::kScenario;
+  } else if (source == "tf") {
+    c.pose_source = PoseSource::kTf;
+  } else if (source == "odometry") {
+    c.pose_source = PoseSource::kOdometry;
+  } else if (source == "pose") {
+    c.pose_source = PoseSource::kPose;
+  } else {
+    return Error{ErrorCode::kInvalidArgument, fmt::format("parameter pose_source '{}': expected scenario, tf, odometry or pose", source)};
+  }
+  SKYTRACE_READ(p.get_string("world_frame", c.world_frame), c.world_frame);
+  SKYTRACE_READ(p.get_string("antenna_frame", c.antenna_frame), c.antenna_frame);
+  SKYTRACE_READ(p.get_string("frame_id", c.antenna_frame), c.frame_id);
+  SKYTRACE_READ(p.get_string("pose_topic", c.pose_topic), c.pose_topic);
+  SKYTRACE_READ(p.get_string("odom_topic", c.odom_topic), c.odom_topic);
+  SKYTRACE_READ(p.get_double("rate_hz", c.rate_hz), c.rate_hz);
+  if (!(c.rate_hz > 0.0 && c.rate_hz <= 100.0)) {
+    return Error{ErrorCode::kInvalidArgument, fmt::format("parameter rate_hz {}: expected a rate in (0, 100] Hz", c.rate_hz)};
+  }
+  SKYTRACE_READ(p.get_double("pose_timeout_s", c.pose_timeout_s), c.pose_timeout_s);
+  if (!(c.pose_timeout_s > 0.0)) {
+    return Error{ErrorCode::kInvalidArgument, fmt::format("parameter pose_timeout_s {}: expected a positive duration", c.pose_timeout_s)};
+  }
+  SKYTRACE_READ(p.get_double("ray_length_m", c.ray_length_m), c.ray_length_m);
+  if (!(c.ray_length_m > 0.0)) {
+    return Error{ErrorCode::kInvalidArgument, fmt::format("parameter ray_length_m {}: expected a positive length", c.ray_length_m)};
+  }
+  SKYTRACE_READ(p.get_string("start_time", c.start_time), c.start_time);
+  SKYTRACE_READ(p.get_string("start_time_scale", c.start_time_scale), c.start_time_scale);
+  std::vector<double> offset;
+  SKYTRACE_READ(p.get_doubles("antenna_offset_m"), offset);
+  if (p.has("antenna_offset_m")) {
+    if (offset.size() != 3) {
+      return Error{ErrorCode::kInvalidArgument,
+                   "parameter antenna_offset_m: expected [x, y, z] in metres in the robot's body frame"};
+    }
+    c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
+  }
+  SKYTRACE_READ(p.get_strings("moving_models"), c.moving_models);
+  SKYTRACE_READ(p.get_string("rinex_out", c.rinex_out), c.rinex_out);
+  SKYTRACE_READ(p.get_string("latency_report", c.latency_report), c.latency_report);
+  SKYTRACE_READ(p.get_bool("use_sim_time", c.use_sim_time), c.use_sim_time);
+  std::string distro;
+  SKYTRACE_READ(p.get_string("ros_distro", "jazzy"), distro);
+  auto parsed = ros2::parse_ros_distro(distro);
+  if (!parsed) return Error{ErrorCode::kInvalidArgument, "parameter ros_distro: " + parsed.error().message};
+  c.distro = *parsed;
+  SKYTRACE_READ(p.get_bool("rtcm3", c.rtcm3), c.rtcm3);
+  SKYTRACE_READ(p.get_bool("gnss_comm", c.gnss_comm), c.gnss_comm);
+  return c;
+}
+
+#undef SKYTRACE_READ
+
+Eigen::Quaterniond to_eigen(const ros2::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
+
+// ROS time in nanoseconds (builtin_interfaces/Time); the clock's zero means "not started".
+std::int64_t to_ns(const ros2::Time& t) { return t.nanoseconds(); }
+ros2::Time from_ns(std::int64_t ns) {
+  ros2::Time t;
+  t.sec = static_cast<std::int32_t>(ns / 1000000000);
+  t.nanosec = static_cast<std::uint32_t>(ns % 1000000000);
+  return t;
+}
+
+// A writer of one message type: serialises only when someone listens (a transient-local writer
+// always does, for the late joiners).
+template <typename Message>
+class Publisher {
+ public:
+  Publisher() = default;
+  explicit Publisher(std::unique_ptr<DdsWriter> writer, bool always = false) : writer_(std::move(writer)), always_(always) {}
+  [[nodiscard]] bool wanted() const { return writer_ && (always_ || writer_->matched_readers() > 0); }
+  Status publish(const Message& message) { return writer_->write(ros2::serialize(message)); }
+  [[nodiscard]] const DdsWriter* writer() const { return writer_.get(); }
+
+ private:
+  std::unique_ptr<DdsWriter> writer_;
+  bool always_ = false;
+};
+
+class Node {
+ public:
+  Node(Config config, CommandLine command_line, std::unique_ptr<live::Receiver> receiver, Log& log)
+      : config_(std::move(config)), command_line_(std::move(command_line)), receiver_(std::move(receiver)), log_(log) {
+    period_s_ = 1.0 / config_.rate_hz;
+  }
+
+  // Creates the DDS entities; errors name the topic.
+  Status open(const DiscoveryOptions& discovery) {
+    auto participant = DdsParticipant::create(discovery, [this](const std::string& text) {
+      log_.throttled(LogLevel::kWarn, 10.0, text.substr(0, text.find(':')), text);
+    });
+    if (!participant) return participant.error();
+    dds_ = std::move(*participant);
+
+    const QosProfile sensor = QosProfile::sensor_data();
+    const QosProfile reliable = QosProfile::default_profile();
+    if (auto st = advertise(fix_, "~/fix", sensor); !st) return st;
+    if (auto st = advertise(velocity_, "~/velocity", sensor); !st) return st;
+    if (auto st = advertise(time_reference_, "~/time_reference", sensor); !st) return st;
+    // Several samples an epoch: a deeper history for reliable delivery of the whole burst.
+    if (auto st = advertise(nmea_, "~/nmea", reliable.keep_last(100)); !st) return st;
+    if (config_.rtcm3) {
+      if (auto st = advertise(rtcm_, "~/rtcm", reliable.keep_last(100)); !st) return st;
+    }
+    if (config_.gnss_comm) {
+      // ublox_driver's names, which GVINS subscribes to; ephemerides kept for late joiners.
+      if (auto st = advertise(range_meas_, "~/range_meas", reliable); !st) return st;
+      if (auto st = advertise(ephem_, "~/ephem", reliable.keep_last(500).transient_local(), true); !st) return st;
+      if (auto st = advertise(glo_ephem_, "~/glo_ephem", reliable.keep_last(200).transient_local(), true); !st) return st;
+    }
+    if (auto st = advertise(observations_, "~/observations", reliable); !st) return st;
+    if (auto st = advertise(sky_, "~/sky", reliable); !st) return st;
+    if (auto st = advertise(rays_, "~/rays", reliable); !st) return st;
+
+    // rclcpp's QoS for what the node reads: the clock and poses best effort (they match either
+    // kind of publisher), tf2_ros's listener profiles for /tf and /tf_static.
+    if (config_.use_sim_time) {
+      if (auto st = subscribe(clock_, "/clock", ros2::Clock::kType, sensor.keep_last(1)); !st) return st;
+    }
+    if (config_.pose_source == PoseSource::kTf || !config_.moving_models.empty()) {
+      if (auto st = subscribe(tf_, "/tf", ros2::TFMessage::kType, reliable.keep_last(100)); !st) return st;
+      if (auto st = subscribe(tf_static_, "/tf_static", ros2::TFMessage::kType, reliable.keep_last(100).transient_local()); !st) {
+        return st;
+      }
+    }
+    if (config_.pose_source == PoseSource::kPose) {
+      if (auto st = subscribe(pose_, config_.pose_topic, ros2::PoseStamped::kType, sensor); !st) return st;
+    } else if (config_.pose_source == PoseSource::kOdometry) {
+      if (auto st = subscribe(pose_, config_.odom_topic, ros2::Odometry::kType, sensor); !st) return st;
+    }
+    return announce();
+  }
+
+  [[nodiscard]] bool open_rinex() {
+    if (config_.rinex_out.empty()) return true;
+    if (auto problem = receiver_->open_rinex(config_.rinex_out, period_s_); !problem.empty()) {
+      log_.fatal("parameter rinex_out {}: {}", config_.rinex_out, problem);
+      return false;
+    }
+    return true;
+  }
+
+  void run() {
+    const double wait_s = std::min(0.01, period_s_ / 4.0);
+    if (!config_.use_sim_time) origin_ns_ = system_now_ns();  // node start maps to start_time
+    while (!cancellation_requested()) {
+      dds_->wait_for_data(wait_s);
+      take_inputs();
+      const std::int64_t now_ns = ros_now_ns();
+      if (now_ns == 0) {
+        log_.throttled(LogLevel::kWarn, 10.0, "clock", "waiting for the clock (use_sim_time is set and /clock has not started)");
+        continue;
+      }
+      const double elapsed_s = 1e-9 * static_cast<double>(now_ns - origin_ns_);
+      if (elapsed_s < 0.0) continue;
+      const auto k = static_cast<std::int64_t>(std::floor(elapsed_s * config_.rate_hz + 1e-6));
+      if (last_k_) {
+        if (k == *last_k_) continue;
+        if (k < *last_k_) {
+          log_.warn("time went back {:.3f} s (simulation reset?): the receiver restarts tracking",
+                    static_cast<double>(*last_k_ - k) * period_s_);
+          tf_buffer_.clear();  // as tf2 does when time jumps back
+        } else if (k - *last_k_ > std::max<std::int64_t>(2, static_cast<std::int64_t>(2.0 * config_.rate_hz))) {
+          log_.warn("time jumped {:.3f} s forward: {} epochs skipped", static_cast<double>(k - *last_k_) * period_s_,
+                    k - *last_k_ - 1);
+        }
+      }
+      last_k_ = k;
+      epoch(k);
+    }
+  }
+
+  void finish() {
+    if (receiver_->rinex_open()) {
+      if (auto problem = receiver_->finish_rinex(); !problem.empty()) {
+        log_.error("parameter rinex_out {}: {}", config_.rinex_out, problem);
+      } else {
+        log_.info("RINEX observations written to {}", config_.rinex_out);
+      }
+    }
+    report_latency();
+  }
+
+ private:
+  static std::int64_t system_now_ns() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+  }
+  [[nodiscard]] std::int64_t ros_now_ns() const { return config_.use_sim_time ? sim_now_ns_ : system_now_ns(); }
+  // Receiver time (seconds after the start time) of a ROS time.
+  [[nodiscard]] double receiver_time_s(std::int64_t stamp_ns) const {
+    return 1e-9 * static_cast<double>(stamp_ns - origin_ns_);
+  }
+
+  template <typename Message>
+  Status advertise(Publisher<Message>& publisher, const std::string& name, const QosProfile& qos, bool always = false) {
+    auto topic = resolve_topic_name(name, command_line_);
+    if (!topic) return topic.error();
+    auto writer = dds_->create_writer("rt" + *topic, ros2::dds_type_name(Message::kType), qos);
+    if (!writer) return writer.error();
+    writer_gids_.push_back((*writer)->guid());
+    publisher = Publisher<Message>(std::move(*writer), always);
+    return Ok{};
+  }
+
+  struct Subscription {
+    std::string topic;  // resolved ROS name, for messages
+    std::unique_ptr<DdsReader> reader;
+  };
+  Status subscribe(Subscription& subscription, const std::string& name, std::string_view type, const QosProfile& qos) {
+    auto topic = resolve_topic_name(name, command_line_);
+    if (!topic) return topic.error();
+    auto reader = dds_->create_reader("rt" + *topic, ros2::dds_type_name(type), qos);
+    if (!reader) return reader.error();
+    reader_gids_.push_back((*reader)->guid());
+    subscription = Subscription{*topic, std::move(*reader)};
+    return Ok{};
+  }
+
+  // The node on ros_discovery_info, as rmw_dds_common's graph cache expects it: the participant's
+  // GID and, for this node, the GIDs of its readers and writers.
+  Status announce() {
+    auto writer = dds_->create_writer("ros_discovery_info", ros2::dds_type_name(ros2::ParticipantEntitiesInfo::kType),
+                                      QosProfile::default_profile().keep_last(1).transient_local());
+    if (!writer) return writer.error();
+    discovery_ = std::move(*writer);
+    const auto gid = [](const Guid& guid) {
+      ros2::Gid g;
+      std::copy(guid.begin(), guid.end(), g.data.begin());
+      return g;
+    };
+    ros2::ParticipantEntitiesInfo info;
+    info.gid = gid(dds_->guid());
+    ros2::NodeEntitiesInfo node;
+    node.node_namespace = command_line_.node_namespace;
+    node.node_name = command_line_.node_name;
+    for (const auto& g : reader_gids_) node.reader_gid_seq.push_back(gid(g));
+    for (const auto& g : writer_gids_) node.writer_gid_seq.push_back(gid(g));
+    info.node_entities_info_seq.push_back(std::move(node));
+    return discovery_->write(ros2::serialize(info, config_.distro));
+  }
+
+  template <typename Message>
+  std::optional<Message> decode(const std::vector<std::uint8_t>& bytes, const std::string& topic) {
+    auto message = ros2::deserialize<Message>(bytes);
+    if (!message) {
+      log_.throttled(LogLevel::kWarn, 5.0, topic + "/decode", fmt::format("{}: message not decoded: {}", topic, message.error().message));
+      return std::nullopt;
+    }
+    return std::move(*message);
+  }
+
+  void take_inputs() {
+    if (clock_.reader) {
+      for (const auto& bytes : clock_.reader->take()) {
+        if (auto clock = decode<ros2::Clock>(bytes, clock_.topic)) sim_now_ns_ = to_ns(clock->clock);
+      }
+    }
+    if (tf_.reader) {
+      for (const auto& bytes : tf_static_.reader->take()) {
+        if (auto tf = decode<ros2::TFMessage>(bytes, tf_static_.topic)) add_transforms(*tf, true);
+      }
+      for (const auto& bytes : tf_.reader->take()) {
+        if (auto tf = decode<ros2::TFMessage>(bytes, tf_.topic)) add_transforms(*tf, false);
+      }
+    }
+    if (pose_.reader) {
+      for (const auto& bytes : pose_.reader->take()) {
+        if (config_.pose_source == PoseSource::kPose) {
+          if (auto pose = decode<ros2::PoseStamped>(bytes, pose_.topic)) on_pose(*pose);
+        } else if (auto odom = decode<ros2::Odometry>(bytes, pose_.topic)) {
+          on_odometry(*odom);
+        }
+      }
+    }
+  }
+
+  void add_transforms(const ros2::TFMessage& message, bool is_static) {
+    for (const auto& t : message.transforms) {
+      const auto& tr = t.transform.translation;
+      const auto st = tf_buffer_.set(t.header.frame_id, t.child_frame_id, Eigen::Vector3d(tr.x, tr.y, tr.z),
+                                     to_eigen(t.transform.rotation), 1e-9 * static_cast<double>(to_ns(t.header.stamp)), is_static);
+      if (!st) log_.throttled(LogLevel::kWarn, 5.0, "tf/" + t.child_frame_id, (is_static ? "/tf_static: " : "/tf: ") + st.error().message);
+    }
+  }
+
+  void set_pose(std::int64_t stamp_ns, const Eigen::Vector3d& position_world_m,
+                const std::optional<Eigen::Vector3d>& velocity_world_mps, const std::string& source) {
+    if (!position_world_m.allFinite() || (velocity_world_mps && !velocity_world_mps->allFinite())) {
+      log_.throttled(LogLevel::kWarn, 5.0, source + "/nan", fmt::format("{}: antenna pose with NaN or infinite values ignored", source));
+      return;
+    }
+    const std::int64_t when_ns = stamp_ns == 0 ? ros_now_ns() : stamp_ns;
+    std::optional<live::Vec3> velocity;
+    if (velocity_world_mps) velocity = live::Vec3{velocity_world_mps->x(), velocity_world_mps->y(), velocity_world_mps->z()};
+    const live::Vec3 position{position_world_m.x(), position_world_m.y(), position_world_m.z()};
+    if (auto problem = receiver_->set_antenna_pose_world(receiver_time_s(when_ns), position, velocity); !problem.empty()) {
+      log_.throttled(LogLevel::kWarn, 5.0, source + "/pose", fmt::format("{}: {}", source, problem));
+    }
+  }
+
+  // The antenna point of a body pose: the body's position plus the lever arm turned by its attitude.
+  [[nodiscard]] std::optional<Eigen::Vector3d> antenna_point(const ros2::Pose& pose, const std::string& source) {
+    const Eigen::Vector3d p(pose.position.x, pose.position.y, pose.position.z);
+    if (config_.antenna_offset_m.isZero()) return p;
+    const Eigen::Quaterniond q = to_eigen(pose.orientation);
+    if (!q.coeffs().allFinite() || q.norm() < 1e-6) {
+      log_.throttled(LogLevel::kWarn, 5.0, source + "/orientation",
+                     fmt::format("{}: orientation missing or not finite; antenna_offset_m needs it, pose ignored", source));
+      return std::nullopt;
+    }
+    return p + q.normalized() * config_.antenna_offset_m;
+  }
+
+  void check_frame(const std::string& frame_id, const std::string& source) {
+    if (!frame_id.empty() && frame_id != config_.world_frame) {
+      log_.throttled(LogLevel::kWarn, 10.0, source + "/frame",
+                     fmt::format("{}: pose in frame '{}', expected world_frame '{}'; used as world coordinates", source,
+                                 frame_id, config_.world_frame));
+    }
+  }
+
+  void on_pose(const ros2::PoseStamped& msg) {
+    check_frame(msg.header.frame_id, pose_.topic);
+    if (auto p = antenna_point(msg.pose, pose_.topic)) set_pose(to_ns(msg.header.stamp), *p, std::nullopt, pose_.topic);
+  }
+
+  void on_odometry(const ros2::Odometry& msg) {
+    check_frame(msg.header.frame_id, pose_.topic);
+    auto p = antenna_point(msg.pose.pose, pose_.topic);
+    if (!p) return;
+    // The twist is in the child (body) frame: turned into the world frame by the attitude.
+    const auto& v = msg.twist.twist.linear;
+    const Eigen::Quaterniond q = to_eigen(msg.pose.pose.orientation);
+    std::optional<Eigen::Vector3d> v_world;
+    if (q.coeffs().allFinite() && q.norm() > 1e-6) v_world = q.normalized() * Eigen::Vector3d(v.x, v.y, v.z);
+    set_pose(to_ns(msg.header.stamp), *p, v_world, pose_.topic);
+  }
+
+  // world_frame <- frame, if tf has it and it is usable.
+  std::optional<StampedTransform> lookup(const std::string& frame) {
+    auto t = tf_buffer_.lookup(config_.world_frame, frame);
+    if (!t) {
+      log_.throttled(LogLevel::kWarn, 5.0, "lookup/" + frame,
+                     fmt::format("no transform {} -> {}: {}", config_.world_frame, frame, t.error().message));
+      return std::nullopt;
+    }
+    return *t;
+  }
+
+  void update_from_tf(std::int64_t epoch_ns) {
+    if (config_.pose_source == PoseSource::kTf) {
+      if (auto t = lookup(config_.antenna_frame)) {
+        // A static chain holds at every time.
+        const std::int64_t stamp_ns = t->is_static ? epoch_ns : static_cast<std::int64_t>(std::llround(t->stamp_s * 1e9));
+        const double age_s = 1e-9 * static_cast<double>(epoch_ns - stamp_ns);
+        if (age_s > config_.pose_timeout_s) {
+          log_.throttled(LogLevel::kWarn, 5.0, "tf/stale",
+                         fmt::format("tf {} -> {} is {:.1f} s old (stale)", config_.world_frame, config_.antenna_frame, age_s));
+        }
+        set_pose(stamp_ns, t->transform.translation(), std::nullopt, "tf");
+      }
+    }
+    for (const auto& model : config_.moving_models) {
+      auto t = lookup(model);
+      if (!t) continue;
+      const Eigen::Vector3d p = t->transform.translation();
+      const Eigen::Quaterniond q(t->transform.rotation());
+      if (auto problem = receiver_->set_object_pose(model, {p.x(), p.y(), p.z()}, {q.w(), q.x(), q.y(), q.z()}); !problem.empty()) {
+        log_.throttled(LogLevel::kWarn, 10.0, "model/" + model, fmt::format("moving model '{}': {}", model, problem));
+      }
+    }
+  }
+
+  template <typename Message>
+  void publish(Publisher<Message>& publisher, const Message& message) {
+    if (auto st = publisher.publish(message); !st) {
+      log_.throttled(LogLevel::kWarn, 10.0, std::string(Message::kType), fmt::format("{}: {}", Message::kType, st.error().message));
+    }
+  }
+
+  void epoch(std::int64_t k) {
+    const double time_s = static_cast<double>(k) * period_s_;
+    const std::int64_t stamp_ns = origin_ns_ + static_cast<std::int64_t>(std::llround(time_s * 1e9));
+    if (tf_.reader) update_from_tf(stamp_ns);
+    const auto started = std::chrono::steady_clock::now();
+    std::string problem;
+    if (!receiver_->step(time_s, epoch_, problem)) {
+      log_.throttled(LogLevel::kError, 10.0, "step", fmt::format("epoch {:.3f} s after the start time: {}", time_s, problem));
+      return;
+    }
+    const live::EpochView& e = epoch_;
+    if (e.restarted) log_.warn("receiver restarted at {} GPST (time went back)", e.time_iso);
+    if (e.pose_stale) {
+      log_.throttled(LogLevel::kWarn, 5.0, "stale",
+                     fmt::format("antenna pose is stale (none for {:.1f} s): the receiver is held where it was", config_.pose_timeout_s));
+    }
+    const ros2::Header fix_header{from_ns(stamp_ns), config_.frame_id};
+    const ros2::Header world_header{from_ns(stamp_ns), config_.world_frame};
+
+    if (fix_.wanted()) publish(fix_, ros2_epoch::to_navsat_fix(e.fix, fix_header));
+    if (e.fix.type != 0 && e.fix.velocity_valid && velocity_.wanted()) publish(velocity_, ros2_epoch::to_velocity(e.fix, fix_header));
+    if (time_reference_.wanted()) publish(time_reference_, ros2_epoch::to_time_reference(e, fix_header));
+    if (nmea_.wanted()) {
+      for (const auto& sentence : ros2_epoch::to_nmea(e, fix_header)) publish(nmea_, sentence);
+    }
+    if (rtcm_.wanted()) {
+      for (const auto& frame : ros2_epoch::to_rtcm(e, fix_header)) publish(rtcm_, frame);
+    }
+    if (range_meas_.wanted()) publish(range_meas_, ros2_epoch::to_gnss_meas(e));
+    if (ephem_.wanted()) {
+      for (const auto& record : ros2_epoch::to_gnss_ephemerides(e)) publish(ephem_, record);
+    }
+    if (glo_ephem_.wanted()) {
+      for (const auto& record : ros2_epoch::to_gnss_glonass_ephemerides(e)) publish(glo_ephem_, record);
+    }
+    if (observations_.wanted()) publish(observations_, ros2_epoch::to_observations(e, fix_header));
+    if (sky_.wanted()) publish(sky_, ros2_epoch::to_sky(e, world_header));
+    if (rays_.wanted()) publish(rays_, ros2_epoch::to_rays(e, world_header, config_.ray_length_m));
+    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+
+    if (receiver_->rinex_open()) {
+      if (auto written = receiver_->write_rinex_epoch(); !written.empty()) {
+        log_.throttled(LogLevel::kWarn, 10.0, "rinex", fmt::format("parameter rinex_out {}: {}", config_.rinex_out, written));
+      }
+    }
+  }
+
+  void report_latency() {
+    if (latencies_s_.empty()) return;
+    std::vector<double> sorted = latencies_s_;
+    std::sort(sorted.begin(), sorted.end());
+    const auto quantile_ms = [&](double q) {
+      const auto index = static_cast<size_t>(std::ceil(q * static_cast<double>(sorted.size()))) - 1;
+      return 1e3 * sorted[std::min(index, sorted.size() - 1)];
+    };
+    double sum_s = 0.0;
+    for (double s : sorted) sum_s += s;
+    const std::string json = fmt::format(
+        "{{\"scenario\": \"{}\", \"rate_hz\": {}, \"epochs\": {}, \"mean_ms\": {:.4f}, \"p50_ms\": {:.4f}, "
+        "\"p90_ms\": {:.4f}, \"p99_ms\": {:.4f}, \"max_ms\": {:.4f}}}\n",
+        config_.scenario, config_.rate_hz, sorted.size(), 1e3 * sum_s / static_cast<double>(sorted.size()),
+        quantile_ms(0.5), quantile_ms(0.9), quantile_ms(0.99), 1e3 * sorted.back());
+    log_.info("per-epoch latency (step and publish): {} epochs, p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms", sorted.size(),
+              quantile_ms(0.5), quantile_ms(0.99), 1e3 * sorted.back());
+    if (!config_.latency_report.empty()) {
+      std::ofstream out(config_.latency_report);
+      out << json;
+      if (!out) log_.error("parameter latency_report {}: cannot write", config_.latency_report);
+    }
+  }
+
+  Config config_;
+  CommandLine command_line_;
+  std::unique_ptr<live::Receiver> receiver_;
+  Log& log_;
+  double period_s_ = 1.0;
+  std::int64_t origin_ns_ = 0;  // ROS time of the start time: zero under sim time, else the node's start
+  std::int64_t sim_now_ns_ = 0;  // the last /clock
+  live::EpochView epoch_;        // reused from epoch to epoch
+  std::optional<std::int64_t> last_k_;
+  TfBuffer tf_buffer_;
+  std::vector<double> latencies_s_;
+  // Destroyed after the endpoints below (declared first): the participant owns their entities.
+  std::unique_ptr<DdsParticipant> dds_;
+  std::vector<Guid> reader_gids_, writer_gids_;
+  std::unique_ptr<DdsWriter> discovery_;
+  Publisher<ros2::NavSatFix> fix_;
+  Publisher<ros2::TwistWithCovarianceStamped> velocity_;
+  Publisher<ros2::TimeReference> time_reference_;
+  Publisher<ros2::NmeaSentence> nmea_;
+  Publisher<ros2::RtcmMessage> rtcm_;
+  Publisher<ros2::GnssMeasMsg> range_meas_;
+  Publisher<ros2::GnssEphemMsg> ephem_;
+  Publisher<ros2::GnssGloEphemMsg> glo_ephem_;
+  Publisher<ros2::Observations> observations_;
+  Publisher<ros2::Sky> sky_;
+  Publisher<ros2::MarkerArray> rays_;
+  Subscription clock_, tf_, tf_static_, pose_;
+};
+
+int run(int argc, char** argv) {
+  Log log;
+  auto command_line = parse_command_line(argc, argv);
+  if (!command_line) {
+    log.fatal("{}", command_line.error().message);
+    std::fputs(kUsage, stderr);
+    return kExitUsage;
+  }
+  if (command_line->help) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
+  log.set_name(command_line->node_namespace == "/" ? command_line->node_name
+                                                   : command_line->node_namespace.substr(1) + "." + command_line->node_name);
+  auto values = load_parameters(*command_line);
+  if (!values) {
+    log.fatal("{}", values.error().message);
+    return values.error().code == ErrorCode::kInvalidArgument ? kExitUsage : kExitInput;
+  }
+  const Parameters parameters(std::move(*values));
+  auto config = read_config(parameters);
+  if (!config) {
+    log.fatal("{}", config.error().message);
+    return kExitUsage;
+  }
+  for (const auto& name : parameters.unread()) log.warn("unknown parameter '{}' ignored", name);
+  auto discovery = read_discovery_environment();
+  if (!discovery) {
+    log.fatal("{}", discovery.error().message);
+    return kExitUsage;
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  live::ReceiverOptions options;
+  options.scenario_path = config->scenario;
+  options.start_time = config->start_time;
+  options.start_time_scale = config->start_time_scale;
+  options.pose_timeout_s = config->pose_timeout_s;
+  options.rtcm3 = config->rtcm3;
+  options.ephemeris_records = config->gnss_comm;
+  std::string problem;
+  auto receiver = live::Receiver::create(options, problem);
+  if (!receiver) {
+    log.fatal("{} (from parameters scenario, start_time, start_time_scale)", problem);
+    return kExitInput;
+  }
+  for (const auto& warning : receiver->warnings()) log.warn("skytrace: {}", warning);
+  Node node(*config, *command_line, std::move(receiver), log);
+  if (!node.open_rinex()) return kExitOutput;
+  if (auto st = node.open(*discovery); !st) {
+    log.fatal("{}", st.error().message);
+    return st.error().code == ErrorCode::kInvalidArgument ? kExitUsage : kExitNetwork;
+  }
+  log.info("skytrace: scenario {}, {:.3g} Hz, antenna pose from {}; DDS domain {}{}, {} graph", config->scenario,
+           config->rate_hz,
+           config->pose_source == PoseSource::kScenario ? "the scenario"
+           : config->pose_source == PoseSource::kTf     ? "tf"
+           : config->pose_source == PoseSource::kPose   ? config->pose_topic
+                                                        : config->odom_topic,
+           discovery->domain_id, discovery->localhost_only ? " (localhost only)" : "",
+           config->distro == ros2::RosDistro::kHumble ? "Humble" : "Jazzy");
+  node.run();
+  alarm(0);  // the loop ended in time: no forced exit while the files are finished
+  node.finish();
+  return 0;
+}
+
+}  // namespace
+}  // namespace skytrace::ros2_node
+
+int main(int argc, char** argv) {
+  try {
+    return skytrace::ros2_node::run(argc, argv);
+  } catch (const std::exception& e) {
+    // A last resort: every expected failure is reported above with its parameter.
+    std::fprintf(stderr, "skytrace_ros2_node: %s\n", e.what());
+    return 1;
+  }
+}
