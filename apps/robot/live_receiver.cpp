@@ -99,14 +99,23 @@ std::string Receiver::set_object_pose(const std::string& name, const Vec3& posit
   return st ? std::string() : st.error().message;
 }
 
-bool Receiver::step(double time_s, EpochView& out, std::string& error) {
-  const GnssTime tag = impl_->start + time_s;
-  auto result = impl_->session->step(tag);
+bool Receiver::step(double time_s, std::string& error) {
+  auto result = impl_->session->step(impl_->start + time_s);
   if (!result) {
     error = result.error().message;
     return false;
   }
-  const sim::LiveEpoch& e = *result;
+  impl_->last = std::move(*result);
+  return true;
+}
+
+const sim::LiveSession& Receiver::session() const { return *impl_->session; }
+const sim::LiveEpoch* Receiver::last_epoch() const { return impl_->last ? &*impl_->last : nullptr; }
+
+bool Receiver::step(double time_s, EpochView& out, std::string& error) {
+  const GnssTime tag = impl_->start + time_s;
+  if (!step(time_s, error)) return false;
+  const sim::LiveEpoch& e = *impl_->last;
   const LocalFrame& world = impl_->session->world_frame();
   const Eigen::Matrix3d to_world = world.ecef_to_local_rotation();
   const Eigen::Vector3d antenna_ecef = e.observations.receiver.position_m;
@@ -181,7 +190,6 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
     }
     out.satellites.push_back(std::move(s));
   }
-  impl_->last = std::move(*result);
   return true;
 }
 

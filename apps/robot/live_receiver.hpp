@@ -10,6 +10,11 @@
 #include <string>
 #include <vector>
 
+namespace skytrace::sim {
+class LiveSession;
+struct LiveEpoch;
+}  // namespace skytrace::sim
+
 namespace skytrace::live {
 
 using Vec3 = std::array<double, 3>;
@@ -99,6 +104,13 @@ class Receiver {
 
   // The epoch at `time_s` (a time before the previous one restarts tracking). False with `error`.
   [[nodiscard]] bool step(double time_s, EpochView& out, std::string& error);
+  // The same without the view, for C++20 callers that read last_epoch() (the ROS 2 node).
+  [[nodiscard]] bool step(double time_s, std::string& error);
+
+  // The simulator behind the view, for C++20 callers (they include skytrace/sim/live.hpp): the
+  // session, and the epoch of the last step (nullptr before the first).
+  [[nodiscard]] const sim::LiveSession& session() const;
+  [[nodiscard]] const sim::LiveEpoch* last_epoch() const;
 
   // RINEX observations written as the receiver runs (epochs that do not advance are left out).
   [[nodiscard]] std::string open_rinex(const std::string& path, double interval_s);

@@ -21,7 +21,8 @@ namespace skytrace::ros2_node {
 
 struct CommandLine {
   std::string node_name = "skytrace";
-  std::string node_namespace = "/";
+  // Topics are relative to it: /skytrace/fix by default, as the ROS 1 node publishes.
+  std::string node_namespace = "/skytrace";
   std::vector<std::string> params_files;
   std::vector<std::pair<std::string, std::string>> param_overrides;  // -p name:=value (value as YAML)
   std::map<std::string, std::string> remappings;                     // -r from:=to, topic names

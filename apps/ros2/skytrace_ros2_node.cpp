@@ -17,18 +17,22 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "dds.hpp"
-#include "epoch_messages.hpp"
 #include "live_receiver.hpp"
 #include "log.hpp"
 #include "params.hpp"
 #include "skytrace/core/cancellation.hpp"
+#include "skytrace/receiver/profile.hpp"
 #include "skytrace/ros2/messages.hpp"
+#include "skytrace/sim/live.hpp"
+#include "skytrace/sim/ros2_topics.hpp"
+#include "skytrace/sim/streams.hpp"
 #include "tf_buffer.hpp"
 
 namespace skytrace::ros2_node {
@@ -67,8 +71,9 @@ struct Config {
   std::string world_frame = "world";
   std::string antenna_frame = "gnss_antenna";
   std::string frame_id;  // of the fix and velocity; the antenna frame by default
-  std::string pose_topic = "antenna_pose";
-  std::string odom_topic = "odom";
+  // Absolute by default: the names ROS 1's node resolves its defaults to.
+  std::string pose_topic = "/antenna_pose";
+  std::string odom_topic = "/odom";
   Eigen::Vector3d antenna_offset_m = Eigen::Vector3d::Zero();  // in the body frame of pose/odometry
   double rate_hz = 1.0;
   std::string start_time;
@@ -165,21 +170,26 @@ ros2::Time from_ns(std::int64_t ns) {
   return t;
 }
 
-// A writer of one message type: serialises only when someone listens (a transient-local writer
-// always does, for the late joiners).
-template <typename Message>
-class Publisher {
- public:
-  Publisher() = default;
-  explicit Publisher(std::unique_ptr<DdsWriter> writer, bool always = false) : writer_(std::move(writer)), always_(always) {}
-  [[nodiscard]] bool wanted() const { return writer_ && (always_ || writer_->matched_readers() > 0); }
-  Status publish(const Message& message) { return writer_->write(ros2::serialize(message)); }
-  [[nodiscard]] const DdsWriter* writer() const { return writer_.get(); }
-
- private:
-  std::unique_ptr<DdsWriter> writer_;
-  bool always_ = false;
+// A topic's writer: messages are serialised only when someone listens (a transient-local writer
+// always writes, for the late joiners).
+struct Output {
+  std::unique_ptr<DdsWriter> writer;
+  bool always = false;
+  [[nodiscard]] bool wanted() const { return writer && (always || writer->matched_readers() > 0); }
 };
+
+// The QoS of a topic of sim::ros2_receiver_topics(), deeper histories where an epoch writes
+// several samples (NMEA, RTCM, ephemerides) so that a burst is delivered whole.
+QosProfile topic_qos(const sim::Ros2Topic& topic) {
+  QosProfile qos = topic.qos == sim::Ros2Qos::kSensorData ? QosProfile::sensor_data()
+                   : topic.qos == sim::Ros2Qos::kLatched  ? QosProfile::default_profile().keep_last(1).transient_local()
+                                                          : QosProfile::default_profile();
+  if (topic.name == "nmea" || topic.name == "rtcm") qos = qos.keep_last(100);
+  // A record is published once, when the receiver starts to use it: kept for estimators that
+  // start after the node (transient local is compatible with volatile subscriptions).
+  if (topic.name.find("ephemeris") != std::string_view::npos) qos = qos.keep_last(500).transient_local();
+  return qos;
+}
 
 class Node {
  public:
@@ -190,6 +200,19 @@ class Node {
 
   // Creates the DDS entities; errors name the topic.
   Status open(const DiscoveryOptions& discovery) {
+    // The messages of an epoch, as the bag sink of `skytrace run` makes them.
+    const sim::LiveSession& session = receiver_->session();
+    auto profile = receiver::load_profile(session.receiver().profile, session.scenario().source.parent_path());
+    if (!profile) return profile.error();
+    sim::Ros2TopicSettings settings;
+    settings.frame_id = config_.frame_id;
+    settings.world_frame = config_.world_frame;
+    settings.ray_length_m = config_.ray_length_m;
+    settings.rtcm = config_.rtcm3;
+    builder_ = std::make_unique<sim::Ros2EpochBuilder>(*session.resources().ephemerides, std::move(*profile),
+                                                        session.world_frame(),
+                                                        sim::rtcm_station(session.marker_ecef_m(), session.receiver()), settings);
+
     auto participant = DdsParticipant::create(discovery, [this](const std::string& text) {
       log_.throttled(LogLevel::kWarn, 10.0, text.substr(0, text.find(':')), text);
     });
@@ -198,23 +221,17 @@ class Node {
 
     const QosProfile sensor = QosProfile::sensor_data();
     const QosProfile reliable = QosProfile::default_profile();
-    if (auto st = advertise(fix_, "~/fix", sensor); !st) return st;
-    if (auto st = advertise(velocity_, "~/velocity", sensor); !st) return st;
-    if (auto st = advertise(time_reference_, "~/time_reference", sensor); !st) return st;
-    // Several samples an epoch: a deeper history for reliable delivery of the whole burst.
-    if (auto st = advertise(nmea_, "~/nmea", reliable.keep_last(100)); !st) return st;
-    if (config_.rtcm3) {
-      if (auto st = advertise(rtcm_, "~/rtcm", reliable.keep_last(100)); !st) return st;
+    for (const auto& topic : sim::ros2_receiver_topics()) {
+      if (topic.name == "rtcm" && !config_.rtcm3) continue;
+      if (topic.name.rfind("gnss/", 0) == 0 && !config_.gnss_comm) continue;
+      const QosProfile qos = topic_qos(topic);
+      auto name = resolve_topic_name(std::string(topic.name), command_line_);
+      if (!name) return name.error();
+      auto writer = dds_->create_writer("rt" + *name, ros2::dds_type_name(topic.type), qos);
+      if (!writer) return writer.error();
+      writer_gids_.push_back((*writer)->guid());
+      outputs_[std::string(topic.name)] = Output{std::move(*writer), qos.durability == QosProfile::Durability::kTransientLocal};
     }
-    if (config_.gnss_comm) {
-      // ublox_driver's names, which GVINS subscribes to; ephemerides kept for late joiners.
-      if (auto st = advertise(range_meas_, "~/range_meas", reliable); !st) return st;
-      if (auto st = advertise(ephem_, "~/ephem", reliable.keep_last(500).transient_local(), true); !st) return st;
-      if (auto st = advertise(glo_ephem_, "~/glo_ephem", reliable.keep_last(200).transient_local(), true); !st) return st;
-    }
-    if (auto st = advertise(observations_, "~/observations", reliable); !st) return st;
-    if (auto st = advertise(sky_, "~/sky", reliable); !st) return st;
-    if (auto st = advertise(rays_, "~/rays", reliable); !st) return st;
 
     // rclcpp's QoS for what the node reads: the clock and poses best effort (they match either
     // kind of publisher), tf2_ros's listener profiles for /tf and /tf_static.
@@ -293,17 +310,6 @@ class Node {
   // Receiver time (seconds after the start time) of a ROS time.
   [[nodiscard]] double receiver_time_s(std::int64_t stamp_ns) const {
     return 1e-9 * static_cast<double>(stamp_ns - origin_ns_);
-  }
-
-  template <typename Message>
-  Status advertise(Publisher<Message>& publisher, const std::string& name, const QosProfile& qos, bool always = false) {
-    auto topic = resolve_topic_name(name, command_line_);
-    if (!topic) return topic.error();
-    auto writer = dds_->create_writer("rt" + *topic, ros2::dds_type_name(Message::kType), qos);
-    if (!writer) return writer.error();
-    writer_gids_.push_back((*writer)->guid());
-    publisher = Publisher<Message>(std::move(*writer), always);
-    return Ok{};
   }
 
   struct Subscription {
@@ -475,11 +481,18 @@ class Node {
     }
   }
 
+  // Writes the messages to the topic `name` when someone listens.
   template <typename Message>
-  void publish(Publisher<Message>& publisher, const Message& message) {
-    if (auto st = publisher.publish(message); !st) {
-      log_.throttled(LogLevel::kWarn, 10.0, std::string(Message::kType), fmt::format("{}: {}", Message::kType, st.error().message));
+  void publish(const char* name, const Message& message) {
+    const auto it = outputs_.find(name);
+    if (it == outputs_.end() || !it->second.wanted()) return;
+    if (auto st = it->second.writer->write(ros2::serialize(message)); !st) {
+      log_.throttled(LogLevel::kWarn, 10.0, name, fmt::format("{}: {}", name, st.error().message));
     }
+  }
+  template <typename Message>
+  void publish(const char* name, const std::vector<Message>& messages) {
+    for (const auto& message : messages) publish(name, message);
   }
 
   void epoch(std::int64_t k) {
@@ -488,38 +501,36 @@ class Node {
     if (tf_.reader) update_from_tf(stamp_ns);
     const auto started = std::chrono::steady_clock::now();
     std::string problem;
-    if (!receiver_->step(time_s, epoch_, problem)) {
+    if (!receiver_->step(time_s, problem)) {
       log_.throttled(LogLevel::kError, 10.0, "step", fmt::format("epoch {:.3f} s after the start time: {}", time_s, problem));
       return;
     }
-    const live::EpochView& e = epoch_;
-    if (e.restarted) log_.warn("receiver restarted at {} GPST (time went back)", e.time_iso);
+    const sim::LiveEpoch& e = *receiver_->last_epoch();
+    if (e.restarted) {
+      log_.warn("receiver restarted at {} GPST (time went back)", e.observations.receiver_time.to_iso8601(TimeScale::kGpst));
+      builder_->reset();
+    }
     if (e.pose_stale) {
       log_.throttled(LogLevel::kWarn, 5.0, "stale",
                      fmt::format("antenna pose is stale (none for {:.1f} s): the receiver is held where it was", config_.pose_timeout_s));
     }
-    const ros2::Header fix_header{from_ns(stamp_ns), config_.frame_id};
-    const ros2::Header world_header{from_ns(stamp_ns), config_.world_frame};
-
-    if (fix_.wanted()) publish(fix_, ros2_epoch::to_navsat_fix(e.fix, fix_header));
-    if (e.fix.type != 0 && e.fix.velocity_valid && velocity_.wanted()) publish(velocity_, ros2_epoch::to_velocity(e.fix, fix_header));
-    if (time_reference_.wanted()) publish(time_reference_, ros2_epoch::to_time_reference(e, fix_header));
-    if (nmea_.wanted()) {
-      for (const auto& sentence : ros2_epoch::to_nmea(e, fix_header)) publish(nmea_, sentence);
+    auto messages = builder_->build(e.observations, e.fix ? &*e.fix : nullptr, from_ns(stamp_ns), e.restarted, e.pose_stale);
+    if (!messages) {
+      log_.throttled(LogLevel::kError, 10.0, "build", fmt::format("epoch {:.3f} s: {}", time_s, messages.error().message));
+      return;
     }
-    if (rtcm_.wanted()) {
-      for (const auto& frame : ros2_epoch::to_rtcm(e, fix_header)) publish(rtcm_, frame);
-    }
-    if (range_meas_.wanted()) publish(range_meas_, ros2_epoch::to_gnss_meas(e));
-    if (ephem_.wanted()) {
-      for (const auto& record : ros2_epoch::to_gnss_ephemerides(e)) publish(ephem_, record);
-    }
-    if (glo_ephem_.wanted()) {
-      for (const auto& record : ros2_epoch::to_gnss_glonass_ephemerides(e)) publish(glo_ephem_, record);
-    }
-    if (observations_.wanted()) publish(observations_, ros2_epoch::to_observations(e, fix_header));
-    if (sky_.wanted()) publish(sky_, ros2_epoch::to_sky(e, world_header));
-    if (rays_.wanted()) publish(rays_, ros2_epoch::to_rays(e, world_header, config_.ray_length_m));
+    const sim::Ros2Epoch& m = *messages;
+    publish("fix", m.fix);
+    if (m.velocity) publish("velocity", *m.velocity);
+    publish("time_reference", m.time_reference);
+    publish("nmea", m.nmea);
+    publish("rtcm", m.rtcm);
+    publish("gnss/measurements", m.measurements);
+    publish("gnss/ephemeris", m.ephemerides);
+    publish("gnss/glonass_ephemeris", m.glonass_ephemerides);
+    publish("observations", m.observations);
+    publish("sky", m.sky);
+    publish("rays", m.rays);
     latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
 
     if (receiver_->rinex_open()) {
@@ -560,25 +571,15 @@ class Node {
   double period_s_ = 1.0;
   std::int64_t origin_ns_ = 0;  // ROS time of the start time: zero under sim time, else the node's start
   std::int64_t sim_now_ns_ = 0;  // the last /clock
-  live::EpochView epoch_;        // reused from epoch to epoch
   std::optional<std::int64_t> last_k_;
   TfBuffer tf_buffer_;
   std::vector<double> latencies_s_;
+  std::unique_ptr<sim::Ros2EpochBuilder> builder_;
   // Destroyed after the endpoints below (declared first): the participant owns their entities.
   std::unique_ptr<DdsParticipant> dds_;
   std::vector<Guid> reader_gids_, writer_gids_;
   std::unique_ptr<DdsWriter> discovery_;
-  Publisher<ros2::NavSatFix> fix_;
-  Publisher<ros2::TwistWithCovarianceStamped> velocity_;
-  Publisher<ros2::TimeReference> time_reference_;
-  Publisher<ros2::NmeaSentence> nmea_;
-  Publisher<ros2::RtcmMessage> rtcm_;
-  Publisher<ros2::GnssMeasMsg> range_meas_;
-  Publisher<ros2::GnssEphemMsg> ephem_;
-  Publisher<ros2::GnssGloEphemMsg> glo_ephem_;
-  Publisher<ros2::Observations> observations_;
-  Publisher<ros2::Sky> sky_;
-  Publisher<ros2::MarkerArray> rays_;
+  std::map<std::string, Output, std::less<>> outputs_;  // by topic name of sim::ros2_receiver_topics()
   Subscription clock_, tf_, tf_static_, pose_;
 };
 
@@ -621,8 +622,6 @@ int run(int argc, char** argv) {
   options.start_time = config->start_time;
   options.start_time_scale = config->start_time_scale;
   options.pose_timeout_s = config->pose_timeout_s;
-  options.rtcm3 = config->rtcm3;
-  options.ephemeris_records = config->gnss_comm;
   std::string problem;
   auto receiver = live::Receiver::create(options, problem);
   if (!receiver) {
