@@ -350,7 +350,11 @@ std::string message_definition(std::string_view ros_type) {
     if (!done.insert(type).second) continue;
     const auto found = table.find(type);
     if (found == table.end()) continue;
-    text += std::string(80, '=') + "\nMSG: " + type + "\n" + found->second;
+    // rosbag2 names a dependency as its fields do, "pkg/Name" (Foxglove's parser matches the
+    // names exactly: "pkg/msg/Name" would leave "std_msgs/Header" unresolved).
+    std::string name = type;
+    if (const size_t msg = name.find("/msg/"); msg != std::string::npos) name.erase(msg, 4);
+    text += std::string(80, '=') + "\nMSG: " + name + "\n" + found->second;
     auto more = field_types(type, found->second);
     pending.insert(pending.end(), more.rbegin(), more.rend());
   }
