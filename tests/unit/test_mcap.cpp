@@ -5,6 +5,7 @@
 // Every test runs for each chunk compression; their names start with "mcap/" (ctest -R mcap).
 #include <gtest/gtest.h>
 #include <lz4frame.h>
+#include <malloc.h>
 #include <sys/resource.h>
 #include <yaml-cpp/yaml.h>
 #include <zlib.h>
@@ -451,6 +452,35 @@ TEST_P(McapWriterTest, ChunksCloseOnceTheyReachTheTargetSize) {
   for (size_t i = 0; i < 5; ++i) EXPECT_EQ(parsed.chunk_uncompressed[i], 4 * kRecord);
   EXPECT_EQ(parsed.chunk_uncompressed[5], 9 + 22 + big.size());
   EXPECT_EQ(parsed.messages.size(), 21u);
+}
+
+TEST_P(McapWriterTest, MemoryDoesNotGrowWithTheNumberOfMessages) {
+  const auto path = test::make_temp_dir("mcap") / "long.mcap";
+  auto writer = McapWriter::open(path, options(size_t{256} << 10));
+  ASSERT_TRUE(writer.ok());
+  McapWriter& w = **writer;
+  const auto channel = w.add_channel(0, "/obs", "cdr", {});
+  ASSERT_TRUE(channel.ok());
+  Bytes payload(400);
+  std::uint64_t t = 0;
+  auto write_mib = [&](int mib) {
+    for (size_t written = 0; written < (size_t(mib) << 20); written += payload.size()) {
+      for (size_t i = 0; i < payload.size(); i += 8) payload[i] = static_cast<std::uint8_t>(t >> (i % 16));
+      ASSERT_TRUE(w.write(*channel, t, t, payload).ok());
+      t += 1'000'000;
+    }
+  };
+  write_mib(4);  // the chunk buffers and compression context have reached their size
+  ASSERT_FALSE(HasFatalFailure());
+  const size_t in_use_after_4_mib = mallinfo2().uordblks;
+  write_mib(32);
+  ASSERT_FALSE(HasFatalFailure());
+  const size_t in_use_after_36_mib = mallinfo2().uordblks;
+  // 128 more chunks keep a Chunk Index entry each (~100 bytes): nothing near the 32 MiB written.
+  EXPECT_LT(in_use_after_36_mib, in_use_after_4_mib + (size_t{256} << 10));
+  EXPECT_GT(w.statistics().chunk_count, 140u);
+  ASSERT_TRUE(w.close().ok());
+  EXPECT_GT(std::filesystem::file_size(path), 0u);
 }
 
 TEST_P(McapWriterTest, MessagesOutOfTimeOrderAreIndexedInTimeOrder) {
