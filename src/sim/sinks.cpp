@@ -305,6 +305,9 @@ class ReportSink final : public EpochSink {
  public:
   explicit ReportSink(const RunContext& c) : context_(c) {}
   Status add(const SinkEpoch& e) override {
+    if (e.fix != nullptr) {
+      report_.add_fix(e.receiver->settings->name, e.observations->receiver_time, positioning::to_string(e.fix->type));
+    }
     if (e.receiver_index != 0) return Ok{};
     const receiver::EpochObservations& epoch = *e.observations;
     for (const auto& sat : epoch.satellites) {
