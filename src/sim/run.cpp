@@ -32,6 +32,7 @@
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/setup.hpp"
+#include "skytrace/sim/sinks.hpp"
 #include "skytrace/sim/streams.hpp"
 #include "skytrace/sim/trajectory.hpp"
 #include "skytrace/sim/world_setup.hpp"
@@ -143,10 +144,10 @@ class StagingDir {
   int lock_fd_ = -1;
 };
 
+// Every receiver's epoch of one instant.
 struct QueuedEpoch {
   std::int64_t index = 0;
-  size_t receiver = 0;
-  receiver::EpochObservations epoch;
+  std::vector<receiver::EpochObservations> receivers;
 };
 using EpochBatch = std::vector<QueuedEpoch>;
 
@@ -218,131 +219,11 @@ struct ReceiverRun {
   std::shared_ptr<const receiver::KinematicsSource> kinematics;
   std::unique_ptr<receiver::ObservationGenerator> generator;
   io::ObservationHeader header;
-  std::unique_ptr<RinexRecordMaker> records;
-  io::RinexObsWriter writer;
-  std::string file_name;
-  std::unique_ptr<RunStreams> streams;  // obs.rtcm3 / fix.nmea when output.rtcm3 / output.nmea
-  // RTK: the base of this rover (index into the receivers), and for a base its latest epoch.
+  std::unique_ptr<FixStage> fixes;  // when a sink needs position fixes
+  // RTK: the base of this rover (index into the receivers), and whether this one is a base.
   std::optional<size_t> base_index;
   bool is_base = false;
-  std::optional<positioning::BaseEpoch> base_epoch;
 };
-
-constexpr const char* kTruthHeader =
-    "time_gpst,receiver,sat,signal,status,az_deg,el_deg,range_m,range_rate_mps,sat_clock_m,relativistic_m,"
-    "group_delay_m,iono_m,tropo_m,rx_clock_m,code_noise_m,phase_noise_m,doppler_noise_mps,ambiguity_cycles,"
-    "pseudorange_m,carrier_phase_cycles,doppler_hz,cn0_dbhz,rx_x_m,rx_y_m,rx_z_m,rx_vx_mps,rx_vy_mps,rx_vz_mps,"
-    "rx_clock_drift_mps,vegetation_attenuation_db,detail,path_type,code_multipath_m,phase_multipath_m,"
-    "multipath_power_db\n";
-
-// paths.csv (models.multipath): every path of every satellite-epoch with any path.
-constexpr const char* kPathsHeader =
-    "time_gpst,receiver,sat,path,type,reflections,excess_delay_m,relative_power_db,rhcp_power_db,lhcp_power_db,"
-    "arrival_az_deg,arrival_el_deg,excess_delay_rate_mps,point_x_m,point_y_m,point_z_m,second_x_m,second_y_m,"
-    "second_z_m,object,material,diffraction_v,diffraction_loss_db,vegetation_db\n";
-
-std::string_view path_type_name(PathType type) {
-  switch (type) {
-    case PathType::kDirect: return "direct";
-    case PathType::kReflected: return "reflected";
-    case PathType::kDiffracted: return "diffracted";
-  }
-  return "?";
-}
-
-double power_db(std::complex<double> amplitude) { return 10.0 * std::log10(std::max(std::norm(amplitude), 1e-30)); }
-
-std::string csv_text(const std::string& text);
-
-void append_paths(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
-  const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
-  for (const auto& sat : epoch.satellites) {
-    for (size_t k = 0; k < sat.paths.size(); ++k) {
-      const SignalPath& p = sat.paths[k];
-      const bool second = p.reflections >= 2;
-      fmt::format_to(std::back_inserter(out),
-                     "{},{},{},{},{},{},{:.4f},{:.2f},{:.2f},{:.2f},{:.4f},{:.4f},{:.5f},{:.3f},{:.3f},{:.3f},{},{},{},{},{},{:.3f},{:.2f},{:.2f}\n",
-                     time, receiver_name, sat.satellite.to_string(), k, path_type_name(p.type), p.reflections,
-                     p.excess_delay_m, p.relative_power_db(), power_db(p.rhcp_amplitude), power_db(p.lhcp_amplitude),
-                     sat.path_directions[k].azimuth_deg, sat.path_directions[k].elevation_deg,
-                     sat.path_delay_rates_mps[k], p.point_m.x(), p.point_m.y(), p.point_m.z(),
-                     second ? fmt::format("{:.3f}", p.second_point_m.x()) : "", second ? fmt::format("{:.3f}", p.second_point_m.y()) : "",
-                     second ? fmt::format("{:.3f}", p.second_point_m.z()) : "", csv_text(p.object),
-                     p.type == PathType::kDirect ? "" : world::material_class_name(p.material), p.diffraction_v, p.diffraction_loss_db,
-                     p.vegetation_attenuation_db);
-    }
-  }
-}
-
-// A CSV cell: quoted when it holds a comma or a quote.
-std::string csv_text(const std::string& text) {
-  if (text.find_first_of(",\"") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
-void append_truth(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
-  const double c = constants::kSpeedOfLight_mps;
-  const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
-  const auto& rx = epoch.receiver;
-  const std::string rx_clock = fmt::format("{:.4f}", c * epoch.receiver_clock.bias_s);
-  const std::string receiver_part =
-      fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.5f},{:.5f},{:.6f}", rx.position_m.x(), rx.position_m.y(), rx.position_m.z(),
-                  rx.velocity_mps.x(), rx.velocity_mps.y(), rx.velocity_mps.z(), c * epoch.receiver_clock.drift_s_per_s);
-  constexpr const char* kNoGeometry = ",,,,,";          // 6 empty geometry cells
-  constexpr const char* kNoSignalValues = ",,,,,,,";     // 8 empty cells from code noise to C/N0
-  for (const auto& sat : epoch.satellites) {
-    const std::string status(receiver::to_string(sat.status));
-    const std::string sat_name = sat.satellite.to_string();
-    const bool has_geometry = !(sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris);
-    // Geometry cells with a satellite clock: the satellite's, and in a signal's row the clock that
-    // signal got (the same one unless the generator gave it another: formatted again only then).
-    auto geometry_with = [&](double satellite_clock_m) {
-      return has_geometry ? fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f}", sat.direction.azimuth_deg,
-                                        sat.direction.elevation_deg, sat.range_m, sat.range_rate_mps,
-                                        satellite_clock_m, sat.relativistic_m)
-                          : std::string(kNoGeometry);
-    };
-    const std::string geometry = geometry_with(sat.satellite_clock_m);
-    // A row per signal its navigation record declares unusable (the others may be tracked).
-    for (const auto& unhealthy : sat.unhealthy_signals) {
-      fmt::format_to(std::back_inserter(out), "{},{},{},{},unhealthy,{},,,{},{},{},{},{:.2f},{},{},,,\n", time,
-                     receiver_name, sat_name, unhealthy.signal.to_string(), geometry,
-                     fmt::format("{:.4f}", sat.troposphere_m), rx_clock, kNoSignalValues, receiver_part,
-                     sat.vegetation_attenuation_db, csv_text(unhealthy.reason), receiver::to_string(sat.path_kind));
-    }
-    if (sat.signals.empty() && sat.status == receiver::SatelliteStatus::kUnhealthy) continue;  // said above
-    if (sat.signals.empty()) {
-      // One row for the satellite: why it is not observed, with the geometry when known.
-      const std::string atmosphere = sat.status == receiver::SatelliteStatus::kTracked ||
-                                             sat.status == receiver::SatelliteStatus::kNoSignal ||
-                                             sat.waiting_for_ephemeris
-                                         ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
-                                         : std::string(",");
-      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,\n", time, receiver_name, sat_name,
-                     status, geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part,
-                     sat.vegetation_attenuation_db, csv_text(sat.detail), receiver::to_string(sat.path_kind));
-      continue;
-    }
-    for (const auto& m : sat.signals) {
-      fmt::format_to(std::back_inserter(out),
-                     "{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.5f},{:.5f},{},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.2f},\n",
-                     time, receiver_name, sat_name, m.signal.to_string(), status,
-                     m.satellite_clock_m == sat.satellite_clock_m ? geometry : geometry_with(m.satellite_clock_m),
-                     m.group_delay_m,
-                     m.ionosphere_code_m, sat.troposphere_m, rx_clock, m.code_noise_m, m.phase_noise_m,
-                     m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
-                     m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);
-      out.pop_back();  // the row's newline: the multipath cells follow
-      fmt::format_to(std::back_inserter(out), ",{},{:.4f},{:.4f},{:.2f}\n", receiver::to_string(sat.path_kind),
-                     m.code_multipath_m, m.phase_multipath_m, m.multipath_power_db);
-    }
-  }
-}
 
 orbits::NavigationData used_navigation(const orbits::NavigationData& all, const std::vector<ReceiverRun>& receivers) {
   orbits::NavigationData used;
@@ -386,109 +267,80 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     auto generator = make_generator(s, *resources, i, rx.kinematics);
     if (!generator) return generator.error();
     rx.generator = std::move(*generator);
-    rx.file_name = s.receivers.size() == 1 ? "obs.rnx" : "obs_" + rx.settings->name + ".rnx";
     rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides, resources->left_out_systems);
-    rx.records = std::make_unique<RinexRecordMaker>(rx.header);
-    if (auto st = rx.writer.open(staging->file(rx.file_name), rx.header); !st) {
-      return st.error();
-    }
-    std::optional<positioning::RtkSettings> rtk;
-    if (rx.settings->rtk && (s.output.nmea || s.output.fix)) {
-      auto settings = rtk_settings(s, i, ephemerides);
-      if (!settings) return settings.error();
-      rtk = std::move(*settings);
-      for (size_t j = 0; j < s.receivers.size(); ++j) {
-        if (s.receivers[j].name == rx.settings->rtk->base) rx.base_index = j;
-      }
-    }
-    if (s.output.rtcm3 || s.output.nmea || s.output.fix) {
-      rx.streams = std::make_unique<RunStreams>(ephemerides, *rx.settings, rx.marker_m, s.output.rtcm3, s.output.nmea,
-                                                s.output.fix, std::move(rtk));
-    }
-  }
-  for (const ReceiverRun& rx : receivers) {
-    if (rx.base_index) receivers[*rx.base_index].is_base = true;
-  }
-
-  std::ofstream truth;
-  std::string truth_buffer;
-  if (options.write_truth) {
-    truth.open(staging->file("truth.csv"), std::ios::binary);
-    if (!truth) return make_error(ErrorCode::kOutput, staging->file("truth.csv").string() + ": cannot create");
-    truth_buffer = kTruthHeader;
-  }
-  std::ofstream paths_file;
-  std::string paths_buffer;
-  const bool write_paths = options.write_truth && s.models.multipath;
-  if (write_paths) {
-    paths_file.open(staging->file("paths.csv"), std::ios::binary);
-    if (!paths_file) return make_error(ErrorCode::kOutput, staging->file("paths.csv").string() + ": cannot create");
-    paths_buffer = kPathsHeader;
   }
 
   RunSummary summary;
-  const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  io::ReportBuilder report;  // of the first receiver
-  // Writes one computed epoch of one receiver: RINEX, counts, truth, report.
-  auto write_epoch = [&](std::int64_t index, size_t receiver_index, const receiver::EpochObservations& epoch) -> Status {
-    if (cancellation_requested()) return cancelled_error();
-    ReceiverRun& rx = receivers[receiver_index];
-    const io::ObservationEpoch record = rx.records->record(epoch);
-    if (auto st = rx.writer.write_epoch(record); !st) return st.error();
-    if (rx.streams) {
-      if (auto st = rx.streams->add(epoch); !st) return st.error();
-    }
-    if (rx.is_base) {
-      // The base's known position: its marker's antenna reference point.
-      rx.base_epoch = positioning::BaseEpoch{to_measurements(epoch), antenna_point(rx.marker_m, *rx.settings)};
-    }
-    if (receiver_index + 1 == receivers.size()) {
-      // Every receiver's epoch is in: the rovers' RTK fixes with their bases' epochs of this instant.
-      for (ReceiverRun& rover : receivers) {
-        if (!rover.base_index || !rover.streams) continue;
-        const auto& base = receivers[*rover.base_index].base_epoch;
-        if (auto st = rover.streams->add_base(base ? &*base : nullptr); !st) return st.error();
-      }
-    }
-    for (const auto& sat : epoch.satellites) {
-      if (sat.status != receiver::SatelliteStatus::kTracked) continue;
-      ++summary.satellite_epochs;
-      ++summary.satellite_epochs_per_system[std::string(system_name(sat.satellite.system))];
-      summary.observations += static_cast<std::int64_t>(sat.signals.size());
-    }
-    if (options.write_truth) {
-      append_truth(truth_buffer, epoch, rx.settings->name);
-      if (write_paths) {
-        append_paths(paths_buffer, epoch, rx.settings->name);
-        if (paths_buffer.size() > (1u << 20)) {
-          paths_file.write(paths_buffer.data(), static_cast<std::streamsize>(paths_buffer.size()));
-          paths_buffer.clear();
+  RunContext context;
+  context.scenario = &s;
+  context.resources = &*resources;
+  context.staging_dir = staging->file("");
+  context.write_truth = options.write_truth;
+  context.summary = &summary;
+  for (const ReceiverRun& rx : receivers) {
+    context.receivers.push_back(SinkReceiver{rx.settings, rx.marker_m, &rx.header, rx.kinematics,
+                                             receivers.size() == 1 ? "" : "_" + rx.settings->name});
+  }
+  if (run_needs_fixes(context)) {
+    for (size_t i = 0; i < receivers.size(); ++i) {
+      ReceiverRun& rx = receivers[i];
+      std::optional<positioning::RtkSettings> rtk;
+      if (rx.settings->rtk) {
+        auto settings = rtk_settings(s, i, ephemerides);
+        if (!settings) return settings.error();
+        rtk = std::move(*settings);
+        for (size_t j = 0; j < s.receivers.size(); ++j) {
+          if (s.receivers[j].name == rx.settings->rtk->base) rx.base_index = j;
         }
       }
-      if (truth_buffer.size() > (1u << 20)) {
-        truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
-        truth_buffer.clear();
+      rx.fixes = std::make_unique<FixStage>(ephemerides, *rx.settings, std::move(rtk));
+    }
+    for (const ReceiverRun& rx : receivers) {
+      if (rx.base_index) receivers[*rx.base_index].is_base = true;
+    }
+  }
+  auto sinks = make_run_sinks(context);
+  if (!sinks) return sinks.error();
+
+  const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
+  std::vector<std::optional<positioning::PositionFix>> fixes(receivers.size());
+  std::vector<std::optional<positioning::BaseEpoch>> base_epochs(receivers.size());
+  // Hands every receiver's epoch of one instant to the sinks, with the fixes when computed: the
+  // bases' first, so that their rovers' RTK fixes have this instant's corrections.
+  auto write_instant = [&](std::int64_t index, const std::vector<receiver::EpochObservations>& epochs) -> Status {
+    if (cancellation_requested()) return cancelled_error();
+    for (size_t i = 0; i < receivers.size(); ++i) {
+      fixes[i].reset();
+      base_epochs[i].reset();
+      if (receivers[i].is_base) {
+        // The base's known position: its marker's antenna reference point.
+        base_epochs[i] = positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)};
       }
     }
-    if (receiver_index == 0) {
+    for (size_t i = 0; i < receivers.size(); ++i) {
+      ReceiverRun& rx = receivers[i];
+      if (!rx.fixes) continue;
+      const positioning::BaseEpoch* base = nullptr;
+      if (rx.base_index && base_epochs[*rx.base_index]) base = &*base_epochs[*rx.base_index];
+      auto fix = rx.fixes->solve(epochs[i], base);
+      if (!fix) return fix.error();
+      fixes[i] = std::move(*fix);
+    }
+    for (size_t i = 0; i < receivers.size(); ++i) {
+      const receiver::EpochObservations& epoch = epochs[i];
       for (const auto& sat : epoch.satellites) {
-        if (sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris) continue;
-        io::ReportSample sample;
-        sample.time = epoch.receiver_time;
-        sample.satellite = sat.satellite;
-        sample.azimuth_deg = sat.direction.azimuth_deg;
-        sample.elevation_deg = sat.direction.elevation_deg;
-        sample.status = std::string(receiver::to_string(sat.status));
-        if (!sat.signals.empty()) sample.cn0_dbhz = sat.signals.front().cn0_dbhz;
-        sample.vegetation_attenuation_db = sat.vegetation_attenuation_db;
-        sample.path_kind = std::string(receiver::to_string(sat.path_kind));
-        report.add(sample);
+        if (sat.status != receiver::SatelliteStatus::kTracked) continue;
+        ++summary.satellite_epochs;
+        ++summary.satellite_epochs_per_system[std::string(system_name(sat.satellite.system))];
+        summary.observations += static_cast<std::int64_t>(sat.signals.size());
+      }
+      const SinkEpoch sink_epoch{index, i, &context.receivers[i], &epoch, fixes[i] ? &*fixes[i] : nullptr};
+      for (auto& sink : *sinks) {
+        if (auto st = sink->add(sink_epoch); !st) return st;
       }
     }
-    if (receiver_index + 1 == receivers.size()) {
-      ++summary.epochs;
-      if (options.progress) options.progress(index + 1, epoch_count);
-    }
+    ++summary.epochs;
+    if (options.progress) options.progress(index + 1, epoch_count);
     return Ok{};
   };
   auto epoch_tag = [&](std::int64_t k) { return s.time.start + static_cast<double>(k) * s.time.interval_s; };
@@ -497,17 +349,26 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (!resources->world || resources->world->moving.empty()) return Ok{};
     return move_models_to(*resources->world, epoch_tag(k));
   };
+  // Every receiver's observations at epoch k.
+  auto observe_instant = [&](std::int64_t k, QueuedEpoch& out) -> Status {
+    if (auto st = move_models(k); !st) return st;
+    out.index = k;
+    out.receivers.clear();
+    for (ReceiverRun& rx : receivers) {
+      auto epoch = rx.generator->observe(epoch_tag(k));
+      if (!epoch) return epoch.error();
+      out.receivers.push_back(std::move(*epoch));
+    }
+    return Ok{};
+  };
 
   if (!options.write_truth) {
     // Without truth.csv, writing costs a fraction of computing: one thread does both (measured
     // faster than handing epochs between threads, docs/performance.md).
+    QueuedEpoch instant;
     for (std::int64_t k = 0; k < epoch_count; ++k) {
-      if (auto st = move_models(k); !st) return st.error();
-      for (size_t i = 0; i < receivers.size(); ++i) {
-        auto epoch = receivers[i].generator->observe(epoch_tag(k));
-        if (!epoch) return epoch.error();
-        if (auto st = write_epoch(k, i, *epoch); !st) return st.error();
-      }
+      if (auto st = observe_instant(k, instant); !st) return st.error();
+      if (auto st = write_instant(k, instant.receivers); !st) return st.error();
     }
   } else {
     // With truth.csv, formatting costs as much as computing: a worker computes the epochs (the
@@ -518,24 +379,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     std::optional<Error> producer_error;
     std::thread producer([&] {
       EpochBatch batch;
+      size_t receiver_epochs = 0;
       for (std::int64_t k = 0; k < epoch_count && !queue.cancelled() && !cancellation_requested(); ++k) {
-        if (auto st = move_models(k); !st) {
+        if (auto st = observe_instant(k, batch.emplace_back()); !st) {
           producer_error = st.error();
           queue.close();
           return;
         }
-        for (size_t i = 0; i < receivers.size(); ++i) {
-          auto epoch = receivers[i].generator->observe(epoch_tag(k));
-          if (!epoch) {
-            producer_error = epoch.error();
-            queue.close();
-            return;
-          }
-          batch.push_back(QueuedEpoch{k, i, std::move(*epoch)});
-        }
-        if (batch.size() >= kBatchEpochs) {
+        receiver_epochs += receivers.size();
+        if (receiver_epochs >= kBatchEpochs) {
           if (!queue.push(std::move(batch))) return;
           batch = EpochBatch();
+          receiver_epochs = 0;
           queue.release_spent();
         }
       }
@@ -545,7 +400,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     Status consumed = Ok{};
     while (auto batch = queue.pop()) {
       for (const QueuedEpoch& item : *batch) {
-        consumed = write_epoch(item.index, item.receiver, item.epoch);
+        consumed = write_instant(item.index, item.receivers);
         if (!consumed) break;
       }
       if (!consumed) break;
@@ -556,22 +411,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (producer_error) return *producer_error;
     if (!consumed) return consumed.error();
   }
-  for (ReceiverRun& rx : receivers) {
-    if (auto st = rx.writer.finish(); !st) return st.error();
-    if (rx.streams) {
-      const std::string suffix = receivers.size() == 1 ? "" : "_" + rx.settings->name;
-      if (auto st = rx.streams->write(staging->file(""), suffix); !st) return st.error();
-    }
-  }
-  if (options.write_truth) {
-    truth.write(truth_buffer.data(), static_cast<std::streamsize>(truth_buffer.size()));
-    truth.close();
-    if (!truth) return make_error(ErrorCode::kOutput, staging->file("truth.csv").string() + ": write failed (disk full?)");
-  }
-  if (write_paths) {
-    paths_file.write(paths_buffer.data(), static_cast<std::streamsize>(paths_buffer.size()));
-    paths_file.close();
-    if (!paths_file) return make_error(ErrorCode::kOutput, staging->file("paths.csv").string() + ": write failed (disk full?)");
+  for (auto& sink : *sinks) {
+    if (auto st = sink->finish(); !st) return st.error();
   }
   const orbits::NavigationData used = used_navigation(ephemerides.data(), receivers);
   orbits::RinexNavWriteOptions nav_options;
@@ -580,42 +421,6 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     return st.error();
   }
 
-  {
-    io::ReportMeta meta;
-    meta.warnings = resources->warnings;
-    meta.scenario_name = s.name;
-    meta.receiver_name = receivers.front().settings->name;
-    meta.start = s.time.start;
-    meta.end = s.time.start + s.time.duration_s;
-    meta.interval_s = s.time.interval_s;
-    meta.summary_rows = {{"epochs", std::to_string(summary.epochs)},
-                         {"tracked satellite-epochs", std::to_string(summary.satellite_epochs)},
-                         {"signal observations", std::to_string(summary.observations)},
-                         {"receiver profile", receivers.front().settings->profile},
-                         {"ionosphere", s.models.ionosphere},
-                         {"troposphere", s.models.troposphere},
-                         {"seed", std::to_string(s.seed)}};
-    for (const auto& [system, count] : summary.satellite_epochs_per_system) {
-      meta.summary_rows.emplace_back(system + " satellite-epochs", std::to_string(count));
-    }
-    if (world) {
-      const LoadedWorld& w = *world;
-      meta.summary_rows.emplace_back("world", w.name + " (" + std::to_string(w.objects) + " objects, " +
-                                                  std::to_string(w.buildings) + " buildings, " + std::to_string(w.trees) +
-                                                  " trees)");
-      meta.warnings.insert(meta.warnings.end(), w.warnings.begin(), w.warnings.end());
-      auto start_position = receivers.front().kinematics->at(s.time.start);
-      if (start_position) {
-        constexpr double kMaskStep_deg = 2.0;
-        if (auto mask = world_sky_mask_deg(w, start_position->position_m, kMaskStep_deg)) {
-          meta.sky_mask_elevation_deg = *mask;
-          meta.sky_mask_azimuth_step_deg = kMaskStep_deg;
-        }
-      }
-    }
-    if (auto st = write_file_atomically(staging->file("report.html"), report.html(meta)); !st) return st.error();
-    if (auto st = write_file_atomically(staging->file("skyplot.svg"), report.sky_plot_svg(meta)); !st) return st.error();
-  }
   summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   nlohmann::json j;
   j["skytrace_version"] = kVersion;

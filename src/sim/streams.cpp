@@ -114,66 +114,19 @@ Result<positioning::RtkSettings> rtk_settings(const Scenario& s, size_t rover_in
   return out;
 }
 
-RunStreams::RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
-                       const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv,
-                       std::optional<positioning::RtkSettings> rtk)
-    : ephemerides_(ephemerides), nmea_(nmea), fix_csv_(fix_csv) {
-  if (rtcm3) rtcm_.emplace(io::Rtcm3StreamSettings{}, rtcm_station(marker_m, receiver));
-  if (fix_csv) fix_text_ = io::fix_csv_header();
-  if (nmea || fix_csv) {
-    if (rtk) {
-      rtk_.emplace(ephemerides, std::move(*rtk), ephemerides.data().ionosphere.gps);
-    } else {
-      solver_.emplace(ephemerides, default_solver_settings(receiver, ephemerides), ephemerides.data().ionosphere.gps);
-    }
+FixStage::FixStage(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
+                   std::optional<positioning::RtkSettings> rtk) {
+  if (rtk) {
+    rtk_.emplace(ephemerides, std::move(*rtk), ephemerides.data().ionosphere.gps);
+  } else {
+    solver_.emplace(ephemerides, default_solver_settings(receiver, ephemerides), ephemerides.data().ionosphere.gps);
   }
 }
 
-Status RunStreams::emit(const positioning::PositionFix& fix) {
-  if (nmea_) {
-    for (const auto& sentence : io::nmea_epoch(fix)) nmea_text_ += sentence;
-  }
-  if (fix_csv_) fix_text_ += io::fix_csv_row(fix);
-  return Ok{};
-}
-
-Status RunStreams::add_base(const positioning::BaseEpoch* base) {
-  if (!rtk_ || !pending_) return Ok{};
-  auto fix = rtk_->solve(*pending_, base);
-  pending_.reset();
-  if (!fix) return fix.error();
-  return emit(*fix);
-}
-
-Status RunStreams::add(const receiver::EpochObservations& epoch) {
-  if (rtcm_) {
-    const RecordsInUse records = records_in_use(ephemerides_, epoch);
-    auto bytes = rtcm_->epoch(to_rtcm_epoch(epoch), records.kepler, records.glonass);
-    if (!bytes) return bytes.error();
-    rtcm_bytes_.insert(rtcm_bytes_.end(), bytes->begin(), bytes->end());
-  }
-  if (rtk_) {
-    pending_ = to_measurements(epoch);
-  } else if (solver_) {
-    auto fix = solver_->solve(to_measurements(epoch));
-    if (!fix) return fix.error();
-    return emit(*fix);
-  }
-  return Ok{};
-}
-
-Status RunStreams::write(const std::filesystem::path& dir, const std::string& suffix) const {
-  if (rtcm_) {
-    const std::string_view bytes(reinterpret_cast<const char*>(rtcm_bytes_.data()), rtcm_bytes_.size());
-    if (auto st = write_file_atomically(dir / ("obs" + suffix + ".rtcm3"), bytes); !st) return st;
-  }
-  if (nmea_) {
-    if (auto st = write_file_atomically(dir / ("fix" + suffix + ".nmea"), nmea_text_); !st) return st;
-  }
-  if (fix_csv_) {
-    if (auto st = write_file_atomically(dir / ("fix" + suffix + ".csv"), fix_text_); !st) return st;
-  }
-  return Ok{};
+Result<positioning::PositionFix> FixStage::solve(const receiver::EpochObservations& epoch,
+                                                 const positioning::BaseEpoch* base) {
+  if (rtk_) return rtk_->solve(to_measurements(epoch), base);
+  return solver_->solve(to_measurements(epoch));
 }
 
 }  // namespace skytrace::sim

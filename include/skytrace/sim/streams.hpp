@@ -1,5 +1,5 @@
 // Receiver observations and fixes as the stream formats of io see them: the neutral RTCM epoch,
-// the RTCM station of a receiver, NMEA text of a fix.
+// the RTCM station of a receiver, the ephemerides in use; and the position engine of a receiver.
 #pragma once
 
 #include <Eigen/Core>
@@ -49,35 +49,21 @@ struct RecordsInUse {
 [[nodiscard]] Result<positioning::RtkSettings> rtk_settings(const Scenario& scenario, size_t rover_index,
                                                             const orbits::BroadcastEphemerides& ephemerides);
 
-// The stream outputs of one receiver of `skytrace run`: the RTCM 3 stream a reference receiver
-// would send (obs.rtcm3), and the position engine's fixes as NMEA sentences (fix.nmea) and as CSV
-// (fix.csv), built epoch by epoch and written at the end.
-class RunStreams {
+// The position engine of one receiver of a run: single point, or RTK for a rover (receivers[].rtk)
+// with its base's epoch of the same instant.
+class FixStage {
  public:
-  RunStreams(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
-             const Eigen::Vector3d& marker_m, bool rtcm3, bool nmea, bool fix_csv = false,
-             std::optional<positioning::RtkSettings> rtk = std::nullopt);
-  // An RTK rover's fix waits for its base's epoch: add_base (or add_base(nullptr)) completes it.
-  [[nodiscard]] Status add(const receiver::EpochObservations& epoch);
+  FixStage(const orbits::BroadcastEphemerides& ephemerides, const ReceiverSettings& receiver,
+           std::optional<positioning::RtkSettings> rtk = std::nullopt);
   [[nodiscard]] bool is_rtk_rover() const { return rtk_.has_value(); }
-  [[nodiscard]] Status add_base(const positioning::BaseEpoch* base);
-  // Writes the files asked for (atomically) into `dir`; `suffix` goes before the extension.
-  [[nodiscard]] Status write(const std::filesystem::path& dir, const std::string& suffix = "") const;
-  [[nodiscard]] const std::vector<std::uint8_t>& rtcm3_bytes() const { return rtcm_bytes_; }
-  [[nodiscard]] const std::string& nmea_text() const { return nmea_text_; }
+  // `base`: the base's epoch of this instant for an RTK rover (nullptr when it has none); ignored
+  // by single point.
+  [[nodiscard]] Result<positioning::PositionFix> solve(const receiver::EpochObservations& epoch,
+                                                       const positioning::BaseEpoch* base = nullptr);
 
  private:
-  const orbits::BroadcastEphemerides& ephemerides_;
-  std::optional<io::Rtcm3Stream> rtcm_;
   std::optional<positioning::SinglePointSolver> solver_;
   std::optional<positioning::RtkEngine> rtk_;
-  std::optional<positioning::EpochMeasurements> pending_;  // the rover's epoch awaiting its base
-  [[nodiscard]] Status emit(const positioning::PositionFix& fix);
-  std::vector<std::uint8_t> rtcm_bytes_;
-  std::string nmea_text_;
-  bool nmea_ = false;
-  bool fix_csv_ = false;
-  std::string fix_text_;
 };
 
 }  // namespace skytrace::sim

@@ -1,0 +1,465 @@
+#include "skytrace/sim/sinks.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <complex>
+#include <cstring>
+
+#include "skytrace/core/constants.hpp"
+#include "skytrace/core/output_file.hpp"
+#include "skytrace/io/fix_csv.hpp"
+#include "skytrace/io/nmea.hpp"
+#include "skytrace/io/report.hpp"
+#include "skytrace/io/rtcm3.hpp"
+#include "skytrace/sim/run.hpp"
+#include "skytrace/sim/streams.hpp"
+#include "skytrace/sim/world_setup.hpp"
+#include "skytrace/world/loaders.hpp"
+
+namespace skytrace::sim {
+
+// --- StagedFile ----------------------------------------------------------------------------------
+namespace {
+constexpr size_t kFlushBytes = 1u << 20;
+}
+
+Result<std::unique_ptr<StagedFile>> StagedFile::create(const std::filesystem::path& path) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) {
+    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + std::strerror(errno) + ")");
+  }
+  return std::unique_ptr<StagedFile>(new StagedFile(path, file));
+}
+
+StagedFile::~StagedFile() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+Status StagedFile::flush() {
+  if (buffer_.empty()) return Ok{};
+  if (file_ == nullptr) return make_error(ErrorCode::kOutput, path_.string() + ": written after it was closed");
+  if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
+    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + std::strerror(errno) + ")");
+  }
+  buffer_.clear();
+  return Ok{};
+}
+
+Status StagedFile::write(std::string_view bytes) {
+  buffer_.append(bytes);
+  if (buffer_.size() >= kFlushBytes) return flush();
+  return Ok{};
+}
+
+Status StagedFile::close() {
+  if (file_ == nullptr) return Ok{};
+  auto st = flush();
+  const bool flushed = std::fflush(file_) == 0;
+  const int saved_errno = errno;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!st) return st;
+  if (!flushed || !closed) {
+    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + std::strerror(saved_errno) + ")");
+  }
+  return Ok{};
+}
+
+namespace {
+
+// --- truth.csv, paths.csv ------------------------------------------------------------------------
+constexpr const char* kTruthHeader =
+    "time_gpst,receiver,sat,signal,status,az_deg,el_deg,range_m,range_rate_mps,sat_clock_m,relativistic_m,"
+    "group_delay_m,iono_m,tropo_m,rx_clock_m,code_noise_m,phase_noise_m,doppler_noise_mps,ambiguity_cycles,"
+    "pseudorange_m,carrier_phase_cycles,doppler_hz,cn0_dbhz,rx_x_m,rx_y_m,rx_z_m,rx_vx_mps,rx_vy_mps,rx_vz_mps,"
+    "rx_clock_drift_mps,vegetation_attenuation_db,detail,path_type,code_multipath_m,phase_multipath_m,"
+    "multipath_power_db\n";
+
+// paths.csv (models.multipath): every path of every satellite-epoch with any path.
+constexpr const char* kPathsHeader =
+    "time_gpst,receiver,sat,path,type,reflections,excess_delay_m,relative_power_db,rhcp_power_db,lhcp_power_db,"
+    "arrival_az_deg,arrival_el_deg,excess_delay_rate_mps,point_x_m,point_y_m,point_z_m,second_x_m,second_y_m,"
+    "second_z_m,object,material,diffraction_v,diffraction_loss_db,vegetation_db\n";
+
+std::string_view path_type_name(PathType type) {
+  switch (type) {
+    case PathType::kDirect: return "direct";
+    case PathType::kReflected: return "reflected";
+    case PathType::kDiffracted: return "diffracted";
+  }
+  return "?";
+}
+
+double power_db(std::complex<double> amplitude) { return 10.0 * std::log10(std::max(std::norm(amplitude), 1e-30)); }
+
+std::string csv_text(const std::string& text);
+
+void append_paths(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
+  const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
+  for (const auto& sat : epoch.satellites) {
+    for (size_t k = 0; k < sat.paths.size(); ++k) {
+      const SignalPath& p = sat.paths[k];
+      const bool second = p.reflections >= 2;
+      fmt::format_to(std::back_inserter(out),
+                     "{},{},{},{},{},{},{:.4f},{:.2f},{:.2f},{:.2f},{:.4f},{:.4f},{:.5f},{:.3f},{:.3f},{:.3f},{},{},{},{},{},{:.3f},{:.2f},{:.2f}\n",
+                     time, receiver_name, sat.satellite.to_string(), k, path_type_name(p.type), p.reflections,
+                     p.excess_delay_m, p.relative_power_db(), power_db(p.rhcp_amplitude), power_db(p.lhcp_amplitude),
+                     sat.path_directions[k].azimuth_deg, sat.path_directions[k].elevation_deg,
+                     sat.path_delay_rates_mps[k], p.point_m.x(), p.point_m.y(), p.point_m.z(),
+                     second ? fmt::format("{:.3f}", p.second_point_m.x()) : "", second ? fmt::format("{:.3f}", p.second_point_m.y()) : "",
+                     second ? fmt::format("{:.3f}", p.second_point_m.z()) : "", csv_text(p.object),
+                     p.type == PathType::kDirect ? "" : world::material_class_name(p.material), p.diffraction_v, p.diffraction_loss_db,
+                     p.vegetation_attenuation_db);
+    }
+  }
+}
+
+// A CSV cell: quoted when it holds a comma or a quote.
+std::string csv_text(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+void append_truth(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
+  const double c = constants::kSpeedOfLight_mps;
+  const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
+  const auto& rx = epoch.receiver;
+  const std::string rx_clock = fmt::format("{:.4f}", c * epoch.receiver_clock.bias_s);
+  const std::string receiver_part =
+      fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.5f},{:.5f},{:.6f}", rx.position_m.x(), rx.position_m.y(), rx.position_m.z(),
+                  rx.velocity_mps.x(), rx.velocity_mps.y(), rx.velocity_mps.z(), c * epoch.receiver_clock.drift_s_per_s);
+  constexpr const char* kNoGeometry = ",,,,,";          // 6 empty geometry cells
+  constexpr const char* kNoSignalValues = ",,,,,,,";     // 8 empty cells from code noise to C/N0
+  for (const auto& sat : epoch.satellites) {
+    const std::string status(receiver::to_string(sat.status));
+    const std::string sat_name = sat.satellite.to_string();
+    const bool has_geometry = !(sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris);
+    // Geometry cells with a satellite clock: the satellite's, and in a signal's row the clock that
+    // signal got (the same one unless the generator gave it another: formatted again only then).
+    auto geometry_with = [&](double satellite_clock_m) {
+      return has_geometry ? fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f}", sat.direction.azimuth_deg,
+                                        sat.direction.elevation_deg, sat.range_m, sat.range_rate_mps,
+                                        satellite_clock_m, sat.relativistic_m)
+                          : std::string(kNoGeometry);
+    };
+    const std::string geometry = geometry_with(sat.satellite_clock_m);
+    // A row per signal its navigation record declares unusable (the others may be tracked).
+    for (const auto& unhealthy : sat.unhealthy_signals) {
+      fmt::format_to(std::back_inserter(out), "{},{},{},{},unhealthy,{},,,{},{},{},{},{:.2f},{},{},,,\n", time,
+                     receiver_name, sat_name, unhealthy.signal.to_string(), geometry,
+                     fmt::format("{:.4f}", sat.troposphere_m), rx_clock, kNoSignalValues, receiver_part,
+                     sat.vegetation_attenuation_db, csv_text(unhealthy.reason), receiver::to_string(sat.path_kind));
+    }
+    if (sat.signals.empty() && sat.status == receiver::SatelliteStatus::kUnhealthy) continue;  // said above
+    if (sat.signals.empty()) {
+      // One row for the satellite: why it is not observed, with the geometry when known.
+      const std::string atmosphere = sat.status == receiver::SatelliteStatus::kTracked ||
+                                             sat.status == receiver::SatelliteStatus::kNoSignal ||
+                                             sat.waiting_for_ephemeris
+                                         ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
+                                         : std::string(",");
+      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,\n", time, receiver_name, sat_name,
+                     status, geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part,
+                     sat.vegetation_attenuation_db, csv_text(sat.detail), receiver::to_string(sat.path_kind));
+      continue;
+    }
+    for (const auto& m : sat.signals) {
+      fmt::format_to(std::back_inserter(out),
+                     "{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.5f},{:.5f},{},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.2f},\n",
+                     time, receiver_name, sat_name, m.signal.to_string(), status,
+                     m.satellite_clock_m == sat.satellite_clock_m ? geometry : geometry_with(m.satellite_clock_m),
+                     m.group_delay_m,
+                     m.ionosphere_code_m, sat.troposphere_m, rx_clock, m.code_noise_m, m.phase_noise_m,
+                     m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
+                     m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);
+      out.pop_back();  // the row's newline: the multipath cells follow
+      fmt::format_to(std::back_inserter(out), ",{},{:.4f},{:.4f},{:.2f}\n", receiver::to_string(sat.path_kind),
+                     m.code_multipath_m, m.phase_multipath_m, m.multipath_power_db);
+    }
+  }
+}
+
+// truth.csv: every term of every signal of every receiver (RunOptions::write_truth).
+class TruthSink final : public EpochSink {
+ public:
+  explicit TruthSink(std::unique_ptr<StagedFile> file) : file_(std::move(file)) {}
+  Status add(const SinkEpoch& e) override {
+    text_.clear();
+    append_truth(text_, *e.observations, e.receiver->settings->name);
+    return file_->write(text_);
+  }
+  Status finish() override { return file_->close(); }
+
+ private:
+  std::unique_ptr<StagedFile> file_;
+  std::string text_;
+};
+
+// paths.csv (models.multipath): every path of every satellite-epoch with any path.
+class PathsSink final : public EpochSink {
+ public:
+  explicit PathsSink(std::unique_ptr<StagedFile> file) : file_(std::move(file)) {}
+  Status add(const SinkEpoch& e) override {
+    text_.clear();
+    append_paths(text_, *e.observations, e.receiver->settings->name);
+    return file_->write(text_);
+  }
+  Status finish() override { return file_->close(); }
+
+ private:
+  std::unique_ptr<StagedFile> file_;
+  std::string text_;
+};
+
+// --- obs.rnx -------------------------------------------------------------------------------------
+class RinexObsSink final : public EpochSink {
+ public:
+  static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
+    auto sink = std::make_unique<RinexObsSink>();
+    for (const SinkReceiver& rx : c.receivers) {
+      auto& out = sink->receivers_.emplace_back();
+      out.records = std::make_unique<RinexRecordMaker>(*rx.header);
+      out.writer = std::make_unique<io::RinexObsWriter>();
+      const auto path = c.staging_dir / ("obs" + rx.file_suffix + ".rnx");
+      if (auto st = out.writer->open(path, *rx.header); !st) return st.error();
+    }
+    return std::unique_ptr<EpochSink>(std::move(sink));
+  }
+  Status add(const SinkEpoch& e) override {
+    Receiver& rx = receivers_[e.receiver_index];
+    return rx.writer->write_epoch(rx.records->record(*e.observations));
+  }
+  Status finish() override {
+    for (Receiver& rx : receivers_) {
+      if (auto st = rx.writer->finish(); !st) return st;
+    }
+    return Ok{};
+  }
+
+ private:
+  struct Receiver {
+    std::unique_ptr<RinexRecordMaker> records;
+    std::unique_ptr<io::RinexObsWriter> writer;
+  };
+  std::vector<Receiver> receivers_;
+};
+
+// --- NMEA, RTCM 3, fix CSV encoders -------------------------------------------------------------
+class NmeaEncoder final : public StreamEncoder {
+ public:
+  Result<std::string> encode(const SinkEpoch& e) override {
+    std::string text;
+    if (e.fix == nullptr) return text;
+    for (const auto& sentence : io::nmea_epoch(*e.fix)) text += sentence;
+    return text;
+  }
+};
+
+class FixCsvEncoder final : public StreamEncoder {
+ public:
+  std::string header() const override { return io::fix_csv_header(); }
+  Result<std::string> encode(const SinkEpoch& e) override {
+    if (e.fix == nullptr) return std::string();
+    return io::fix_csv_row(*e.fix);
+  }
+};
+
+class Rtcm3Encoder final : public StreamEncoder {
+ public:
+  Rtcm3Encoder(const orbits::BroadcastEphemerides& ephemerides, const io::RtcmStation& station)
+      : ephemerides_(ephemerides), stream_(io::Rtcm3StreamSettings{}, station) {}
+  Result<std::string> encode(const SinkEpoch& e) override {
+    const RecordsInUse records = records_in_use(ephemerides_, *e.observations);
+    auto bytes = stream_.epoch(to_rtcm_epoch(*e.observations), records.kepler, records.glonass);
+    if (!bytes) return bytes.error();
+    return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
+  }
+
+ private:
+  const orbits::BroadcastEphemerides& ephemerides_;
+  io::Rtcm3Stream stream_;
+};
+
+// One file per receiver: STEM[_NAME].EXT, each with its own encoder.
+template <typename MakeEncoder>
+Result<std::unique_ptr<EpochSink>> per_receiver_files(const RunContext& c, const std::string& stem,
+                                                      const std::string& extension, MakeEncoder make_encoder) {
+  auto group = std::make_unique<SinkGroup>();
+  for (size_t i = 0; i < c.receivers.size(); ++i) {
+    auto file = StagedFile::create(c.staging_dir / (stem + c.receivers[i].file_suffix + extension));
+    if (!file) return file.error();
+    group->add_sink(std::make_unique<StreamSink>(i, make_encoder(c.receivers[i]), std::move(*file)));
+  }
+  return std::unique_ptr<EpochSink>(std::move(group));
+}
+
+// --- report.html, skyplot.svg of the first receiver ------------------------------------------------
+class ReportSink final : public EpochSink {
+ public:
+  explicit ReportSink(const RunContext& c) : context_(c) {}
+  Status add(const SinkEpoch& e) override {
+    if (e.fix != nullptr) {
+      report_.add_fix(e.receiver->settings->name, e.observations->receiver_time, positioning::to_string(e.fix->type));
+    }
+    if (e.receiver_index != 0) return Ok{};
+    const receiver::EpochObservations& epoch = *e.observations;
+    for (const auto& sat : epoch.satellites) {
+      if (sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris) continue;
+      io::ReportSample sample;
+      sample.time = epoch.receiver_time;
+      sample.satellite = sat.satellite;
+      sample.azimuth_deg = sat.direction.azimuth_deg;
+      sample.elevation_deg = sat.direction.elevation_deg;
+      sample.status = std::string(receiver::to_string(sat.status));
+      if (!sat.signals.empty()) sample.cn0_dbhz = sat.signals.front().cn0_dbhz;
+      sample.vegetation_attenuation_db = sat.vegetation_attenuation_db;
+      sample.path_kind = std::string(receiver::to_string(sat.path_kind));
+      report_.add(sample);
+    }
+    return Ok{};
+  }
+  Status finish() override {
+    const Scenario& s = *context_.scenario;
+    const RunSummary& summary = *context_.summary;
+    const SinkReceiver& first = context_.receivers.front();
+    io::ReportMeta meta;
+    meta.warnings = context_.resources->warnings;
+    meta.scenario_name = s.name;
+    meta.receiver_name = first.settings->name;
+    meta.start = s.time.start;
+    meta.end = s.time.start + s.time.duration_s;
+    meta.interval_s = s.time.interval_s;
+    meta.summary_rows = {{"epochs", std::to_string(summary.epochs)},
+                         {"tracked satellite-epochs", std::to_string(summary.satellite_epochs)},
+                         {"signal observations", std::to_string(summary.observations)},
+                         {"receiver profile", first.settings->profile},
+                         {"ionosphere", s.models.ionosphere},
+                         {"troposphere", s.models.troposphere},
+                         {"seed", std::to_string(s.seed)}};
+    for (const auto& [system, count] : summary.satellite_epochs_per_system) {
+      meta.summary_rows.emplace_back(system + " satellite-epochs", std::to_string(count));
+    }
+    if (const auto& world = context_.resources->world) {
+      const LoadedWorld& w = *world;
+      meta.summary_rows.emplace_back("world", w.name + " (" + std::to_string(w.objects) + " objects, " +
+                                                  std::to_string(w.buildings) + " buildings, " + std::to_string(w.trees) +
+                                                  " trees)");
+      meta.warnings.insert(meta.warnings.end(), w.warnings.begin(), w.warnings.end());
+      auto start_position = first.kinematics->at(s.time.start);
+      if (start_position) {
+        constexpr double kMaskStep_deg = 2.0;
+        if (auto mask = world_sky_mask_deg(w, start_position->position_m, kMaskStep_deg)) {
+          meta.sky_mask_elevation_deg = *mask;
+          meta.sky_mask_azimuth_step_deg = kMaskStep_deg;
+        }
+      }
+    }
+    if (auto st = write_file_atomically(context_.staging_dir / "report.html", report_.html(meta)); !st) return st;
+    return write_file_atomically(context_.staging_dir / "skyplot.svg", report_.sky_plot_svg(meta));
+  }
+
+ private:
+  const RunContext& context_;
+  io::ReportBuilder report_;
+};
+
+template <typename Sink>
+Result<std::unique_ptr<EpochSink>> make_file_sink(const RunContext& c, const char* name, const char* header) {
+  auto file = StagedFile::create(c.staging_dir / name);
+  if (!file) return file.error();
+  if (auto st = (*file)->write(header); !st) return st.error();
+  return std::unique_ptr<EpochSink>(std::make_unique<Sink>(std::move(*file)));
+}
+
+}  // namespace
+
+std::unique_ptr<StreamEncoder> make_nmea_encoder() { return std::make_unique<NmeaEncoder>(); }
+std::unique_ptr<StreamEncoder> make_fix_csv_encoder() { return std::make_unique<FixCsvEncoder>(); }
+std::unique_ptr<StreamEncoder> make_rtcm3_encoder(const orbits::BroadcastEphemerides& ephemerides,
+                                                  const io::RtcmStation& station) {
+  return std::make_unique<Rtcm3Encoder>(ephemerides, station);
+}
+
+Status StreamSink::add(const SinkEpoch& epoch) {
+  if (epoch.receiver_index != receiver_index_) return Ok{};
+  if (!started_) {
+    started_ = true;
+    if (auto st = stream_->write(encoder_->header()); !st) return st;
+  }
+  auto bytes = encoder_->encode(epoch);
+  if (!bytes) return bytes.error();
+  if (bytes->empty()) return Ok{};
+  return stream_->write(*bytes);
+}
+
+Status StreamSink::finish() {
+  if (!started_) {
+    started_ = true;
+    if (auto st = stream_->write(encoder_->header()); !st) return st;
+  }
+  return stream_->close();
+}
+
+Status SinkGroup::add(const SinkEpoch& epoch) {
+  for (auto& sink : sinks_) {
+    if (auto st = sink->add(epoch); !st) return st;
+  }
+  return Ok{};
+}
+
+Status SinkGroup::finish() {
+  for (auto& sink : sinks_) {
+    if (auto st = sink->finish(); !st) return st;
+  }
+  return Ok{};
+}
+
+const std::vector<SinkKind>& run_sink_table() {
+  static const std::vector<SinkKind> table = {
+      {"obs.rnx", [](const RunContext&) { return true; }, false, &RinexObsSink::make},
+      {"truth.csv", [](const RunContext& c) { return c.write_truth; }, false,
+       [](const RunContext& c) { return make_file_sink<TruthSink>(c, "truth.csv", kTruthHeader); }},
+      {"paths.csv", [](const RunContext& c) { return c.write_truth && c.scenario->models.multipath; }, false,
+       [](const RunContext& c) { return make_file_sink<PathsSink>(c, "paths.csv", kPathsHeader); }},
+      {"obs.rtcm3", [](const RunContext& c) { return c.scenario->output.rtcm3; }, false,
+       [](const RunContext& c) {
+         return per_receiver_files(c, "obs", ".rtcm3", [&](const SinkReceiver& rx) {
+           return make_rtcm3_encoder(*c.resources->ephemerides, rtcm_station(rx.marker_m, *rx.settings));
+         });
+       }},
+      {"fix.nmea", [](const RunContext& c) { return c.scenario->output.nmea; }, true,
+       [](const RunContext& c) { return per_receiver_files(c, "fix", ".nmea", [](const SinkReceiver&) { return make_nmea_encoder(); }); }},
+      {"fix.csv", [](const RunContext& c) { return c.scenario->output.fix; }, true,
+       [](const RunContext& c) { return per_receiver_files(c, "fix", ".csv", [](const SinkReceiver&) { return make_fix_csv_encoder(); }); }},
+      {"report.html", [](const RunContext&) { return true; }, false,
+       [](const RunContext& c) -> Result<std::unique_ptr<EpochSink>> { return std::unique_ptr<EpochSink>(std::make_unique<ReportSink>(c)); }},
+  };
+  return table;
+}
+
+Result<std::vector<std::unique_ptr<EpochSink>>> make_run_sinks(const RunContext& context) {
+  std::vector<std::unique_ptr<EpochSink>> sinks;
+  for (const SinkKind& kind : run_sink_table()) {
+    if (!kind.wanted(context)) continue;
+    auto sink = kind.make(context);
+    if (!sink) return sink.error();
+    sinks.push_back(std::move(*sink));
+  }
+  return sinks;
+}
+
+bool run_needs_fixes(const RunContext& context) {
+  for (const SinkKind& kind : run_sink_table()) {
+    if (kind.needs_fixes && kind.wanted(context)) return true;
+  }
+  return false;
+}
+
+}  // namespace skytrace::sim
