@@ -440,6 +440,7 @@ const std::vector<SinkKind>& run_sink_table() {
        [](const RunContext& c) { return per_receiver_files(c, "fix", ".csv", [](const SinkReceiver&) { return make_fix_csv_encoder(); }); }},
       {"report.html", [](const RunContext&) { return true; }, false,
        [](const RunContext& c) -> Result<std::unique_ptr<EpochSink>> { return std::unique_ptr<EpochSink>(std::make_unique<ReportSink>(c)); }},
+      {"bag (rosbag2, MCAP)", [](const RunContext& c) { return c.scenario->output.mcap; }, true, &make_mcap_sink},
   };
   return table;
 }

@@ -70,9 +70,8 @@ ros2::Header header_at(std::uint64_t stamp_ns, const std::string& frame) {
   return header;
 }
 
-// One message of every type skytrace publishes, over `epochs` epochs at 10 Hz. The gnss_comm
-// topics are optional: their ROS 1 field names (CN0, LLI, A, OMG0) are not valid ROS 2 field
-// names, and Foxglove's parser refuses such schemas.
+// One message of every type skytrace publishes, over `epochs` epochs at 10 Hz (the gnss_comm
+// topics optionally).
 void write_every_type(BagBuilder& bag, int epochs, bool gnss_comm = false) {
   bag.topic<ros2::NavSatFix>("/gnss/fix", QosProfileKind::kSensorData);
   bag.topic<ros2::TwistWithCovarianceStamped>("/gnss/vel", QosProfileKind::kSensorData);
@@ -226,8 +225,8 @@ void write_every_type(BagBuilder& bag, int epochs, bool gnss_comm = false) {
       obs.time = {2111, 18.0 + 0.1 * e};
       obs.sat = 10;
       obs.freqs = {1575.42e6, 1227.6e6};
-      obs.CN0 = {44, 38};
-      obs.LLI = {0, 1};
+      obs.cn0 = {44, 38};
+      obs.lli = {0, 1};
       obs.code = {1, 14};
       obs.psr = {2.1e7, 2.1e7 + 2.5};
       obs.psr_std = {0.3, 0.6};
@@ -238,7 +237,7 @@ void write_every_type(BagBuilder& bag, int epochs, bool gnss_comm = false) {
       obs.status = {0x0F, 0x07};
       meas.meas = {obs};
       bag.write("/ublox_driver/range_meas", t, meas,
-                {{"meas", {{{"sat", 10}, {"time", {{"week", 2111}, {"tow", obs.time.tow}}}, {"LLI", {0, 1}},
+                {{"meas", {{{"sat", 10}, {"time", {{"week", 2111}, {"tow", obs.time.tow}}}, {"lli", {0, 1}},
                             {"psr", {2.1e7, 2.1e7 + 2.5}}, {"status", {15, 7}}}}}});
 
       if (e % 10 == 0) {
@@ -246,10 +245,10 @@ void write_every_type(BagBuilder& bag, int epochs, bool gnss_comm = false) {
         ephem.sat = 10;
         ephem.toe = {2111, 21600};
         ephem.week = 2111;
-        ephem.A = 26559700.5;
+        ephem.a = 26559700.5;
         ephem.e = 0.0123;
         ephem.af0 = -1.2e-5;
-        bag.write("/ublox_driver/ephem", t, ephem, {{"sat", 10}, {"A", ephem.A}, {"af0", ephem.af0}});
+        bag.write("/ublox_driver/ephem", t, ephem, {{"sat", 10}, {"a", ephem.a}, {"af0", ephem.af0}});
         ros2::GnssGloEphemMsg glo;
         glo.sat = 65;
         glo.freqo = -4;
@@ -363,9 +362,8 @@ TEST_P(FoxgloveBagCheck, ALongRunSpreadOverManyChunksReadsBackInOrder) {
   EXPECT_EQ(summary.value("message_count", 0), 1 + 200 * 11);
 }
 
-// Disabled while the gnss_comm definitions keep their ROS 1 field names (CN0, LLI, A, OMG0, ...):
-// ROS 2 (rosidl) and Foxglove's parser accept lower-case field names only.
-TEST_P(FoxgloveBagCheck, DISABLED_GnssCommTopicsDecode) {
+// gnss_comm's messages with their field names in lower case, as ROS 2 requires (messages.hpp).
+TEST_P(FoxgloveBagCheck, GnssCommTopicsDecode) {
   const auto bag = test::make_temp_dir("mcap_bag") / "gnss_comm";
   io::Rosbag2Options options;
   options.mcap.compression = GetParam();

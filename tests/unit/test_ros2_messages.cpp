@@ -65,7 +65,7 @@ TEST(Ros2Cdr, EveryMessageRoundTrips) {
   obs.sat = 7;
   obs.freqs = {1575.42e6, 1227.6e6};
   obs.psr = {2.1e7, 2.1e7 + 3};
-  obs.LLI = {0, 1};
+  obs.lli = {0, 1};
   obs.status = {1, 3};
   meas.meas = {obs, obs};
   auto meas_back = deserialize<GnssMeasMsg>(serialize(meas));
