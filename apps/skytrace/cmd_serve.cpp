@@ -33,6 +33,7 @@
 #include "skytrace/io/rtcm3.hpp"
 #include "skytrace/sim/live.hpp"
 #include "skytrace/sim/scenario.hpp"
+#include "skytrace/sim/sinks.hpp"
 #include "skytrace/sim/streams.hpp"
 
 namespace skytrace::cli {
@@ -265,6 +266,30 @@ class PseudoTerminal {
   std::filesystem::path link_;
 };
 
+// The byte streams of serve's sinks: every TCP client, or the pseudo-terminal.
+class TcpStream final : public sim::ByteStream {
+ public:
+  explicit TcpStream(std::shared_ptr<TcpBroadcaster> server) : server_(std::move(server)) {}
+  Status write(std::string_view bytes) override {
+    server_->broadcast(bytes);
+    return Ok{};
+  }
+
+ private:
+  std::shared_ptr<TcpBroadcaster> server_;
+};
+class PtyStream final : public sim::ByteStream {
+ public:
+  explicit PtyStream(std::unique_ptr<PseudoTerminal> pty) : pty_(std::move(pty)) {}
+  Status write(std::string_view bytes) override {
+    pty_->write_bytes(bytes);
+    return Ok{};
+  }
+
+ private:
+  std::unique_ptr<PseudoTerminal> pty_;
+};
+
 int serve(const ServeArgs& args) {
   if (!(args.rate_hz > 0.0 && args.rate_hz <= 100.0)) {
     return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--rate-hz {}: expected 0 < R <= 100", args.rate_hz)));
@@ -282,27 +307,37 @@ int serve(const ServeArgs& args) {
   sim::LiveSession& live = **session;
   for (const auto& warning : live.resources().warnings) std::cerr << "skytrace serve: warning: " << warning << "\n";
 
-  std::unique_ptr<TcpBroadcaster> nmea_tcp, rtcm_tcp;
-  std::unique_ptr<PseudoTerminal> pty;
-  int pose_fd = -1;
+  // The outputs: sinks of the receiver's epoch stream, as `skytrace run`'s (sim/sinks).
+  const sim::SinkReceiver sink_receiver{&live.receiver(), live.marker_ecef_m(), &live.observation_header(), nullptr, ""};
+  std::vector<std::unique_ptr<sim::EpochSink>> sinks;
+  std::vector<std::shared_ptr<TcpBroadcaster>> servers;  // served between epochs
+  auto tcp_server = [&](const std::string& endpoint, const char* option, const char* what) -> Result<std::shared_ptr<TcpBroadcaster>> {
+    auto fd = bind_socket(endpoint, SOCK_STREAM, option);
+    if (!fd) return fd.error();
+    auto server = std::make_shared<TcpBroadcaster>(*fd);
+    std::cout << "skytrace serve: " << what << " on tcp port " << server->port() << std::endl;
+    servers.push_back(server);
+    return server;
+  };
   if (!args.nmea_tcp.empty()) {
-    auto fd = bind_socket(args.nmea_tcp, SOCK_STREAM, "--nmea-tcp");
-    if (!fd) return report_error(fd.error());
-    nmea_tcp = std::make_unique<TcpBroadcaster>(*fd);
-    std::cout << "skytrace serve: NMEA on tcp port " << nmea_tcp->port() << std::endl;
+    auto server = tcp_server(args.nmea_tcp, "--nmea-tcp", "NMEA");
+    if (!server) return report_error(server.error());
+    sinks.push_back(std::make_unique<sim::StreamSink>(0, sim::make_nmea_encoder(), std::make_unique<TcpStream>(*server)));
   }
   if (!args.rtcm_tcp.empty()) {
-    auto fd = bind_socket(args.rtcm_tcp, SOCK_STREAM, "--rtcm-tcp");
-    if (!fd) return report_error(fd.error());
-    rtcm_tcp = std::make_unique<TcpBroadcaster>(*fd);
-    std::cout << "skytrace serve: RTCM 3 on tcp port " << rtcm_tcp->port() << std::endl;
+    auto server = tcp_server(args.rtcm_tcp, "--rtcm-tcp", "RTCM 3");
+    if (!server) return report_error(server.error());
+    sinks.push_back(std::make_unique<sim::StreamSink>(
+        0, sim::make_rtcm3_encoder(*live.resources().ephemerides, sim::rtcm_station(live.marker_ecef_m(), live.receiver())),
+        std::make_unique<TcpStream>(*server)));
   }
   if (!args.pty.empty()) {
     auto opened = PseudoTerminal::open(args.pty);
     if (!opened) return report_error(opened.error());
-    pty = std::move(*opened);
-    std::cout << "skytrace serve: NMEA on " << args.pty << " -> " << pty->slave_name() << std::endl;
+    std::cout << "skytrace serve: NMEA on " << args.pty << " -> " << (*opened)->slave_name() << std::endl;
+    sinks.push_back(std::make_unique<sim::StreamSink>(0, sim::make_nmea_encoder(), std::make_unique<PtyStream>(std::move(*opened))));
   }
+  int pose_fd = -1;
   if (!args.pose_udp.empty()) {
     auto fd = bind_socket(args.pose_udp, SOCK_DGRAM, "--pose-udp");
     if (!fd) return report_error(fd.error());
@@ -315,9 +350,6 @@ int serve(const ServeArgs& args) {
       if (fd >= 0) close(fd);
     }
   } pose_guard{pose_fd};
-
-  std::optional<io::Rtcm3Stream> rtcm;
-  if (rtcm_tcp) rtcm.emplace(io::Rtcm3StreamSettings{}, sim::rtcm_station(live.marker_ecef_m(), live.receiver()));
 
   struct sigaction action {};
   action.sa_handler = on_stop_signal;
@@ -341,16 +373,14 @@ int serve(const ServeArgs& args) {
     // Serve clients and poses until the epoch is due.
     for (;;) {
       std::vector<pollfd> fds;
-      if (nmea_tcp) nmea_tcp->add_poll_fds(fds);
-      if (rtcm_tcp) rtcm_tcp->add_poll_fds(fds);
+      for (const auto& server : servers) server->add_poll_fds(fds);
       if (pose_fd >= 0) fds.push_back({pose_fd, POLLIN, 0});
       const auto now = Clock::now();
       if (now >= deadline || g_stop) break;
       const auto wait_ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count() + 1;
       const int ready = poll(fds.data(), fds.size(), static_cast<int>(std::min<long long>(wait_ms, 100)));
       if (ready < 0 && errno != EINTR) return report_error(io_error("poll"));
-      if (nmea_tcp) nmea_tcp->service();
-      if (rtcm_tcp) rtcm_tcp->service();
+      for (const auto& server : servers) server->service();
       if (pose_fd >= 0) {
         char buffer[2048];
         for (size_t datagrams = 0; datagrams < kMaxDatagramsPerWakeup; ++datagrams) {
@@ -377,17 +407,9 @@ int serve(const ServeArgs& args) {
     const GnssTime tag = start + static_cast<double>(k) * period_s;
     auto epoch = live.step(tag);
     if (!epoch) return report_error(epoch.error());
-    if (epoch->fix && (nmea_tcp || pty)) {
-      std::string text;
-      for (const auto& sentence : io::nmea_epoch(*epoch->fix)) text += sentence;
-      if (nmea_tcp) nmea_tcp->broadcast(text);
-      if (pty) pty->write_bytes(text);
-    }
-    if (rtcm) {
-      const auto records = sim::records_in_use(*live.resources().ephemerides, epoch->observations);
-      auto bytes = rtcm->epoch(sim::to_rtcm_epoch(epoch->observations), records.kepler, records.glonass);
-      if (!bytes) return report_error(bytes.error());
-      rtcm_tcp->broadcast(std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
+    const sim::SinkEpoch sink_epoch{k, 0, &sink_receiver, &epoch->observations, epoch->fix ? &*epoch->fix : nullptr};
+    for (auto& sink : sinks) {
+      if (auto st = sink->add(sink_epoch); !st) return report_error(st.error());
     }
     ++k;
     // Behind the wall clock by more than an epoch (a slow world, a suspended process): skip ahead
@@ -401,8 +423,11 @@ int serve(const ServeArgs& args) {
   alarm(0);  // stopped in time: no forced exit
   if (late_epochs > 0) std::cerr << "skytrace serve: " << late_epochs << " epochs skipped to keep real time\n";
   if (ignored_poses > 0) std::cerr << "skytrace serve: " << ignored_poses << " pose datagrams ignored\n";
-  for (const TcpBroadcaster* server : {nmea_tcp.get(), rtcm_tcp.get()}) {
-    if (server != nullptr && server->refused_count() > 0) {
+  for (auto& sink : sinks) {
+    if (auto st = sink->finish(); !st) return report_error(st.error());
+  }
+  for (const auto& server : servers) {
+    if (server->refused_count() > 0) {
       std::cerr << "skytrace serve: " << server->refused_count() << " connections refused (more than "
                 << kMaxTcpClients << " clients at once)\n";
     }

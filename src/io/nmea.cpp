@@ -55,6 +55,26 @@ std::string talker_of_fix(const positioning::PositionFix& fix) {
   return "GN";
 }
 
+// GGA quality: 1 single point, 2 differential, 4 RTK fixed, 5 RTK float (NMEA 0183 4.11).
+int gga_quality(const positioning::PositionFix& fix) {
+  switch (fix.type) {
+    case positioning::FixType::kDgnss: return 2;
+    case positioning::FixType::kRtkFixed: return 4;
+    case positioning::FixType::kRtkFloat: return 5;
+    default: return 1;
+  }
+}
+
+// Mode indicator of RMC and VTG: A autonomous, D differential, R RTK fixed, F RTK float.
+char mode_indicator(const positioning::PositionFix& fix) {
+  switch (fix.type) {
+    case positioning::FixType::kDgnss: return 'D';
+    case positioning::FixType::kRtkFixed: return 'R';
+    case positioning::FixType::kRtkFloat: return 'F';
+    default: return 'A';
+  }
+}
+
 struct Motion {
   double speed_mps = 0.0;
   double course_deg = 0.0;
@@ -76,10 +96,12 @@ std::string gga(const positioning::PositionFix& fix, const std::string& talker, 
   if (!has_fix(fix)) return fmt::format("{}GGA,{},,,,,0,00,,,M,,M,,", talker, stamp.hhmmss);
   // Without a geoid model the altitude field holds the ellipsoidal height and the separation 0,
   // so that altitude + separation (what gpsd and nmea_navsat_driver add up) is the exact height.
-  return fmt::format("{}GGA,{},{},{},1,{:02d},{:.2f},{:.3f},M,0.000,M,,", talker, stamp.hhmmss,
+  // Differential fixes give the age of the corrections (s); the base's station id is not known here.
+  const std::string age = fix.relative && gga_quality(fix) != 1 ? fmt::format("{:.1f}", fix.relative->age_s) : "";
+  return fmt::format("{}GGA,{},{},{},{},{:02d},{:.2f},{:.3f},M,0.000,M,{},", talker, stamp.hhmmss,
                      angle_field(fix.position.latitude_deg, 2, 'N', 'S'),
-                     angle_field(fix.position.longitude_deg, 3, 'E', 'W'), fix.satellites_used, fix.hdop,
-                     fix.position.height_m);
+                     angle_field(fix.position.longitude_deg, 3, 'E', 'W'), gga_quality(fix), fix.satellites_used,
+                     fix.hdop, fix.position.height_m, age);
 }
 
 std::string rmc(const positioning::PositionFix& fix, const std::string& talker, const UtcStamp& stamp) {
@@ -90,16 +112,16 @@ std::string rmc(const positioning::PositionFix& fix, const std::string& talker, 
   const std::string speed = motion ? fmt::format("{:.3f}", motion->speed_mps * kKnotsPerMps) : "";
   const std::string course = motion ? fmt::format("{:.2f}", motion->course_deg) : "";
   // Navigational status V: the receiver makes no integrity statement (NMEA 4.11 field 13).
-  return fmt::format("{}RMC,{},A,{},{},{},{},{},,,A,V", talker, stamp.hhmmss,
+  return fmt::format("{}RMC,{},A,{},{},{},{},{},,,{},V", talker, stamp.hhmmss,
                      angle_field(fix.position.latitude_deg, 2, 'N', 'S'),
-                     angle_field(fix.position.longitude_deg, 3, 'E', 'W'), speed, course, date);
+                     angle_field(fix.position.longitude_deg, 3, 'E', 'W'), speed, course, date, mode_indicator(fix));
 }
 
 std::string vtg(const positioning::PositionFix& fix, const std::string& talker) {
   const auto motion = motion_of(fix);
   if (!motion) return fmt::format("{}VTG,,T,,M,,N,,K,N", talker);
-  return fmt::format("{}VTG,{:.2f},T,,M,{:.3f},N,{:.3f},K,A", talker, motion->course_deg,
-                     motion->speed_mps * kKnotsPerMps, motion->speed_mps * kKmhPerMps);
+  return fmt::format("{}VTG,{:.2f},T,,M,{:.3f},N,{:.3f},K,{}", talker, motion->course_deg,
+                     motion->speed_mps * kKnotsPerMps, motion->speed_mps * kKmhPerMps, mode_indicator(fix));
 }
 
 std::string zda(const std::string& talker, const UtcStamp& stamp) {

@@ -494,6 +494,41 @@ void ReportBuilder::compact_track(Track& track) const {
   track.stride *= 2;
 }
 
+namespace {
+// fix.csv's solution types from worst to best: the chart's levels 0-5.
+constexpr std::array<std::string_view, 6> kFixTypes = {"none", "2d", "3d", "dgnss", "rtk_float", "rtk_fixed"};
+constexpr std::array<std::string_view, 6> kFixTypeLabels = {"none", "2D", "3D", "DGNSS", "RTK float", "RTK fixed"};
+constexpr std::array<std::string_view, 8> kReceiverColours = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
+                                                              "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
+}  // namespace
+
+void ReportBuilder::add_fix(const std::string& receiver, const GnssTime& time, std::string_view type) {
+  auto it = std::find_if(fix_runs_.begin(), fix_runs_.end(), [&](const FixRuns& r) { return r.receiver == receiver; });
+  if (it == fix_runs_.end()) {
+    fix_runs_.push_back(FixRuns{});
+    it = std::prev(fix_runs_.end());
+    it->receiver = receiver;
+  }
+  FixRuns& r = *it;
+  int level = 0;
+  for (size_t i = 0; i < kFixTypes.size(); ++i) {
+    if (kFixTypes[i] == type) level = static_cast<int>(i);
+  }
+  const double t = time.gpst_seconds_approx();
+  ++r.epochs_per_type[static_cast<size_t>(level)];
+  if (std::isnan(r.first_time_s)) r.first_time_s = t;
+  if (level >= 1 && std::isnan(r.first_fix_time_s)) r.first_fix_time_s = t;
+  if (level == 5 && std::isnan(r.first_fixed_time_s)) r.first_fixed_time_s = t;
+  r.last_time_s = t;
+  if (r.runs.empty() || r.runs.back().second != level) {
+    if (r.runs.size() < kMaxFixRuns) {
+      r.runs.emplace_back(t, level);
+    } else {
+      r.truncated = true;
+    }
+  }
+}
+
 std::string ReportBuilder::sky_plot_svg(const ReportMeta& meta) const { return draw_sky_plot(meta, tracks_, true); }
 
 std::string ReportBuilder::html(const ReportMeta& meta) const {
@@ -612,6 +647,44 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
   out += "</section>\n<section>\n<h2>C/N0 (first signal)</h2>\n";
   out += line_chart("cn0-chart", "C/N0 of the first signal per satellite", "C/N0 (dB-Hz)", cn0_frame, cn0_series, cn0_legend,
                     cn0_step);
+  if (!fix_runs_.empty()) {
+    // Solution type per receiver: a table of shares and first fixes, and the type over time.
+    out += "</section>\n<section>\n<h2>Solution type</h2>\n<table id=\"solution-types\">\n<thead><tr><th>receiver</th><th>epochs</th>";
+    for (size_t i = kFixTypes.size(); i-- > 0;) out += fmt::format("<th>{}</th>", kFixTypeLabels[i]);
+    out += "<th>first fix (s)</th><th>first RTK fixed (s)</th></tr></thead>\n<tbody>\n";
+    std::vector<Series> fix_series;
+    std::vector<LegendEntry> fix_legend;
+    for (size_t k = 0; k < fix_runs_.size(); ++k) {
+      const FixRuns& r = fix_runs_[k];
+      size_t total = 0;
+      for (const auto n : r.epochs_per_type) total += n;
+      out += fmt::format("<tr><th scope=\"row\">{}</th><td>{}</td>", escape(r.receiver), total);
+      for (size_t i = kFixTypes.size(); i-- > 0;) {
+        out += fmt::format("<td>{:.1f} %</td>", total > 0 ? 100.0 * static_cast<double>(r.epochs_per_type[i]) / static_cast<double>(total) : 0.0);
+      }
+      auto after_start = [&](double t) { return std::isnan(t) ? std::string("never") : fmt::format("{:g}", t - r.first_time_s); };
+      out += fmt::format("<td>{}</td><td>{}</td></tr>\n", after_start(r.first_fix_time_s), after_start(r.first_fixed_time_s));
+      const std::string colour(kReceiverColours[k % kReceiverColours.size()]);
+      Series series{colour, 0.9, 1.8, {{}}};
+      for (size_t i = 0; i < r.runs.size(); ++i) {
+        const double end_s = i + 1 < r.runs.size() ? r.runs[i + 1].first : r.last_time_s;
+        // Offset per receiver so that equal types stay visible side by side.
+        const double level = r.runs[i].second + 0.06 * static_cast<double>(k);
+        series.segments.back().push_back({r.runs[i].first, level});
+        series.segments.back().push_back({end_s, level});
+      }
+      fix_series.push_back(std::move(series));
+      fix_legend.push_back({r.receiver + (r.truncated ? " (chart truncated)" : ""), colour});
+    }
+    out += "</tbody>\n</table>\n";
+    out += "<p class=\"meta\">Chart levels: 0 none, 1 2D, 2 3D, 3 DGNSS, 4 RTK float, 5 RTK fixed.</p>\n";
+    ChartFrame fix_frame;
+    fix_frame.t0_s = t0_s;
+    fix_frame.t1_s = t1_s;
+    fix_frame.y0 = 0.0;
+    fix_frame.y1 = 5.5;
+    out += line_chart("solution-type", "Solution type over time", "solution type", fix_frame, fix_series, fix_legend, 1.0);
+  }
   out += "</section>\n<section>\n<h2>Scenario</h2>\n";
   out += summary_table(meta);
   out += "</section>\n<section>\n<h2>Warnings</h2>\n";

@@ -10,6 +10,7 @@
 namespace skytrace::ros2 {
 namespace {
 
+// gnss_comm's field names in lower case, as ROS 2 requires (messages.hpp).
 // Jazzy's text where Humble's differs only in constants and defaults (NavSatStatus, Marker): the
 // fields and their wire form are the same in both.
 const std::map<std::string, std::string, std::less<>>& definitions() {
@@ -69,14 +70,14 @@ uint32 iodc
 uint32 health
 uint32 code
 float64 ura
-float64 A
+float64 a
 float64 e
 float64 i0
 float64 omg
-float64 OMG0
-float64 M0
+float64 omg0
+float64 m0
 float64 delta_n
-float64 OMG_dot
+float64 omg_dot
 float64 i_dot
 float64 cuc
 float64 cus
@@ -89,7 +90,7 @@ float64 af1
 float64 af2
 float64 tgd0
 float64 tgd1
-float64 A_dot
+float64 a_dot
 float64 n_dot
 )msg"},
     {"gnss_comm/msg/GnssGloEphemMsg", R"msg(uint32 sat
@@ -118,8 +119,8 @@ float64 delta_tau_n
     {"gnss_comm/msg/GnssObsMsg", R"msg(GnssTimeMsg time
 uint32 sat
 float64[] freqs
-float64[] CN0
-uint8[] LLI
+float64[] cn0
+uint8[] lli
 uint8[] code
 float64[] psr
 float64[] psr_std
@@ -350,7 +351,11 @@ std::string message_definition(std::string_view ros_type) {
     if (!done.insert(type).second) continue;
     const auto found = table.find(type);
     if (found == table.end()) continue;
-    text += std::string(80, '=') + "\nMSG: " + type + "\n" + found->second;
+    // rosbag2 names a dependency as its fields do, "pkg/Name" (Foxglove's parser matches the
+    // names exactly: "pkg/msg/Name" would leave "std_msgs/Header" unresolved).
+    std::string name = type;
+    if (const size_t msg = name.find("/msg/"); msg != std::string::npos) name.erase(msg, 4);
+    text += std::string(80, '=') + "\nMSG: " + name + "\n" + found->second;
     auto more = field_types(type, found->second);
     pending.insert(pending.end(), more.rbegin(), more.rend());
   }

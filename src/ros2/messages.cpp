@@ -194,12 +194,12 @@ SKYTRACE_ROS2_FIELDS(Marker, m.header, m.ns, m.id, m.type, m.action, m.pose, m.s
                      m.mesh_resource, m.mesh_file, m.mesh_use_embedded_materials)
 SKYTRACE_ROS2_FIELDS(MarkerArray, m.markers)
 SKYTRACE_ROS2_FIELDS(GnssTimeMsg, m.week, m.tow)
-SKYTRACE_ROS2_FIELDS(GnssObsMsg, m.time, m.sat, m.freqs, m.CN0, m.LLI, m.code, m.psr, m.psr_std, m.cp, m.cp_std,
+SKYTRACE_ROS2_FIELDS(GnssObsMsg, m.time, m.sat, m.freqs, m.cn0, m.lli, m.code, m.psr, m.psr_std, m.cp, m.cp_std,
                      m.dopp, m.dopp_std, m.status)
 SKYTRACE_ROS2_FIELDS(GnssMeasMsg, m.meas)
 SKYTRACE_ROS2_FIELDS(GnssEphemMsg, m.sat, m.ttr, m.toe, m.toc, m.toe_tow, m.week, m.iode, m.iodc, m.health, m.code,
-                     m.ura, m.A, m.e, m.i0, m.omg, m.OMG0, m.M0, m.delta_n, m.OMG_dot, m.i_dot, m.cuc, m.cus, m.crc,
-                     m.crs, m.cic, m.cis, m.af0, m.af1, m.af2, m.tgd0, m.tgd1, m.A_dot, m.n_dot)
+                     m.ura, m.a, m.e, m.i0, m.omg, m.omg0, m.m0, m.delta_n, m.omg_dot, m.i_dot, m.cuc, m.cus, m.crc,
+                     m.crs, m.cic, m.cis, m.af0, m.af1, m.af2, m.tgd0, m.tgd1, m.a_dot, m.n_dot)
 SKYTRACE_ROS2_FIELDS(GnssGloEphemMsg, m.sat, m.ttr, m.toe, m.freqo, m.iode, m.health, m.age, m.ura, m.pos_x, m.pos_y,
                      m.pos_z, m.vel_x, m.vel_y, m.vel_z, m.acc_x, m.acc_y, m.acc_z, m.tau_n, m.gamma, m.delta_tau_n)
 SKYTRACE_ROS2_FIELDS(Observation, m.satellite, m.system, m.prn, m.glonass_channel, m.signal, m.carrier_frequency_hz,

@@ -73,14 +73,14 @@ ros2::GnssEphemMsg to_gnss_comm(const orbits::KeplerEphemeris& e) {
   m.health = static_cast<std::uint32_t>(std::max(e.health, 0));
   m.code = e.satellite.system == GnssSystem::kGalileo ? e.data_source : static_cast<std::uint32_t>(std::max(e.codes_on_l2, 0));
   m.ura = e.accuracy_m;
-  m.A = e.sqrt_a_sqrtm * e.sqrt_a_sqrtm;
+  m.a = e.sqrt_a_sqrtm * e.sqrt_a_sqrtm;
   m.e = e.eccentricity;
   m.i0 = e.i0_rad;
   m.omg = e.omega_rad;
-  m.OMG0 = e.omega0_rad;
-  m.M0 = e.m0_rad;
+  m.omg0 = e.omega0_rad;
+  m.m0 = e.m0_rad;
   m.delta_n = e.delta_n_rad_per_s;
-  m.OMG_dot = e.omega_dot_rad_per_s;
+  m.omg_dot = e.omega_dot_rad_per_s;
   m.i_dot = e.idot_rad_per_s;
   m.cuc = e.cuc_rad;
   m.cus = e.cus_rad;
@@ -103,7 +103,7 @@ ros2::GnssEphemMsg to_gnss_comm(const orbits::KeplerEphemeris& e) {
       break;
     default: m.tgd0 = e.group_delays.tgd_s; break;
   }
-  m.A_dot = e.a_dot_m_per_s;
+  m.a_dot = e.a_dot_m_per_s;
   m.n_dot = e.delta_n_dot_rad_per_s2;
   return m;
 }
@@ -373,8 +373,8 @@ Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epo
         if (info != nullptr) noise = receiver::tracking_noise(s.profile, *info, m.carrier_hz, m.cn0_dbhz);
         const double wavelength_m = constants::kSpeedOfLight_mps / m.carrier_hz;
         obs.freqs.push_back(m.carrier_hz);
-        obs.CN0.push_back(m.cn0_dbhz);
-        obs.LLI.push_back(static_cast<std::uint8_t>((m.loss_of_lock ? 1 : 0) | (m.half_cycle_unresolved ? 2 : 0)));
+        obs.cn0.push_back(m.cn0_dbhz);
+        obs.lli.push_back(static_cast<std::uint8_t>((m.loss_of_lock ? 1 : 0) | (m.half_cycle_unresolved ? 2 : 0)));
         obs.code.push_back(gnss_comm_code(m.signal));
         obs.psr.push_back(m.pseudorange_m);
         obs.psr_std.push_back(std::max(noise.code_m, kMinCodeStd_m));

@@ -47,7 +47,7 @@ Status StagedFile::flush() {
   return Ok{};
 }
 
-Status StagedFile::append(std::string_view bytes) {
+Status StagedFile::write(std::string_view bytes) {
   buffer_.append(bytes);
   if (buffer_.size() >= kFlushBytes) return flush();
   return Ok{};
@@ -193,7 +193,7 @@ class TruthSink final : public EpochSink {
   Status add(const SinkEpoch& e) override {
     text_.clear();
     append_truth(text_, *e.observations, e.receiver->settings->name);
-    return file_->append(text_);
+    return file_->write(text_);
   }
   Status finish() override { return file_->close(); }
 
@@ -209,7 +209,7 @@ class PathsSink final : public EpochSink {
   Status add(const SinkEpoch& e) override {
     text_.clear();
     append_paths(text_, *e.observations, e.receiver->settings->name);
-    return file_->append(text_);
+    return file_->write(text_);
   }
   Status finish() override { return file_->close(); }
 
@@ -251,88 +251,63 @@ class RinexObsSink final : public EpochSink {
   std::vector<Receiver> receivers_;
 };
 
-// --- obs.rtcm3, fix.nmea, fix.csv: one file per receiver -----------------------------------------
-class PerReceiverFileSink : public EpochSink {
+// --- NMEA, RTCM 3, fix CSV encoders -------------------------------------------------------------
+class NmeaEncoder final : public StreamEncoder {
  public:
-  Status finish() override {
-    for (auto& file : files_) {
-      if (auto st = file->close(); !st) return st;
-    }
-    return Ok{};
+  Result<std::string> encode(const SinkEpoch& e) override {
+    std::string text;
+    if (e.fix == nullptr) return text;
+    for (const auto& sentence : io::nmea_epoch(*e.fix)) text += sentence;
+    return text;
   }
-
- protected:
-  Status open(const RunContext& c, const std::string& stem, const std::string& extension, std::string_view first = {}) {
-    for (const SinkReceiver& rx : c.receivers) {
-      auto file = StagedFile::create(c.staging_dir / (stem + rx.file_suffix + extension));
-      if (!file) return file.error();
-      if (auto st = (*file)->append(first); !st) return st;
-      files_.push_back(std::move(*file));
-    }
-    return Ok{};
-  }
-  std::vector<std::unique_ptr<StagedFile>> files_;
 };
 
-// The RTCM 3 stream a reference receiver would send: MSM7, 1006, ephemerides as they come in use.
-class RtcmSink final : public PerReceiverFileSink {
+class FixCsvEncoder final : public StreamEncoder {
  public:
-  static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
-    auto sink = std::make_unique<RtcmSink>();
-    sink->ephemerides_ = c.resources->ephemerides.get();
-    for (const SinkReceiver& rx : c.receivers) {
-      sink->streams_.emplace_back(io::Rtcm3StreamSettings{}, rtcm_station(rx.marker_m, *rx.settings));
-    }
-    if (auto st = sink->open(c, "obs", ".rtcm3"); !st) return st.error();
-    return std::unique_ptr<EpochSink>(std::move(sink));
+  std::string header() const override { return io::fix_csv_header(); }
+  Result<std::string> encode(const SinkEpoch& e) override {
+    if (e.fix == nullptr) return std::string();
+    return io::fix_csv_row(*e.fix);
   }
-  Status add(const SinkEpoch& e) override {
-    const RecordsInUse records = records_in_use(*ephemerides_, *e.observations);
-    auto bytes = streams_[e.receiver_index].epoch(to_rtcm_epoch(*e.observations), records.kepler, records.glonass);
+};
+
+class Rtcm3Encoder final : public StreamEncoder {
+ public:
+  Rtcm3Encoder(const orbits::BroadcastEphemerides& ephemerides, const io::RtcmStation& station)
+      : ephemerides_(ephemerides), stream_(io::Rtcm3StreamSettings{}, station) {}
+  Result<std::string> encode(const SinkEpoch& e) override {
+    const RecordsInUse records = records_in_use(ephemerides_, *e.observations);
+    auto bytes = stream_.epoch(to_rtcm_epoch(*e.observations), records.kepler, records.glonass);
     if (!bytes) return bytes.error();
-    return files_[e.receiver_index]->append(
-        std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
+    return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
   }
 
  private:
-  const orbits::BroadcastEphemerides* ephemerides_ = nullptr;
-  std::vector<io::Rtcm3Stream> streams_;
+  const orbits::BroadcastEphemerides& ephemerides_;
+  io::Rtcm3Stream stream_;
 };
 
-class NmeaSink final : public PerReceiverFileSink {
- public:
-  static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
-    auto sink = std::make_unique<NmeaSink>();
-    if (auto st = sink->open(c, "fix", ".nmea"); !st) return st.error();
-    return std::unique_ptr<EpochSink>(std::move(sink));
+// One file per receiver: STEM[_NAME].EXT, each with its own encoder.
+template <typename MakeEncoder>
+Result<std::unique_ptr<EpochSink>> per_receiver_files(const RunContext& c, const std::string& stem,
+                                                      const std::string& extension, MakeEncoder make_encoder) {
+  auto group = std::make_unique<SinkGroup>();
+  for (size_t i = 0; i < c.receivers.size(); ++i) {
+    auto file = StagedFile::create(c.staging_dir / (stem + c.receivers[i].file_suffix + extension));
+    if (!file) return file.error();
+    group->add_sink(std::make_unique<StreamSink>(i, make_encoder(c.receivers[i]), std::move(*file)));
   }
-  Status add(const SinkEpoch& e) override {
-    if (e.fix == nullptr) return Ok{};
-    for (const auto& sentence : io::nmea_epoch(*e.fix)) {
-      if (auto st = files_[e.receiver_index]->append(sentence); !st) return st;
-    }
-    return Ok{};
-  }
-};
-
-class FixCsvSink final : public PerReceiverFileSink {
- public:
-  static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
-    auto sink = std::make_unique<FixCsvSink>();
-    if (auto st = sink->open(c, "fix", ".csv", io::fix_csv_header()); !st) return st.error();
-    return std::unique_ptr<EpochSink>(std::move(sink));
-  }
-  Status add(const SinkEpoch& e) override {
-    if (e.fix == nullptr) return Ok{};
-    return files_[e.receiver_index]->append(io::fix_csv_row(*e.fix));
-  }
-};
+  return std::unique_ptr<EpochSink>(std::move(group));
+}
 
 // --- report.html, skyplot.svg of the first receiver ------------------------------------------------
 class ReportSink final : public EpochSink {
  public:
   explicit ReportSink(const RunContext& c) : context_(c) {}
   Status add(const SinkEpoch& e) override {
+    if (e.fix != nullptr) {
+      report_.add_fix(e.receiver->settings->name, e.observations->receiver_time, positioning::to_string(e.fix->type));
+    }
     if (e.receiver_index != 0) return Ok{};
     const receiver::EpochObservations& epoch = *e.observations;
     for (const auto& sat : epoch.satellites) {
@@ -399,11 +374,52 @@ template <typename Sink>
 Result<std::unique_ptr<EpochSink>> make_file_sink(const RunContext& c, const char* name, const char* header) {
   auto file = StagedFile::create(c.staging_dir / name);
   if (!file) return file.error();
-  if (auto st = (*file)->append(header); !st) return st.error();
+  if (auto st = (*file)->write(header); !st) return st.error();
   return std::unique_ptr<EpochSink>(std::make_unique<Sink>(std::move(*file)));
 }
 
 }  // namespace
+
+std::unique_ptr<StreamEncoder> make_nmea_encoder() { return std::make_unique<NmeaEncoder>(); }
+std::unique_ptr<StreamEncoder> make_fix_csv_encoder() { return std::make_unique<FixCsvEncoder>(); }
+std::unique_ptr<StreamEncoder> make_rtcm3_encoder(const orbits::BroadcastEphemerides& ephemerides,
+                                                  const io::RtcmStation& station) {
+  return std::make_unique<Rtcm3Encoder>(ephemerides, station);
+}
+
+Status StreamSink::add(const SinkEpoch& epoch) {
+  if (epoch.receiver_index != receiver_index_) return Ok{};
+  if (!started_) {
+    started_ = true;
+    if (auto st = stream_->write(encoder_->header()); !st) return st;
+  }
+  auto bytes = encoder_->encode(epoch);
+  if (!bytes) return bytes.error();
+  if (bytes->empty()) return Ok{};
+  return stream_->write(*bytes);
+}
+
+Status StreamSink::finish() {
+  if (!started_) {
+    started_ = true;
+    if (auto st = stream_->write(encoder_->header()); !st) return st;
+  }
+  return stream_->close();
+}
+
+Status SinkGroup::add(const SinkEpoch& epoch) {
+  for (auto& sink : sinks_) {
+    if (auto st = sink->add(epoch); !st) return st;
+  }
+  return Ok{};
+}
+
+Status SinkGroup::finish() {
+  for (auto& sink : sinks_) {
+    if (auto st = sink->finish(); !st) return st;
+  }
+  return Ok{};
+}
 
 const std::vector<SinkKind>& run_sink_table() {
   static const std::vector<SinkKind> table = {
@@ -412,11 +428,19 @@ const std::vector<SinkKind>& run_sink_table() {
        [](const RunContext& c) { return make_file_sink<TruthSink>(c, "truth.csv", kTruthHeader); }},
       {"paths.csv", [](const RunContext& c) { return c.write_truth && c.scenario->models.multipath; }, false,
        [](const RunContext& c) { return make_file_sink<PathsSink>(c, "paths.csv", kPathsHeader); }},
-      {"obs.rtcm3", [](const RunContext& c) { return c.scenario->output.rtcm3; }, false, &RtcmSink::make},
-      {"fix.nmea", [](const RunContext& c) { return c.scenario->output.nmea; }, true, &NmeaSink::make},
-      {"fix.csv", [](const RunContext& c) { return c.scenario->output.fix; }, true, &FixCsvSink::make},
+      {"obs.rtcm3", [](const RunContext& c) { return c.scenario->output.rtcm3; }, false,
+       [](const RunContext& c) {
+         return per_receiver_files(c, "obs", ".rtcm3", [&](const SinkReceiver& rx) {
+           return make_rtcm3_encoder(*c.resources->ephemerides, rtcm_station(rx.marker_m, *rx.settings));
+         });
+       }},
+      {"fix.nmea", [](const RunContext& c) { return c.scenario->output.nmea; }, true,
+       [](const RunContext& c) { return per_receiver_files(c, "fix", ".nmea", [](const SinkReceiver&) { return make_nmea_encoder(); }); }},
+      {"fix.csv", [](const RunContext& c) { return c.scenario->output.fix; }, true,
+       [](const RunContext& c) { return per_receiver_files(c, "fix", ".csv", [](const SinkReceiver&) { return make_fix_csv_encoder(); }); }},
       {"report.html", [](const RunContext&) { return true; }, false,
        [](const RunContext& c) -> Result<std::unique_ptr<EpochSink>> { return std::unique_ptr<EpochSink>(std::make_unique<ReportSink>(c)); }},
+      {"bag (rosbag2, MCAP)", [](const RunContext& c) { return c.scenario->output.mcap; }, true, &make_mcap_sink},
   };
   return table;
 }

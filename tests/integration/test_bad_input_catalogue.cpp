@@ -231,6 +231,16 @@ TEST_F(BadInputCatalogue, RunOutputsThroughSymlinksKeepTheLinks) {
   EXPECT_NE(read_text(dir_ / "elsewhere.rnx").find("END OF HEADER"), std::string::npos);
 }
 
+TEST_F(BadInputCatalogue, BagFillingTheDiskLeavesNothingBehind) {
+  // A file size limit makes the MCAP file the first output to fail, as a full disk would.
+  const fs::path out = dir_ / "out";
+  const std::string run = skytrace_cmd() + " run " + q(test::source_dir() / "examples" / "quickstart.yaml") + " --out " +
+                          q(out) + " --quiet --no-truth --set output.mcap=true --set output.mcap_compression=none" +
+                          " --set time.duration_s=600";
+  run_case("bash -c " + test::shell_quote("ulimit -f 1024; exec " + run), 5, "bag_0.mcap: write failed \\(file size limit exceeded\\)");
+  EXPECT_TRUE(fs::is_empty(out)) << "a failed run left files in " << out;
+}
+
 // ---------------------------------------------------------------- absurd numbers
 
 TEST_F(BadInputCatalogue, NanObservationNamesItsLine) {

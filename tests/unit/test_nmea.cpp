@@ -222,3 +222,34 @@ TEST(Nmea, TimeShowsSecond60OnlyInsideARealLeapSecond) {
 
 }  // namespace
 }  // namespace skytrace::io
+
+namespace skytrace::io {
+namespace {
+
+// RTK solutions: GGA quality 4 (fixed) or 5 (float) with the age of the corrections, RMC and VTG
+// mode R or F; DGNSS quality 2 and mode D (NMEA 0183 4.11).
+TEST(Nmea, RtkFixesReportTheirQualityModeAndCorrectionAge) {
+  auto fix = esbc_like_fix();
+  fix.relative = positioning::PositionFix::Relative{};
+  fix.relative->age_s = 1.25;
+  auto sentence = [&](const char* type) {
+    for (const auto& s : nmea_epoch(fix)) {
+      if (s.find(type) != std::string::npos) return s;
+    }
+    return std::string();
+  };
+  fix.type = positioning::FixType::kRtkFixed;
+  EXPECT_NE(sentence("GGA").find(",E,4,03,0.83,58.123,M,0.000,M,1.2,*"), std::string::npos) << sentence("GGA");
+  EXPECT_NE(sentence("RMC").find(",R,V*"), std::string::npos) << sentence("RMC");
+  EXPECT_NE(sentence("VTG").find(",K,R*"), std::string::npos) << sentence("VTG");
+  fix.type = positioning::FixType::kRtkFloat;
+  EXPECT_NE(sentence("GGA").find(",E,5,03,"), std::string::npos) << sentence("GGA");
+  EXPECT_NE(sentence("RMC").find(",F,V*"), std::string::npos);
+  fix.type = positioning::FixType::kDgnss;
+  EXPECT_NE(sentence("GGA").find(",E,2,03,"), std::string::npos);
+  EXPECT_NE(sentence("VTG").find(",K,D*"), std::string::npos);
+  for (const auto& s : nmea_epoch(fix)) EXPECT_TRUE(nmea_checksum_valid(s)) << s;
+}
+
+}  // namespace
+}  // namespace skytrace::io

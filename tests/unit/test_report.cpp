@@ -356,3 +356,38 @@ TEST(Report, TimeAxisLabelsRoundedToTheSecondCarryIntoMinuteHourDayMonthAndYear)
 
 }  // namespace
 }  // namespace skytrace::io
+
+namespace skytrace::io {
+namespace {
+
+// Solution types per receiver: shares, first fix and first RTK fixed after the start, one run per
+// change (so a flickering rover does not grow memory beyond kMaxFixRuns).
+TEST(Report, SolutionTypesPerReceiverWithFirstFixes) {
+  ReportBuilder report;
+  for (int k = 0; k < 100; ++k) {
+    report.add_fix("BASE", t0() + k, "3d");
+    report.add_fix("ROVR", t0() + k, k < 10 ? "none" : k < 40 ? "rtk_float" : "rtk_fixed");
+  }
+  ReportMeta meta;
+  meta.scenario_name = "pair";
+  meta.start = t0();
+  meta.end = t0() + 99.0;
+  meta.interval_s = 1.0;
+  const std::string html = report.html(meta);
+  EXPECT_NE(html.find("id=\"solution-types\""), std::string::npos);
+  EXPECT_NE(html.find("<th scope=\"row\">ROVR</th><td>100</td><td>60.0 %</td><td>30.0 %</td>"), std::string::npos) << html;
+  EXPECT_NE(html.find("<td>10</td><td>40</td></tr>"), std::string::npos);  // first fix, first RTK fixed (s)
+  EXPECT_NE(html.find("<th scope=\"row\">BASE</th><td>100</td><td>0.0 %</td>"), std::string::npos);
+  EXPECT_NE(html.find("id=\"solution-type\""), std::string::npos);
+
+  ReportBuilder flicker;
+  for (size_t k = 0; k < 2 * ReportBuilder::kMaxFixRuns + 10; ++k) {
+    flicker.add_fix("X", t0() + static_cast<double>(k), k % 2 == 0 ? "rtk_fixed" : "rtk_float");
+  }
+  EXPECT_NE(flicker.html(meta).find("X (chart truncated)"), std::string::npos);
+  // Without fixes the section is left out.
+  EXPECT_EQ(ReportBuilder().html(meta).find("solution-types"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace skytrace::io

@@ -65,7 +65,7 @@ TEST(Ros2Cdr, EveryMessageRoundTrips) {
   obs.sat = 7;
   obs.freqs = {1575.42e6, 1227.6e6};
   obs.psr = {2.1e7, 2.1e7 + 3};
-  obs.LLI = {0, 1};
+  obs.lli = {0, 1};
   obs.status = {1, 3};
   meas.meas = {obs, obs};
   auto meas_back = deserialize<GnssMeasMsg>(serialize(meas));
@@ -167,8 +167,8 @@ TEST(Ros2Names, GidIsTwentyFourBytesInHumbleAndSixteenInJazzy) {
 TEST(Ros2Definitions, NavSatFixCarriesEveryTypeItUsesOnce) {
   const std::string text = message_definition(NavSatFix::kType);
   EXPECT_EQ(text.rfind("std_msgs/Header header\nNavSatStatus status\n", 0), 0u) << text;
-  for (const char* dependency : {"MSG: std_msgs/msg/Header\n", "MSG: builtin_interfaces/msg/Time\n",
-                                 "MSG: sensor_msgs/msg/NavSatStatus\n"}) {
+  for (const char* dependency : {"MSG: std_msgs/Header\n", "MSG: builtin_interfaces/Time\n",
+                                 "MSG: sensor_msgs/NavSatStatus\n"}) {
     const size_t first = text.find(dependency);
     ASSERT_NE(first, std::string::npos) << dependency;
     EXPECT_EQ(text.find(dependency, first + 1), std::string::npos) << dependency;
@@ -176,7 +176,7 @@ TEST(Ros2Definitions, NavSatFixCarriesEveryTypeItUsesOnce) {
   EXPECT_NE(text.find("uint8 COVARIANCE_TYPE_KNOWN = 3"), std::string::npos);
   EXPECT_NE(text.find(std::string(80, '=') + "\nMSG: "), std::string::npos);
   // The gnss_comm types refer to each other without a package.
-  EXPECT_NE(message_definition(GnssMeasMsg::kType).find("MSG: gnss_comm/msg/GnssTimeMsg"), std::string::npos);
+  EXPECT_NE(message_definition(GnssMeasMsg::kType).find("MSG: gnss_comm/GnssTimeMsg"), std::string::npos);
   EXPECT_TRUE(message_definition("no_msgs/msg/Nothing").empty());
 }
 

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <string_view>
 #include <string>
 #include <utility>
 #include <vector>
@@ -76,6 +77,13 @@ class ReportBuilder {
   // is counted in ignored_samples() and otherwise ignored); epochs in time order for the counts.
   void add(const ReportSample& sample);
 
+  // A receiver's solution at an epoch, by fix.csv's name: "none", "2d", "3d", "dgnss",
+  // "rtk_float", "rtk_fixed" (unknown names count as "none"). Epochs in time order per receiver.
+  // Kept as runs of one type: memory grows with the changes, and stops at kMaxFixRuns per receiver
+  // (the counts stay exact).
+  void add_fix(const std::string& receiver, const GnssTime& time, std::string_view type);
+  static constexpr size_t kMaxFixRuns = 20000;
+
   // The self-contained page.
   [[nodiscard]] std::string html(const ReportMeta& meta) const;
   // The sky plot alone, as a standalone SVG document (same drawing as in the page).
@@ -101,6 +109,17 @@ class ReportBuilder {
     // flickering at every sample): from then on plain decimation.
     bool keep_changes = true;
   };
+  // Solution types of one receiver as runs (start time, type index in kFixTypes order).
+  struct FixRuns {
+    std::string receiver;
+    std::vector<std::pair<double, int>> runs;
+    double last_time_s = 0.0;
+    std::array<std::size_t, 6> epochs_per_type{};
+    double first_time_s = std::numeric_limits<double>::quiet_NaN();
+    double first_fix_time_s = std::numeric_limits<double>::quiet_NaN();    // first 2D/3D or better
+    double first_fixed_time_s = std::numeric_limits<double>::quiet_NaN();  // first rtk_fixed
+    bool truncated = false;
+  };
   struct CountPoint {
     double time_s = 0.0;
     std::array<std::uint16_t, kAllSystems.size()> tracked{};  // per GnssSystem
@@ -119,6 +138,7 @@ class ReportBuilder {
   size_t count_stride_ = 1;
   std::array<bool, kAllSystems.size()> systems_seen_{};
   size_t ignored_samples_ = 0;
+  std::vector<FixRuns> fix_runs_;  // per receiver, in the order first seen
 };
 
 namespace detail {

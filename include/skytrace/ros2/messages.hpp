@@ -206,6 +206,9 @@ struct MarkerArray {
 };
 
 // --- gnss_comm (GVINS and other GNSS-fusion estimators) -------------------------------------------
+// gnss_comm is a ROS 1 package; ROS 2 (rosidl) accepts lower-case field names only, so its
+// messages in ROS 2 name CN0, LLI, A, OMG0, OMG_dot and A_dot in lower case. Field order and types,
+// hence the bytes on the wire, are those of gnss_comm.
 struct GnssTimeMsg {
   static constexpr std::string_view kType = "gnss_comm/msg/GnssTimeMsg";
   std::uint32_t week = 0;
@@ -215,8 +218,8 @@ struct GnssObsMsg {
   static constexpr std::string_view kType = "gnss_comm/msg/GnssObsMsg";
   GnssTimeMsg time;
   std::uint32_t sat = 0;  // gnss_comm's sat_no()
-  std::vector<double> freqs, CN0;
-  std::vector<std::uint8_t> LLI, code;
+  std::vector<double> freqs, cn0;
+  std::vector<std::uint8_t> lli, code;
   std::vector<double> psr, psr_std, cp, cp_std, dopp, dopp_std;
   std::vector<std::uint8_t> status;
 };
@@ -230,9 +233,9 @@ struct GnssEphemMsg {
   GnssTimeMsg ttr, toe, toc;
   double toe_tow = 0;
   std::uint32_t week = 0, iode = 0, iodc = 0, health = 0, code = 0;
-  double ura = 0, A = 0, e = 0, i0 = 0, omg = 0, OMG0 = 0, M0 = 0, delta_n = 0, OMG_dot = 0, i_dot = 0;
+  double ura = 0, a = 0, e = 0, i0 = 0, omg = 0, omg0 = 0, m0 = 0, delta_n = 0, omg_dot = 0, i_dot = 0;
   double cuc = 0, cus = 0, crc = 0, crs = 0, cic = 0, cis = 0;
-  double af0 = 0, af1 = 0, af2 = 0, tgd0 = 0, tgd1 = 0, A_dot = 0, n_dot = 0;
+  double af0 = 0, af1 = 0, af2 = 0, tgd0 = 0, tgd1 = 0, a_dot = 0, n_dot = 0;
 };
 struct GnssGloEphemMsg {
   static constexpr std::string_view kType = "gnss_comm/msg/GnssGloEphemMsg";

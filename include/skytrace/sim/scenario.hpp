@@ -125,6 +125,8 @@ struct OutputSettings {
   bool fix = true;     // fix.csv: the position engine on the first receiver's observations
   bool nmea = false;   // fix.nmea: NMEA 0183 sentences of that fix
   bool rtcm3 = false;  // obs.rtcm3: RTCM 3 MSM7 observations, station and ephemeris messages
+  bool mcap = false;   // bag/: a rosbag2 folder (MCAP) with the ROS 2 topics of every receiver
+  std::string mcap_compression = "zstd";  // zstd | lz4 | none
 };
 
 struct Scenario {

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -15,6 +16,8 @@
 
 #include "skytrace/core/error.hpp"
 #include "skytrace/io/rinex_obs.hpp"
+#include "skytrace/io/rtcm3.hpp"
+#include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/positioning/spp.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/scenario.hpp"
@@ -76,14 +79,62 @@ struct SinkKind {
 [[nodiscard]] Result<std::vector<std::unique_ptr<EpochSink>>> make_run_sinks(const RunContext& context);
 [[nodiscard]] bool run_needs_fixes(const RunContext& context);
 
-// A text or binary file in the staging folder written as it grows (through a 1 MiB buffer);
-// errors name the file.
-class StagedFile {
+// Byte-stream outputs are an encoding (NMEA, RTCM 3, fix CSV) of one receiver's epochs sent to a
+// destination (a file, TCP clients, a pseudo-terminal): StreamSink joins one of each.
+class StreamEncoder {
+ public:
+  virtual ~StreamEncoder() = default;
+  [[nodiscard]] virtual std::string header() const { return {}; }  // sent once, before the first epoch
+  [[nodiscard]] virtual Result<std::string> encode(const SinkEpoch& epoch) = 0;
+};
+class ByteStream {
+ public:
+  virtual ~ByteStream() = default;
+  [[nodiscard]] virtual Status write(std::string_view bytes) = 0;
+  [[nodiscard]] virtual Status close() { return Ok{}; }
+};
+
+// NMEA 0183 sentences of the epoch's fix (none without a fix).
+[[nodiscard]] std::unique_ptr<StreamEncoder> make_nmea_encoder();
+// fix.csv rows (io/fix_csv), with the header.
+[[nodiscard]] std::unique_ptr<StreamEncoder> make_fix_csv_encoder();
+// The RTCM 3 stream of the receiver as a reference station: MSM7 observations, 1006, and the
+// ephemeris messages of the records in use.
+[[nodiscard]] std::unique_ptr<StreamEncoder> make_rtcm3_encoder(const orbits::BroadcastEphemerides& ephemerides,
+                                                                const io::RtcmStation& station);
+
+class StreamSink final : public EpochSink {
+ public:
+  StreamSink(size_t receiver_index, std::unique_ptr<StreamEncoder> encoder, std::unique_ptr<ByteStream> stream)
+      : receiver_index_(receiver_index), encoder_(std::move(encoder)), stream_(std::move(stream)) {}
+  Status add(const SinkEpoch& epoch) override;
+  Status finish() override;
+
+ private:
+  size_t receiver_index_;
+  std::unique_ptr<StreamEncoder> encoder_;
+  std::unique_ptr<ByteStream> stream_;
+  bool started_ = false;
+};
+
+// Several sinks as one (one per receiver, say).
+class SinkGroup final : public EpochSink {
+ public:
+  void add_sink(std::unique_ptr<EpochSink> sink) { sinks_.push_back(std::move(sink)); }
+  Status add(const SinkEpoch& epoch) override;
+  Status finish() override;
+
+ private:
+  std::vector<std::unique_ptr<EpochSink>> sinks_;
+};
+
+// A file written as it grows (through a 1 MiB buffer); errors name the file.
+class StagedFile final : public ByteStream {
  public:
   [[nodiscard]] static Result<std::unique_ptr<StagedFile>> create(const std::filesystem::path& path);
-  ~StagedFile();
-  [[nodiscard]] Status append(std::string_view bytes);
-  [[nodiscard]] Status close();
+  ~StagedFile() override;
+  [[nodiscard]] Status write(std::string_view bytes) override;
+  [[nodiscard]] Status close() override;
   [[nodiscard]] const std::filesystem::path& path() const { return path_; }
 
  private:

@@ -1,0 +1,101 @@
+// output.mcap: the ROS 2 topics of every receiver in a rosbag2 folder `bag/` (one MCAP file),
+// stamped with the UTC of each epoch as a driver on a GNSS-synchronised clock would stamp them.
+#include <map>
+
+#include "skytrace/io/rosbag2.hpp"
+#include "skytrace/receiver/profile.hpp"
+#include "skytrace/sim/ros2_topics.hpp"
+#include "skytrace/sim/sinks.hpp"
+#include "skytrace/sim/streams.hpp"
+
+namespace skytrace::sim {
+namespace {
+
+io::QosProfileKind bag_qos(Ros2Qos qos) {
+  switch (qos) {
+    case Ros2Qos::kSensorData: return io::QosProfileKind::kSensorData;
+    case Ros2Qos::kDefault: return io::QosProfileKind::kDefault;
+    case Ros2Qos::kLatched: return io::QosProfileKind::kTransientLocal;
+  }
+  return io::QosProfileKind::kDefault;
+}
+
+class McapSink final : public EpochSink {
+ public:
+  Status add(const SinkEpoch& e) override {
+    Receiver& rx = receivers_[e.receiver_index];
+    const ros2::Time stamp = unix_utc_time(e.observations->true_time);
+    const auto stamp_ns = static_cast<std::uint64_t>(stamp.nanoseconds());
+    auto messages = rx.builder->build(*e.observations, e.fix, stamp);
+    if (!messages) return messages.error();
+    const Ros2Epoch& m = *messages;
+    auto put = [&](const char* topic, const auto& message) {
+      return bag_->write(rx.topic_ids.at(topic), stamp_ns, ros2::serialize(message));
+    };
+    if (auto st = put("fix", m.fix); !st) return st;
+    if (m.velocity) {
+      if (auto st = put("velocity", *m.velocity); !st) return st;
+    }
+    if (auto st = put("time_reference", m.time_reference); !st) return st;
+    for (const auto& sentence : m.nmea) {
+      if (auto st = put("nmea", sentence); !st) return st;
+    }
+    for (const auto& frame : m.rtcm) {
+      if (auto st = put("rtcm", frame); !st) return st;
+    }
+    if (auto st = put("gnss/measurements", m.measurements); !st) return st;
+    for (const auto& eph : m.ephemerides) {
+      if (auto st = put("gnss/ephemeris", eph); !st) return st;
+    }
+    for (const auto& eph : m.glonass_ephemerides) {
+      if (auto st = put("gnss/glonass_ephemeris", eph); !st) return st;
+    }
+    if (auto st = put("observations", m.observations); !st) return st;
+    if (auto st = put("sky", m.sky); !st) return st;
+    return put("rays", m.rays);
+  }
+  Status finish() override { return bag_->close(); }
+
+  static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
+    auto sink = std::make_unique<McapSink>();
+    io::Rosbag2Options options;
+    options.mcap.compression = c.scenario->output.mcap_compression == "none" ? "" : c.scenario->output.mcap_compression;
+    options.file_stem = "bag";  // not the staging folder's name
+    auto bag = io::Rosbag2Writer::open(c.staging_dir / "bag", options);
+    if (!bag) return bag.error();
+    sink->bag_ = std::move(*bag);
+    const auto world = world_origin(*c.scenario, c.resources->world);
+    for (const SinkReceiver& rx : c.receivers) {
+      auto profile = receiver::load_profile(rx.settings->profile, c.scenario->source.parent_path());
+      if (!profile) return profile.error();
+      const LocalFrame frame = world ? *world : LocalFrame{ecef_to_geodetic(rx.marker_m), 0.0};
+      Receiver& out = sink->receivers_.emplace_back();
+      out.builder = std::make_unique<Ros2EpochBuilder>(*c.resources->ephemerides, std::move(*profile), frame,
+                                                       rtcm_station(rx.marker_m, *rx.settings), Ros2TopicSettings{});
+      // One receiver: /skytrace/fix as the live node's default name; several: /skytrace/NAME/fix.
+      const std::string ns = c.receivers.size() == 1 ? "/skytrace/" : "/skytrace/" + rx.settings->name + "/";
+      for (const Ros2Topic& topic : ros2_receiver_topics()) {
+        const std::string type(topic.type);
+        auto id = sink->bag_->add_topic(ns + std::string(topic.name), type, ros2::message_definition(type),
+                                        bag_qos(topic.qos));
+        if (!id) return id.error();
+        out.topic_ids.emplace(std::string(topic.name), *id);
+      }
+    }
+    return std::unique_ptr<EpochSink>(std::move(sink));
+  }
+
+ private:
+  struct Receiver {
+    std::unique_ptr<Ros2EpochBuilder> builder;
+    std::map<std::string, std::uint16_t, std::less<>> topic_ids;
+  };
+  std::unique_ptr<io::Rosbag2Writer> bag_;
+  std::vector<Receiver> receivers_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<EpochSink>> make_mcap_sink(const RunContext& context) { return McapSink::make(context); }
+
+}  // namespace skytrace::sim
