@@ -198,9 +198,9 @@ class Node {
     period_s_ = 1.0 / config_.rate_hz;
   }
 
-  // Creates the DDS entities; errors name the topic.
-  Status open(const DiscoveryOptions& discovery) {
-    // The messages of an epoch, as the bag sink of `skytrace run` makes them.
+  // The messages of an epoch, as the bag sink of `skytrace run` makes them (an error: the
+  // scenario's receiver profile).
+  Status make_builder() {
     const sim::LiveSession& session = receiver_->session();
     auto profile = receiver::load_profile(session.receiver().profile, session.scenario().source.parent_path());
     if (!profile) return profile.error();
@@ -212,7 +212,11 @@ class Node {
     builder_ = std::make_unique<sim::Ros2EpochBuilder>(*session.resources().ephemerides, std::move(*profile),
                                                         session.world_frame(),
                                                         sim::rtcm_station(session.marker_ecef_m(), session.receiver()), settings);
+    return Ok{};
+  }
 
+  // Creates the DDS entities; errors name the topic.
+  Status open(const DiscoveryOptions& discovery) {
     auto participant = DdsParticipant::create(discovery, [this](const std::string& text) {
       log_.throttled(LogLevel::kWarn, 10.0, text.substr(0, text.find(':')), text);
     });
@@ -630,6 +634,10 @@ int run(int argc, char** argv) {
   }
   for (const auto& warning : receiver->warnings()) log.warn("skytrace: {}", warning);
   Node node(*config, *command_line, std::move(receiver), log);
+  if (auto st = node.make_builder(); !st) {
+    log.fatal("{} (from parameter scenario)", st.error().message);
+    return kExitInput;
+  }
   if (!node.open_rinex()) return kExitOutput;
   if (auto st = node.open(*discovery); !st) {
     log.fatal("{}", st.error().message);
