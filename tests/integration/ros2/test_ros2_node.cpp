@@ -501,6 +501,59 @@ TEST_F(Ros2NodeTest, TfChainPlacesTheAntennaAndBadTransformsAreReported) {
   EXPECT_TRUE(node_->running());
 }
 
+TEST_F(Ros2NodeTest, MovingModelsFollowTheirTransforms) {
+  // A roof over the antenna (a model that is not static: movable in live sessions), then lifted
+  // away through /tf as a simulator would move it; a listed model the world lacks is reported.
+  const auto world = dir_ / "roof.sdf";
+  std::ofstream(world) << R"(<?xml version="1.0"?>
+<sdf version="1.9">
+  <world name="roof_yard">
+    <spherical_coordinates>
+      <surface_model>EARTH_WGS84</surface_model>
+      <world_frame_orientation>ENU</world_frame_orientation>
+      <latitude_deg>48.1507</latitude_deg>
+      <longitude_deg>11.5690</longitude_deg>
+      <elevation>560.0</elevation>
+    </spherical_coordinates>
+    <model name="roof">
+      <pose>0 0 10 0 0 0</pose>
+      <link name="link"><collision name="collision"><geometry><box><size>400 400 1</size></box></geometry></collision></link>
+    </model>
+  </world>
+</sdf>
+)";
+  const auto scenario = dir_ / "roof.yaml";
+  std::ofstream(scenario) << "name: roof\ntime: {start: 2026-03-01T12:00:00, scale: GPST, duration_s: 3600, interval_s: 1}\n"
+                          << "receiver:\n  name: ROOF\n  position: {world_enu_m: [0.0, 0.0, 1.5]}\n"
+                          << "  elevation_mask_deg: 10\n  profile: ideal\n  signals: [G1C, E1C]\n"
+                          << "world: {sdf: " << world.string() << "}\nephemeris: {nominal: true}\n";
+  Subscription& sky = peer_->subscribe(topic("sky"), dds_type("skytrace_msgs", "Sky"), Qos::sensor_data());
+  Qos dynamic_qos = Qos::default_profile();
+  dynamic_qos.depth = 100;
+  auto& tf = peer_->advertise("rt/tf", dds_type("tf2_msgs", "TFMessage"), dynamic_qos);
+  start_node({"-p", "scenario:=" + scenario.string(), "-p", "moving_models:=[roof, ghost]", "-p", "rate_hz:=5"});
+  const auto blocked_in_last_sky = [&]() -> int {
+    const auto samples = sky.samples();
+    if (samples.empty()) return -1;
+    size_t left = 0;
+    int blocked = 0;
+    for (const auto& sat : wire::decode_sky(samples.back(), left).satellites) blocked += sat.status == 4 ? 1 : 0;
+    return blocked;
+  };
+  ASSERT_TRUE(wait_until([&] { return blocked_in_last_sky() >= 5; }, 30s)) << "the roof blocks the sky; log:\n" << log_text();
+  ASSERT_TRUE(wait_until(
+      [&] {
+        tf.write(wire::encode_tf({wire::Transform{{ros_time(now_s()), "world"}, "roof", {0.0, 0.0, -100.0}, {}},
+                                  wire::Transform{{ros_time(now_s()), "world"}, "ghost", {0.0, 0.0, 0.0}, {}}}));
+        return blocked_in_last_sky() == 0;
+      },
+      30s))
+      << "the roof did not move; log:\n"
+      << log_text();
+  EXPECT_TRUE(wait_until([&] { return log_has("moving model 'ghost'"); }, 5s)) << log_text();
+  EXPECT_TRUE(node_->running());
+}
+
 TEST_F(Ros2NodeTest, PoseTopicMovesTheFixAndBadPosesAreIgnored) {
   Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), Qos::sensor_data());
   const std::string pose_topic = namespace_ + "/antenna_pose_in";
