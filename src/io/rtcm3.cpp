@@ -181,10 +181,15 @@ std::uint32_t crc24q(std::span<const std::uint8_t> bytes) {
 }
 
 void BitWriter::put_unsigned(std::uint64_t value, int bits) {
-  for (int i = bits - 1; i >= 0; --i) {
-    if (bits_ % 8 == 0) bytes_.push_back(0);
-    if ((value >> i) & 1U) bytes_.back() |= static_cast<std::uint8_t>(0x80U >> (bits_ % 8));
-    ++bits_;
+  // Most significant bit first, as many bits per step as the current byte has room for.
+  while (bits > 0) {
+    const int used = static_cast<int>(bits_ % 8);
+    if (used == 0) bytes_.push_back(0);
+    const int take = std::min(8 - used, bits);
+    const auto chunk = static_cast<std::uint8_t>((value >> (bits - take)) & ((1U << take) - 1U));
+    bytes_.back() |= static_cast<std::uint8_t>(chunk << (8 - used - take));
+    bits -= take;
+    bits_ += static_cast<size_t>(take);
   }
 }
 

@@ -9,7 +9,14 @@ namespace {
 constexpr size_t kEncapsulationBytes = 4;
 }
 
-CdrWriter::CdrWriter() { buffer_.assign(std::begin(kCdrLittleEndian), std::end(kCdrLittleEndian)); }
+CdrWriter::CdrWriter(std::vector<std::uint8_t>&& storage) : buffer_(std::move(storage)) {
+  buffer_.assign(std::begin(kCdrLittleEndian), std::end(kCdrLittleEndian));
+}
+
+CdrWriter::CdrWriter() {
+  buffer_.reserve(256);
+  buffer_.assign(std::begin(kCdrLittleEndian), std::end(kCdrLittleEndian));
+}
 
 void CdrWriter::align(size_t alignment) {
   const size_t offset = buffer_.size() - kEncapsulationBytes;
@@ -20,10 +27,11 @@ void CdrWriter::align(size_t alignment) {
 template <typename T>
 void CdrWriter::write_primitive(T value) {
   static_assert(std::endian::native == std::endian::little, "CdrWriter writes little-endian CDR on little-endian hosts");
-  align(sizeof(T));
-  std::uint8_t bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  buffer_.insert(buffer_.end(), bytes, bytes + sizeof(T));
+  // Padding and value in one resize: the padding is zero-filled by resize.
+  const size_t offset = buffer_.size() - 4;
+  const size_t start = buffer_.size() + (sizeof(T) - offset % sizeof(T)) % sizeof(T);
+  buffer_.resize(start + sizeof(T));
+  std::memcpy(buffer_.data() + start, &value, sizeof(T));
 }
 
 template void CdrWriter::write_primitive<std::uint16_t>(std::uint16_t);

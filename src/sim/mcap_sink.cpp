@@ -26,11 +26,13 @@ class McapSink final : public EpochSink {
     Receiver& rx = receivers_[e.receiver_index];
     const ros2::Time stamp = unix_utc_time(e.observations->true_time);
     const auto stamp_ns = static_cast<std::uint64_t>(stamp.nanoseconds());
-    auto messages = rx.builder->build(*e.observations, e.fix, stamp);
-    if (!messages) return messages.error();
-    const Ros2Epoch& m = *messages;
-    auto put = [&](const char* topic, const auto& message) {
-      return bag_->write(rx.topic_ids.at(topic), stamp_ns, ros2::serialize(message));
+    if (auto st = rx.builder->build_into(rx.messages, *e.observations, e.fix, stamp); !st) return st;
+    const Ros2Epoch& m = rx.messages;
+    auto put = [&](std::string_view topic, const auto& message) -> Status {
+      const auto id = rx.topic_ids.find(topic);
+      if (id == rx.topic_ids.end()) return Ok{};  // a topic this bag leaves out
+      ros2::serialize_into(message, buffer_);
+      return bag_->write(id->second, stamp_ns, buffer_);
     };
     if (auto st = put("fix", m.fix); !st) return st;
     if (m.velocity) {
@@ -70,11 +72,17 @@ class McapSink final : public EpochSink {
       if (!profile) return profile.error();
       const LocalFrame frame = world ? *world : LocalFrame{ecef_to_geodetic(rx.marker_m), 0.0};
       Receiver& out = sink->receivers_.emplace_back();
+      // The bag carries what the run outputs: the RTCM and NMEA topics when output.rtcm3 and
+      // output.nmea ask for those streams.
+      Ros2TopicSettings settings;
+      settings.rtcm = c.scenario->output.rtcm3;
+      settings.nmea = c.scenario->output.nmea;
       out.builder = std::make_unique<Ros2EpochBuilder>(*c.resources->ephemerides, std::move(*profile), frame,
-                                                       rtcm_station(rx.marker_m, *rx.settings), Ros2TopicSettings{});
+                                                       rtcm_station(rx.marker_m, *rx.settings), settings);
       // One receiver: /skytrace/fix as the live node's default name; several: /skytrace/NAME/fix.
       const std::string ns = c.receivers.size() == 1 ? "/skytrace/" : "/skytrace/" + rx.settings->name + "/";
       for (const Ros2Topic& topic : ros2_receiver_topics()) {
+        if ((topic.name == "rtcm" && !settings.rtcm) || (topic.name == "nmea" && !settings.nmea)) continue;
         const std::string type(topic.type);
         auto id = sink->bag_->add_topic(ns + std::string(topic.name), type, ros2::message_definition(type),
                                         bag_qos(topic.qos));
@@ -88,9 +96,11 @@ class McapSink final : public EpochSink {
  private:
   struct Receiver {
     std::unique_ptr<Ros2EpochBuilder> builder;
+    Ros2Epoch messages;  // reused from epoch to epoch
     std::map<std::string, std::uint16_t, std::less<>> topic_ids;
   };
   std::unique_ptr<io::Rosbag2Writer> bag_;
+  std::vector<std::uint8_t> buffer_;  // CDR of one message
   std::vector<Receiver> receivers_;
 };
 

@@ -238,12 +238,18 @@ struct Ros2EpochBuilder::Impl {
   Ros2TopicSettings settings;
   std::optional<io::Rtcm3Stream> rtcm;
   std::set<const void*> published_records;
-  std::map<std::string, const SignalInfo*> signal_infos;
+  // Without RTCM the records in use are looked up only when a tracked satellite has none published
+  // yet, and every kRecordCheck_s otherwise (a new record replaces the old one every 1-2 h).
+  std::set<SatelliteId> satellites_with_records;
+  std::optional<GnssTime> last_record_check;
+  std::map<Signal, const SignalInfo*> signal_infos;
+  // The profile's noise at a C/N0, cached per signal and 0.05 dB-Hz step (C/N0 changes slowly).
+  std::map<std::pair<Signal, int>, receiver::TrackingNoise> noise_cache;
 };
 
 Ros2EpochBuilder::Ros2EpochBuilder(const orbits::BroadcastEphemerides& ephemerides, receiver::ReceiverProfile profile,
                                    LocalFrame world, io::RtcmStation station, Ros2TopicSettings settings)
-    : impl_(new Impl{ephemerides, std::move(profile), world, std::move(station), std::move(settings), {}, {}, {}}) {
+    : impl_(new Impl{ephemerides, std::move(profile), world, std::move(station), std::move(settings), {}, {}, {}, {}, {}, {}}) {
   reset();
 }
 
@@ -251,18 +257,37 @@ Ros2EpochBuilder::~Ros2EpochBuilder() = default;
 
 void Ros2EpochBuilder::reset() {
   impl_->published_records.clear();
+  impl_->satellites_with_records.clear();
+  impl_->last_record_check.reset();
   impl_->rtcm.reset();
   if (impl_->settings.rtcm) impl_->rtcm.emplace(io::Rtcm3StreamSettings{}, impl_->station);
 }
 
 Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epoch, const positioning::PositionFix* fix,
                                           const ros2::Time& stamp, bool restarted, bool pose_stale) {
-  Impl& s = *impl_;
   Ros2Epoch out;
+  if (auto st = build_into(out, epoch, fix, stamp, restarted, pose_stale); !st) return st.error();
+  return out;
+}
+
+namespace {
+// The i-th element of a reused vector, grown when needed (the caller trims it at the end).
+template <typename T>
+T& slot(std::vector<T>& items, size_t i) {
+  if (i == items.size()) items.emplace_back();
+  return items[i];
+}
+}  // namespace
+
+Status Ros2EpochBuilder::build_into(Ros2Epoch& out, const receiver::EpochObservations& epoch,
+                                    const positioning::PositionFix* fix, const ros2::Time& stamp, bool restarted,
+                                    bool pose_stale) {
+  Impl& s = *impl_;
   const ros2::Header header{stamp, s.settings.frame_id};
   const WeekTow tag = epoch.receiver_time.to_week_tow(TimeScale::kGpst);
 
   out.fix = to_navsat_fix(fix, header);
+  out.velocity.reset();
   if (fix != nullptr && fix->velocity_valid) {
     ros2::TwistWithCovarianceStamped v;
     v.header = header;
@@ -276,30 +301,46 @@ Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epo
     out.velocity = std::move(v);
   }
   // The receiver's time: its solution's when it has one, else its own tag.
-  out.time_reference.header = ros2::Header{stamp, s.settings.frame_id};
+  out.time_reference.header = header;
   out.time_reference.time_ref =
       unix_utc_time(fix != nullptr && fix->type != positioning::FixType::kNone ? fix->time : epoch.receiver_time);
   out.time_reference.source = s.settings.time_source;
-  if (fix != nullptr) {
+  out.nmea.clear();
+  if (fix != nullptr && s.settings.nmea) {
     for (std::string& sentence : io::nmea_epoch(*fix)) {
       while (!sentence.empty() && (sentence.back() == '\n' || sentence.back() == '\r')) sentence.pop_back();
       out.nmea.push_back(ros2::NmeaSentence{header, std::move(sentence)});
     }
   }
 
-  const RecordsInUse records = records_in_use(s.ephemerides, epoch);
-  if (s.rtcm) {
-    auto bytes = s.rtcm->epoch(to_rtcm_epoch(epoch), records.kepler, records.glonass);
-    if (!bytes) return bytes.error();
-    for (auto& frame : split_rtcm3_frames(*bytes)) out.rtcm.push_back(ros2::RtcmMessage{header, std::move(frame)});
+  constexpr double kRecordCheck_s = 30.0;
+  bool check_records = s.rtcm.has_value() || !s.last_record_check ||
+                       std::abs(epoch.receiver_time - *s.last_record_check) >= kRecordCheck_s;
+  for (size_t i = 0; i < epoch.satellites.size() && !check_records; ++i) {
+    const auto& sat = epoch.satellites[i];
+    check_records = !sat.signals.empty() && !s.satellites_with_records.contains(sat.satellite);
   }
-  for (const auto* e : records.kepler) {
-    if (gnss_comm_satellite(e->satellite) == 0 || !s.published_records.insert(e).second) continue;
-    out.ephemerides.push_back(to_gnss_comm(*e));
-  }
-  for (const auto* e : records.glonass) {
-    if (gnss_comm_satellite(e->satellite) == 0 || !s.published_records.insert(e).second) continue;
-    out.glonass_ephemerides.push_back(to_gnss_comm(*e));
+  out.rtcm.clear();
+  out.ephemerides.clear();
+  out.glonass_ephemerides.clear();
+  if (check_records) {
+    s.last_record_check = epoch.receiver_time;
+    const RecordsInUse records = records_in_use(s.ephemerides, epoch);
+    if (s.rtcm) {
+      auto bytes = s.rtcm->epoch(to_rtcm_epoch(epoch), records.kepler, records.glonass);
+      if (!bytes) return bytes.error();
+      for (auto& frame : split_rtcm3_frames(*bytes)) out.rtcm.push_back(ros2::RtcmMessage{header, std::move(frame)});
+    }
+    for (const auto* e : records.kepler) {
+      s.satellites_with_records.insert(e->satellite);
+      if (gnss_comm_satellite(e->satellite) == 0 || !s.published_records.insert(e).second) continue;
+      out.ephemerides.push_back(to_gnss_comm(*e));
+    }
+    for (const auto* e : records.glonass) {
+      s.satellites_with_records.insert(e->satellite);
+      if (gnss_comm_satellite(e->satellite) == 0 || !s.published_records.insert(e).second) continue;
+      out.glonass_ephemerides.push_back(to_gnss_comm(*e));
+    }
   }
 
   std::set<SatelliteId> used;
@@ -317,37 +358,54 @@ Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epo
   out.sky.gps_week = out.observations.gps_week;
   out.sky.gps_tow_s = tag.tow_s;
 
-  ros2::Marker rays;
+  if (out.rays.markers.size() != 1) out.rays.markers.resize(1);
+  ros2::Marker& rays = out.rays.markers.front();
   rays.header = ros2::Header{stamp, s.settings.world_frame};
   rays.ns = "skytrace_rays";
   rays.type = ros2::Marker::kLineList;
   rays.pose.orientation.w = 1.0;
   rays.scale.x = 0.05;  // line width, m
+  rays.points.clear();
+  rays.colors.clear();
   const Eigen::Vector3d antenna_ecef = epoch.receiver.position_m;
   const Eigen::Vector3d antenna_world = s.world.from_ecef(antenna_ecef);
   const Eigen::Matrix3d to_world = s.world.ecef_to_local_rotation();
 
   const ros2::GnssTimeMsg meas_time = gnss_time(epoch.receiver_time);
+  size_t n_observations = 0, n_meas = 0, n_sky = 0;
   for (const auto& sat : epoch.satellites) {
     const bool has_position = sat.status != receiver::SatelliteStatus::kNoEphemeris || sat.waiting_for_ephemeris;
     const bool vegetation = sat.vegetation_path_m > 0.0;
     const bool nlos = sat.path_kind == receiver::PathKind::kNlos;
-    const std::string id = sat.satellite.to_string();
-    const std::string system(1, system_letter(sat.satellite.system));
+    const char system = system_letter(sat.satellite.system);
     const auto prn = static_cast<std::uint16_t>(sat.satellite.prn());
+    const std::uint32_t gnss_comm_sat = gnss_comm_satellite(sat.satellite);
+    const bool tracked = !sat.signals.empty();
+    if (!tracked && !(has_position && sat.direction.elevation_deg >= 0.0)) continue;
+    const std::string id = sat.satellite.to_string();
 
-    ros2::GnssObsMsg obs;
-    obs.time = meas_time;
-    obs.sat = gnss_comm_satellite(sat.satellite);
+    ros2::GnssObsMsg* obs = nullptr;
+    if (gnss_comm_sat != 0 && tracked) {
+      obs = &slot(out.measurements.meas, n_meas++);
+      obs->time = meas_time;
+      obs->sat = gnss_comm_sat;
+      for (auto* values : {&obs->freqs, &obs->cn0, &obs->psr, &obs->psr_std, &obs->cp, &obs->cp_std, &obs->dopp,
+                           &obs->dopp_std}) {
+        values->clear();
+      }
+      obs->lli.clear();
+      obs->code.clear();
+      obs->status.clear();
+    }
     double best_cn0 = 0.0;
     for (const auto& m : sat.signals) {
       best_cn0 = std::max(best_cn0, m.cn0_dbhz);
-      ros2::Observation o;
+      ros2::Observation& o = slot(out.observations.observations, n_observations++);
       o.satellite = id;
-      o.system = system;
+      o.system.assign(1, system);
       o.prn = prn;
       o.glonass_channel = static_cast<std::int8_t>(sat.glonass_channel);
-      o.signal = m.signal.code();
+      o.signal.assign({m.signal.band, m.signal.attribute});
       o.carrier_frequency_hz = m.carrier_hz;
       o.pseudorange_m = m.pseudorange_m;
       o.carrier_phase_cycles = m.carrier_phase_cycles;
@@ -364,35 +422,39 @@ Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epo
       o.blocked = false;  // blocked satellites are not tracked (they are on `sky`)
       o.vegetation_path_m = sat.vegetation_path_m;
       o.vegetation_attenuation_db = sat.vegetation_attenuation_db;
-      out.observations.observations.push_back(std::move(o));
 
-      if (obs.sat != 0) {
-        auto& info = s.signal_infos[id.substr(0, 1) + m.signal.code()];
-        if (info == nullptr) info = find_signal_info(m.signal);
-        receiver::TrackingNoise noise;
-        if (info != nullptr) noise = receiver::tracking_noise(s.profile, *info, m.carrier_hz, m.cn0_dbhz);
+      if (obs != nullptr) {
+        const auto key = std::make_pair(m.signal, static_cast<int>(std::lround(m.cn0_dbhz * 20.0)));
+        auto cached = s.noise_cache.find(key);
+        if (cached == s.noise_cache.end()) {
+          const SignalInfo*& info = s.signal_infos[m.signal];
+          if (info == nullptr) info = find_signal_info(m.signal);
+          receiver::TrackingNoise computed;
+          if (info != nullptr) computed = receiver::tracking_noise(s.profile, *info, m.carrier_hz, key.second / 20.0);
+          cached = s.noise_cache.emplace(key, computed).first;
+        }
+        const receiver::TrackingNoise& noise = cached->second;
         const double wavelength_m = constants::kSpeedOfLight_mps / m.carrier_hz;
-        obs.freqs.push_back(m.carrier_hz);
-        obs.cn0.push_back(m.cn0_dbhz);
-        obs.lli.push_back(static_cast<std::uint8_t>((m.loss_of_lock ? 1 : 0) | (m.half_cycle_unresolved ? 2 : 0)));
-        obs.code.push_back(gnss_comm_code(m.signal));
-        obs.psr.push_back(m.pseudorange_m);
-        obs.psr_std.push_back(std::max(noise.code_m, kMinCodeStd_m));
-        obs.cp.push_back(m.carrier_phase_cycles);
-        obs.cp_std.push_back(std::max(noise.phase_m / wavelength_m, kMinPhaseStd_cycles));
-        obs.dopp.push_back(m.doppler_hz);
-        obs.dopp_std.push_back(std::max(noise.doppler_mps / wavelength_m, kMinDopplerStd_hz));
+        obs->freqs.push_back(m.carrier_hz);
+        obs->cn0.push_back(m.cn0_dbhz);
+        obs->lli.push_back(static_cast<std::uint8_t>((m.loss_of_lock ? 1 : 0) | (m.half_cycle_unresolved ? 2 : 0)));
+        obs->code.push_back(gnss_comm_code(m.signal));
+        obs->psr.push_back(m.pseudorange_m);
+        obs->psr_std.push_back(std::max(noise.code_m, kMinCodeStd_m));
+        obs->cp.push_back(m.carrier_phase_cycles);
+        obs->cp_std.push_back(std::max(noise.phase_m / wavelength_m, kMinPhaseStd_cycles));
+        obs->dopp.push_back(m.doppler_hz);
+        obs->dopp_std.push_back(std::max(noise.doppler_mps / wavelength_m, kMinDopplerStd_hz));
         // bit 0 pseudorange valid, 1 phase valid, 2 half cycle valid, 3 half cycle subtracted
-        obs.status.push_back(static_cast<std::uint8_t>(0x1 | 0x2 | (m.half_cycle_unresolved ? 0 : 0x4)));
+        obs->status.push_back(static_cast<std::uint8_t>(0x1 | 0x2 | (m.half_cycle_unresolved ? 0 : 0x4)));
       }
     }
-    if (obs.sat != 0 && !obs.psr.empty()) out.measurements.meas.push_back(std::move(obs));
 
     // The sky: every satellite with a position above the horizon.
     if (has_position && sat.direction.elevation_deg >= 0.0) {
-      ros2::SatelliteSky sky;
+      ros2::SatelliteSky& sky = slot(out.sky.satellites, n_sky++);
       sky.satellite = id;
-      sky.system = system;
+      sky.system.assign(1, system);
       sky.prn = prn;
       sky.azimuth_deg = sat.direction.azimuth_deg;
       sky.elevation_deg = sat.direction.elevation_deg;
@@ -402,7 +464,6 @@ Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epo
       sky.vegetation_path_m = sat.vegetation_path_m;
       sky.vegetation_attenuation_db = sat.vegetation_attenuation_db;
       sky.detail = sat.detail;
-      out.sky.satellites.push_back(std::move(sky));
       if (sat.status != receiver::SatelliteStatus::kNoSignal && sat.status != receiver::SatelliteStatus::kUnhealthy) {
         ros2::ColorRGBA colour;
         switch (sat.status) {
@@ -422,9 +483,11 @@ Result<Ros2Epoch> Ros2EpochBuilder::build(const receiver::EpochObservations& epo
       }
     }
   }
+  out.observations.observations.resize(n_observations);
+  out.measurements.meas.resize(n_meas);
+  out.sky.satellites.resize(n_sky);
   rays.action = rays.points.empty() ? ros2::Marker::kActionDeleteAll : ros2::Marker::kActionAdd;
-  out.rays.markers.push_back(std::move(rays));
-  return out;
+  return Ok{};
 }
 
 }  // namespace skytrace::sim

@@ -144,10 +144,11 @@ class StagingDir {
   int lock_fd_ = -1;
 };
 
-// Every receiver's epoch of one instant.
+// Every receiver's epoch of one instant, with its fix when the run computes fixes.
 struct QueuedEpoch {
   std::int64_t index = 0;
   std::vector<receiver::EpochObservations> receivers;
+  std::vector<std::optional<positioning::PositionFix>> fixes;
 };
 using EpochBatch = std::vector<QueuedEpoch>;
 
@@ -303,14 +304,14 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   if (!sinks) return sinks.error();
 
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  std::vector<std::optional<positioning::PositionFix>> fixes(receivers.size());
   std::vector<std::optional<positioning::BaseEpoch>> base_epochs(receivers.size());
-  // Hands every receiver's epoch of one instant to the sinks, with the fixes when computed: the
-  // bases' first, so that their rovers' RTK fixes have this instant's corrections.
-  auto write_instant = [&](std::int64_t index, const std::vector<receiver::EpochObservations>& epochs) -> Status {
-    if (cancellation_requested()) return cancelled_error();
+  // The receivers' fixes of one instant: the bases' epochs first, so that their rovers' RTK fixes
+  // have this instant's corrections. Computed where the observations are (the worker thread when
+  // there is one), which balances the two threads.
+  auto solve_instant = [&](QueuedEpoch& instant) -> Status {
+    const auto& epochs = instant.receivers;
+    instant.fixes.assign(receivers.size(), std::nullopt);
     for (size_t i = 0; i < receivers.size(); ++i) {
-      fixes[i].reset();
       base_epochs[i].reset();
       if (receivers[i].is_base) {
         // The base's known position: its marker's antenna reference point.
@@ -324,8 +325,15 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       if (rx.base_index && base_epochs[*rx.base_index]) base = &*base_epochs[*rx.base_index];
       auto fix = rx.fixes->solve(epochs[i], base);
       if (!fix) return fix.error();
-      fixes[i] = std::move(*fix);
+      instant.fixes[i] = std::move(*fix);
     }
+    return Ok{};
+  };
+  // Hands every receiver's epoch of one instant to the sinks.
+  auto write_instant = [&](const QueuedEpoch& instant) -> Status {
+    if (cancellation_requested()) return cancelled_error();
+    const std::int64_t index = instant.index;
+    const auto& epochs = instant.receivers;
     for (size_t i = 0; i < receivers.size(); ++i) {
       const receiver::EpochObservations& epoch = epochs[i];
       for (const auto& sat : epoch.satellites) {
@@ -334,7 +342,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         ++summary.satellite_epochs_per_system[std::string(system_name(sat.satellite.system))];
         summary.observations += static_cast<std::int64_t>(sat.signals.size());
       }
-      const SinkEpoch sink_epoch{index, i, &context.receivers[i], &epoch, fixes[i] ? &*fixes[i] : nullptr};
+      const auto& fix = instant.fixes[i];
+      const SinkEpoch sink_epoch{index, i, &context.receivers[i], &epoch, fix ? &*fix : nullptr};
       for (auto& sink : *sinks) {
         if (auto st = sink->add(sink_epoch); !st) return st;
       }
@@ -359,7 +368,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       if (!epoch) return epoch.error();
       out.receivers.push_back(std::move(*epoch));
     }
-    return Ok{};
+    return solve_instant(out);
   };
 
   if (!options.write_truth) {
@@ -368,7 +377,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     QueuedEpoch instant;
     for (std::int64_t k = 0; k < epoch_count; ++k) {
       if (auto st = observe_instant(k, instant); !st) return st.error();
-      if (auto st = write_instant(k, instant.receivers); !st) return st.error();
+      if (auto st = write_instant(instant); !st) return st.error();
     }
   } else {
     // With truth.csv, formatting costs as much as computing: a worker computes the epochs (the
@@ -400,7 +409,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     Status consumed = Ok{};
     while (auto batch = queue.pop()) {
       for (const QueuedEpoch& item : *batch) {
-        consumed = write_instant(item.index, item.receivers);
+        consumed = write_instant(item);
         if (!consumed) break;
       }
       if (!consumed) break;

@@ -21,6 +21,8 @@ inline constexpr std::uint8_t kCdrLittleEndian[4] = {0x00, 0x01, 0x00, 0x00};
 class CdrWriter {
  public:
   CdrWriter();  // starts with the encapsulation header
+  // The same, writing into `storage` (cleared; its capacity is reused).
+  explicit CdrWriter(std::vector<std::uint8_t>&& storage);
   void write_bool(bool value) { write_u8(value ? 1 : 0); }
   void write_u8(std::uint8_t value) { buffer_.push_back(value); }
   void write_i8(std::int8_t value) { write_u8(static_cast<std::uint8_t>(value)); }

@@ -360,6 +360,14 @@ template <typename Message>
   return writer.take();
 }
 
+// The same into `out`, reusing its capacity (a publisher's buffer from message to message).
+template <typename Message>
+void serialize_into(const Message& message, std::vector<std::uint8_t>& out) {
+  CdrWriter writer(std::move(out));
+  encode(writer, message);
+  out = writer.take();
+}
+
 template <typename Message>
 [[nodiscard]] Result<Message> deserialize(std::span<const std::uint8_t> bytes) {
   CdrReader reader(bytes);

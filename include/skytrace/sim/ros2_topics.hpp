@@ -40,6 +40,7 @@ struct Ros2TopicSettings {
   double ray_length_m = 100.0;
   std::string time_source = "gps";        // TimeReference.source
   bool rtcm = true;                       // the RTCM 3 stream of the receiver as a reference station
+  bool nmea = true;                       // NMEA sentences of the fix
 };
 
 // The messages of one receiver epoch.
@@ -71,6 +72,11 @@ class Ros2EpochBuilder {
   // engine: NavSatFix STATUS_NO_FIX). `restarted`/`pose_stale` go into the observations message.
   [[nodiscard]] Result<Ros2Epoch> build(const receiver::EpochObservations& epoch, const positioning::PositionFix* fix,
                                         const ros2::Time& stamp, bool restarted = false, bool pose_stale = false);
+  // The same into `out`, reusing its storage (strings and vectors keep their capacity from epoch
+  // to epoch: a long run allocates little).
+  [[nodiscard]] Status build_into(Ros2Epoch& out, const receiver::EpochObservations& epoch,
+                                  const positioning::PositionFix* fix, const ros2::Time& stamp, bool restarted = false,
+                                  bool pose_stale = false);
   // A simulation reset: ephemerides are sent again, RTCM starts anew.
   void reset();
 
