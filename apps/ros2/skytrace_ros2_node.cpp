@@ -490,7 +490,8 @@ class Node {
   void publish(const char* name, const Message& message) {
     const auto it = outputs_.find(name);
     if (it == outputs_.end() || !it->second.wanted()) return;
-    if (auto st = it->second.writer->write(ros2::serialize(message)); !st) {
+    ros2::serialize_into(message, cdr_);
+    if (auto st = it->second.writer->write(cdr_); !st) {
       log_.throttled(LogLevel::kWarn, 10.0, name, fmt::format("{}: {}", name, st.error().message));
     }
   }
@@ -518,12 +519,13 @@ class Node {
       log_.throttled(LogLevel::kWarn, 5.0, "stale",
                      fmt::format("antenna pose is stale (none for {:.1f} s): the receiver is held where it was", config_.pose_timeout_s));
     }
-    auto messages = builder_->build(e.observations, e.fix ? &*e.fix : nullptr, from_ns(stamp_ns), e.restarted, e.pose_stale);
-    if (!messages) {
-      log_.throttled(LogLevel::kError, 10.0, "build", fmt::format("epoch {:.3f} s: {}", time_s, messages.error().message));
+    if (auto st = builder_->build_into(messages_, e.observations, e.fix ? &*e.fix : nullptr, from_ns(stamp_ns), e.restarted,
+                                       e.pose_stale);
+        !st) {
+      log_.throttled(LogLevel::kError, 10.0, "build", fmt::format("epoch {:.3f} s: {}", time_s, st.error().message));
       return;
     }
-    const sim::Ros2Epoch& m = *messages;
+    const sim::Ros2Epoch& m = messages_;
     publish("fix", m.fix);
     if (m.velocity) publish("velocity", *m.velocity);
     publish("time_reference", m.time_reference);
@@ -579,6 +581,8 @@ class Node {
   TfBuffer tf_buffer_;
   std::vector<double> latencies_s_;
   std::unique_ptr<sim::Ros2EpochBuilder> builder_;
+  sim::Ros2Epoch messages_;           // reused from epoch to epoch (storage kept)
+  std::vector<std::uint8_t> cdr_;     // one sample's bytes, reused
   // Destroyed after the endpoints below (declared first): the participant owns their entities.
   std::unique_ptr<DdsParticipant> dds_;
   std::vector<Guid> reader_gids_, writer_gids_;
