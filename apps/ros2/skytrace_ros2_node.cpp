@@ -178,17 +178,12 @@ struct Output {
   [[nodiscard]] bool wanted() const { return writer && (always || writer->matched_readers() > 0); }
 };
 
-// The QoS of a topic of sim::ros2_receiver_topics(), deeper histories where an epoch writes
-// several samples (NMEA, RTCM, ephemerides) so that a burst is delivered whole.
+// The QoS of a topic of sim::ros2_receiver_topics() (REP 2003, see there).
 QosProfile topic_qos(const sim::Ros2Topic& topic) {
   QosProfile qos = topic.qos == sim::Ros2Qos::kSensorData ? QosProfile::sensor_data()
-                   : topic.qos == sim::Ros2Qos::kLatched  ? QosProfile::default_profile().keep_last(1).transient_local()
+                   : topic.qos == sim::Ros2Qos::kLatched  ? QosProfile::default_profile().transient_local()
                                                           : QosProfile::default_profile();
-  if (topic.name == "nmea" || topic.name == "rtcm") qos = qos.keep_last(100);
-  // A record is published once, when the receiver starts to use it: kept for estimators that
-  // start after the node (transient local is compatible with volatile subscriptions).
-  if (topic.name.find("ephemeris") != std::string_view::npos) qos = qos.keep_last(500).transient_local();
-  return qos;
+  return qos.keep_last(topic.depth);
 }
 
 class Node {

@@ -138,17 +138,19 @@ ros2::GnssGloEphemMsg to_gnss_comm(const orbits::GlonassEphemeris& e) {
 
 const std::vector<Ros2Topic>& ros2_receiver_topics() {
   static const std::vector<Ros2Topic> topics = {
-      {"fix", ros2::NavSatFix::kType, Ros2Qos::kSensorData},
-      {"velocity", ros2::TwistWithCovarianceStamped::kType, Ros2Qos::kSensorData},
-      {"time_reference", ros2::TimeReference::kType, Ros2Qos::kSensorData},
-      {"nmea", ros2::NmeaSentence::kType, Ros2Qos::kDefault},
-      {"rtcm", ros2::RtcmMessage::kType, Ros2Qos::kDefault},
-      {"gnss/measurements", ros2::GnssMeasMsg::kType, Ros2Qos::kSensorData},
-      {"gnss/ephemeris", ros2::GnssEphemMsg::kType, Ros2Qos::kDefault},
-      {"gnss/glonass_ephemeris", ros2::GnssGloEphemMsg::kType, Ros2Qos::kDefault},
-      {"observations", ros2::Observations::kType, Ros2Qos::kSensorData},
-      {"sky", ros2::Sky::kType, Ros2Qos::kSensorData},
-      {"rays", ros2::MarkerArray::kType, Ros2Qos::kDefault},
+      {"fix", ros2::NavSatFix::kType, Ros2Qos::kDefault, 10},
+      {"velocity", ros2::TwistWithCovarianceStamped::kType, Ros2Qos::kDefault, 10},
+      {"time_reference", ros2::TimeReference::kType, Ros2Qos::kDefault, 10},
+      {"nmea", ros2::NmeaSentence::kType, Ros2Qos::kDefault, 100},
+      {"rtcm", ros2::RtcmMessage::kType, Ros2Qos::kDefault, 100},
+      {"gnss/measurements", ros2::GnssMeasMsg::kType, Ros2Qos::kDefault, 10},
+      // A record is published once, when the receiver starts to use it: kept for estimators that
+      // start after the node.
+      {"gnss/ephemeris", ros2::GnssEphemMsg::kType, Ros2Qos::kLatched, 500},
+      {"gnss/glonass_ephemeris", ros2::GnssGloEphemMsg::kType, Ros2Qos::kLatched, 500},
+      {"observations", ros2::Observations::kType, Ros2Qos::kDefault, 10},
+      {"sky", ros2::Sky::kType, Ros2Qos::kDefault, 10},
+      {"rays", ros2::MarkerArray::kType, Ros2Qos::kDefault, 10},
   };
   return topics;
 }

@@ -21,15 +21,17 @@
 
 namespace skytrace::sim {
 
-// ROS 2's QoS profiles the topics use: rclcpp's SensorDataQoS (best effort, volatile, keep last
-// 5), the default (reliable, volatile, keep last 10), and a latched one (reliable, transient local,
-// keep last 1) as /tf_static uses.
+// The QoS a receiver's topics are offered with, after REP 2003: a sensor driver publishes with the
+// system default profile (reliable, volatile; keep last `depth`), which both reliable and
+// best-effort (rclcpp::SensorDataQoS) subscriptions match; records a late subscriber needs
+// (ephemerides) are latched (reliable, transient local).
 enum class Ros2Qos { kSensorData, kDefault, kLatched };
 
 struct Ros2Topic {
   std::string_view name;  // relative to the node's namespace: "fix", "gnss/measurements"
   std::string_view type;  // "sensor_msgs/msg/NavSatFix"
   Ros2Qos qos;
+  int depth = 10;  // history: deeper where one epoch writes several samples (NMEA, RTCM, records)
 };
 // Every topic a receiver publishes, in a fixed order.
 [[nodiscard]] const std::vector<Ros2Topic>& ros2_receiver_topics();

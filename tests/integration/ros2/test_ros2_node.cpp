@@ -188,18 +188,19 @@ TEST_F(Ros2NodeTest, PeerDiscoversTheNodeAndDecodesEveryTopic) {
   for (auto* s : {&fix, &time_reference, &observations, &sky, &rays, &meas}) expect_samples(*s, 3, "epochs");
   for (auto* s : {&velocity, &nmea, &rtcm, &ephem, &glo_ephem, &discovery}) expect_samples(*s, 1, "messages");
 
-  // Discovery: every topic under its ROS 2 name and type, with the QoS of its profile.
+  // Discovery: every topic under its ROS 2 name and type, reliable as REP 2003 has sensor drivers
+  // publish (the best-effort subscriptions above match them, as rclcpp's SensorDataQoS does).
   const std::map<std::string, std::pair<std::string, bool>> expected_writers = {
-      {"fix", {dds_type("sensor_msgs", "NavSatFix"), false}},
-      {"velocity", {dds_type("geometry_msgs", "TwistWithCovarianceStamped"), false}},
-      {"time_reference", {dds_type("sensor_msgs", "TimeReference"), false}},
+      {"fix", {dds_type("sensor_msgs", "NavSatFix"), true}},
+      {"velocity", {dds_type("geometry_msgs", "TwistWithCovarianceStamped"), true}},
+      {"time_reference", {dds_type("sensor_msgs", "TimeReference"), true}},
       {"nmea", {dds_type("nmea_msgs", "Sentence"), true}},
       {"rtcm", {dds_type("rtcm_msgs", "Message"), true}},
-      {"gnss/measurements", {dds_type("gnss_comm", "GnssMeasMsg"), false}},
+      {"gnss/measurements", {dds_type("gnss_comm", "GnssMeasMsg"), true}},
       {"gnss/ephemeris", {dds_type("gnss_comm", "GnssEphemMsg"), true}},
       {"gnss/glonass_ephemeris", {dds_type("gnss_comm", "GnssGloEphemMsg"), true}},
-      {"observations", {dds_type("skytrace_msgs", "Observations"), false}},
-      {"sky", {dds_type("skytrace_msgs", "Sky"), false}},
+      {"observations", {dds_type("skytrace_msgs", "Observations"), true}},
+      {"sky", {dds_type("skytrace_msgs", "Sky"), true}},
       {"rays", {dds_type("visualization_msgs", "MarkerArray"), true}},
   };
   std::map<std::string, test::ros2_peer::Guid> writer_guid;
@@ -613,11 +614,13 @@ TEST_F(Ros2NodeTest, OdometryPlacesTheAntennaByItsLeverArm) {
 }
 
 TEST_F(Ros2NodeTest, IncompatibleQosIsLoggedBothWays) {
-  // A reliable subscription to the best-effort fix, a best-effort publisher to the reliable /tf.
-  Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), Qos::default_profile());
+  // A transient-local subscription to the volatile fix, a best-effort publisher to the reliable /tf.
+  Qos latched = Qos::default_profile();
+  latched.transient_local = true;
+  Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), latched);
   auto& tf = peer_->advertise("rt/tf", dds_type("tf2_msgs", "TFMessage"), Qos::sensor_data());
   start_node({"-p", "pose_source:=tf", "-p", "rate_hz:=5"});
-  EXPECT_TRUE(wait_until([&] { return log_has("requests incompatible QoS (RELIABILITY)"); }, 30s)) << log_text();
+  EXPECT_TRUE(wait_until([&] { return log_has("requests incompatible QoS (DURABILITY)"); }, 30s)) << log_text();
   EXPECT_TRUE(wait_until([&] { return log_has("offers incompatible QoS (RELIABILITY)"); }, 30s)) << log_text();
   EXPECT_GT(fix.incompatible_qos_count(), 0U);
   EXPECT_EQ(tf.matched(), 0);
