@@ -8,6 +8,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
 #include <cstring>
 #include <iterator>
 #include <limits>
@@ -152,9 +156,22 @@ void append_channel(ByteSink& sink, const ChannelRecord& channel) {
   sink.end_record(at);
 }
 
+// A filled chunk on its way to the file: its uncompressed records and, per channel, (log time,
+// offset in it) of its messages.
+struct ChunkJob {
+  std::vector<std::uint8_t> records;
+  std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> message_index;
+  std::uint64_t start_time = 0, end_time = 0;
+  bool has_messages = false;
+};
+
 }  // namespace
 
+// Chunks are compressed and written by a worker thread while the caller fills the next one (at
+// most kQueuedChunks wait, so memory stays bounded); everything else that goes into the file waits
+// until the worker is idle (drain), so records keep their order.
 struct McapWriter::State {
+  static constexpr size_t kQueuedChunks = 2;
   std::filesystem::path path;
   McapOptions options;
   int fd = -1;
@@ -163,8 +180,15 @@ struct McapWriter::State {
   std::uint64_t written_bytes = 0;    // bytes already in the file
   std::uint32_t data_section_crc = 0;
   bool in_data_section = true;
-  std::optional<Error> failure;  // the first write error; every later call returns it
+  std::optional<Error> failure;  // the first write error; every later call returns it (under `mutex`)
   bool closed = false;
+
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::deque<ChunkJob> jobs;
+  bool worker_busy = false, stopping = false;
+  std::vector<std::vector<std::uint8_t>> spare_chunks;  // written chunks' buffers, for reuse
+  std::thread worker;
 
   std::vector<SchemaRecord> schemas;    // id = index + 1
   std::vector<ChannelRecord> channels;  // id = index + 1 (as the reference writers count)
@@ -182,8 +206,47 @@ struct McapWriter::State {
   ZSTD_CCtx* zstd = nullptr;
 
   ~State() {
+    stop_worker();
     if (zstd != nullptr) ZSTD_freeCCtx(zstd);
     if (fd >= 0) ::close(fd);
+  }
+
+  void stop_worker() {
+    if (!worker.joinable()) return;
+    {
+      std::lock_guard lock(mutex);
+      stopping = true;
+    }
+    changed.notify_all();
+    worker.join();
+  }
+
+  void work() {
+    std::unique_lock lock(mutex);
+    for (;;) {
+      changed.wait(lock, [&] { return stopping || !jobs.empty(); });
+      if (jobs.empty()) return;  // stopping, nothing left
+      ChunkJob job = std::move(jobs.front());
+      jobs.pop_front();
+      worker_busy = true;
+      const bool failed = failure.has_value();
+      lock.unlock();
+      Status written = failed ? Status(Ok{}) : write_chunk(job);
+      lock.lock();
+      if (!written.ok() && !failure) failure = written.error();
+      job.records.clear();
+      spare_chunks.push_back(std::move(job.records));
+      worker_busy = false;
+      changed.notify_all();
+    }
+  }
+
+  // Waits until every handed-over chunk is in the file; the first failure if any.
+  Status drain() {
+    std::unique_lock lock(mutex);
+    changed.wait(lock, [&] { return jobs.empty() && !worker_busy; });
+    if (failure) return *failure;
+    return Ok{};
   }
 
   [[nodiscard]] std::uint64_t offset() const { return written_bytes + pending.size(); }
@@ -193,13 +256,15 @@ struct McapWriter::State {
   }
 
   // Refuses calls after a failure or after close().
-  [[nodiscard]] std::optional<Error> usable() const {
+  [[nodiscard]] std::optional<Error> usable() {
+    std::lock_guard lock(mutex);
     if (failure) return failure;
     if (closed) return output_error("MCAP writer already closed");
     return std::nullopt;
   }
 
   Status fail(Error error) {
+    std::lock_guard lock(mutex);
     if (!failure) failure = std::move(error);
     return *failure;
   }
@@ -227,40 +292,68 @@ struct McapWriter::State {
     return Ok{};
   }
 
-  Result<std::span<const std::uint8_t>> compress_chunk() {
+  Result<std::span<const std::uint8_t>> compress_chunk(const std::vector<std::uint8_t>& records) {
     const std::string& method = options.compression;
-    if (method.empty()) return std::span<const std::uint8_t>(chunk);
+    if (method.empty()) return std::span<const std::uint8_t>(records);
     if (method == "zstd") {
       if (zstd == nullptr) zstd = ZSTD_createCCtx();
       if (zstd == nullptr) return output_error("zstd: cannot create a compression context");
-      compressed.resize(ZSTD_compressBound(chunk.size()));
-      const size_t n = ZSTD_compressCCtx(zstd, compressed.data(), compressed.size(), chunk.data(), chunk.size(), kZstdLevel);
+      compressed.resize(ZSTD_compressBound(records.size()));
+      const size_t n = ZSTD_compressCCtx(zstd, compressed.data(), compressed.size(), records.data(), records.size(), kZstdLevel);
       if (ZSTD_isError(n) != 0U) return output_error(std::string("zstd: ") + ZSTD_getErrorName(n));
       return std::span<const std::uint8_t>(compressed.data(), n);
     }
     // lz4: the LZ4 frame format (magic 0x184D2204), which MCAP readers expect.
     LZ4F_preferences_t preferences;
     std::memset(&preferences, 0, sizeof preferences);
-    preferences.frameInfo.contentSize = chunk.size();
-    compressed.resize(LZ4F_compressFrameBound(chunk.size(), &preferences));
-    const size_t n = LZ4F_compressFrame(compressed.data(), compressed.size(), chunk.data(), chunk.size(), &preferences);
+    preferences.frameInfo.contentSize = records.size();
+    compressed.resize(LZ4F_compressFrameBound(records.size(), &preferences));
+    const size_t n = LZ4F_compressFrame(compressed.data(), compressed.size(), records.data(), records.size(), &preferences);
     if (LZ4F_isError(n) != 0U) return output_error(std::string("lz4: ") + LZ4F_getErrorName(n));
     return std::span<const std::uint8_t>(compressed.data(), n);
   }
 
-  // Writes the chunk being filled (if any), its Message Index records, and remembers its index.
+  // Hands the chunk being filled (if any) to the worker, which writes it; the worker's failure, if
+  // one has happened.
   Status finish_chunk() {
     if (chunk.empty()) return Ok{};
-    const std::uint32_t uncompressed_crc = crc32_update(0, chunk);
-    auto body = compress_chunk();
+    ChunkJob job;
+    job.records = std::move(chunk);
+    job.message_index = std::move(chunk_message_index);
+    job.start_time = chunk_start_time;
+    job.end_time = chunk_end_time;
+    job.has_messages = chunk_has_messages;
+    chunk_message_index.clear();
+    chunk_has_messages = false;
+    ++statistics.chunk_count;
+    std::unique_lock lock(mutex);
+    chunk.clear();
+    if (!spare_chunks.empty()) {
+      chunk = std::move(spare_chunks.back());  // keeps its capacity: the next chunk reuses the memory
+      spare_chunks.pop_back();
+    }
+    if (!worker.joinable()) worker = std::thread([this] { work(); });
+    changed.wait(lock, [&] { return jobs.size() < kQueuedChunks; });
+    if (failure) return *failure;
+    jobs.push_back(std::move(job));
+    changed.notify_all();
+    return Ok{};
+  }
+
+  // Writes a chunk, its Message Index records, and remembers its index (the worker's part, or the
+  // caller's once the worker has stopped).
+  Status write_chunk(ChunkJob& job) {
+    const std::vector<std::uint8_t>& records = job.records;
+    const std::uint32_t uncompressed_crc = crc32_update(0, records);
+    auto body = compress_chunk(records);
     if (!body.ok()) return fail(body.error());
 
     ChunkIndexEntry entry;
-    entry.message_start_time = chunk_has_messages ? chunk_start_time : 0;
-    entry.message_end_time = chunk_has_messages ? chunk_end_time : 0;
+    entry.message_start_time = job.has_messages ? job.start_time : 0;
+    entry.message_end_time = job.has_messages ? job.end_time : 0;
     entry.chunk_start_offset = offset();
     entry.compressed_size = body->size();
-    entry.uncompressed_size = chunk.size();
+    entry.uncompressed_size = records.size();
 
     std::vector<std::uint8_t> head;
     ByteSink sink(head);
@@ -281,7 +374,7 @@ struct McapWriter::State {
     // One Message Index per channel of the chunk, entries in log time order.
     const std::uint64_t index_start = offset();
     std::vector<std::uint8_t> index;
-    for (auto& [channel_id, entries] : chunk_message_index) {
+    for (auto& [channel_id, entries] : job.message_index) {
       std::stable_sort(entries.begin(), entries.end(),
                        [](const auto& a, const auto& b) { return a.first < b.first; });
       index.clear();
@@ -300,17 +393,24 @@ struct McapWriter::State {
     }
     entry.message_index_length = offset() - index_start;
     chunk_indexes.push_back(std::move(entry));
-    ++statistics.chunk_count;
-
-    chunk.clear();  // keeps its capacity: the next chunk reuses the memory
-    chunk_message_index.clear();
-    chunk_has_messages = false;
     // The compressed chunk is in the file now; anything waiting goes out with it.
     return flush();
   }
 
   Status finish_file() {
-    if (auto status = finish_chunk(); !status.ok()) return status;
+    // The worker's chunks first, then the last chunk and the rest on this thread.
+    if (auto status = drain(); !status.ok()) return status;
+    stop_worker();
+    if (!chunk.empty()) {
+      ChunkJob last;
+      last.records = std::move(chunk);
+      last.message_index = std::move(chunk_message_index);
+      last.start_time = chunk_start_time;
+      last.end_time = chunk_end_time;
+      last.has_messages = chunk_has_messages;
+      ++statistics.chunk_count;
+      if (auto status = write_chunk(last); !status.ok()) return status;
+    }
 
     // Data End carries the CRC of everything before it, from the leading magic on.
     std::vector<std::uint8_t> data_end;
@@ -456,6 +556,7 @@ Result<std::uint16_t> McapWriter::add_schema(std::string name, std::string encod
   if (data.size() > std::numeric_limits<std::uint32_t>::max()) {
     return make_error(ErrorCode::kInvalidArgument, s.path.string() + ": schema " + name + " is too long");
   }
+  if (auto status = s.drain(); !status.ok()) return status.error();
   SchemaRecord schema{static_cast<std::uint16_t>(s.schemas.size() + 1), std::move(name), std::move(encoding),
                       std::move(data)};
   std::vector<std::uint8_t> record;
@@ -477,6 +578,7 @@ Result<std::uint16_t> McapWriter::add_channel(std::uint16_t schema_id, std::stri
   if (s.channels.size() >= std::numeric_limits<std::uint16_t>::max()) {
     return make_error(ErrorCode::kInvalidArgument, s.path.string() + ": too many MCAP channels");
   }
+  if (auto status = s.drain(); !status.ok()) return status.error();
   ChannelRecord channel{static_cast<std::uint16_t>(s.channels.size() + 1), schema_id, std::move(topic),
                         std::move(message_encoding), std::move(metadata)};
   std::vector<std::uint8_t> record;
@@ -497,6 +599,7 @@ Status McapWriter::add_metadata(std::string name, std::map<std::string, std::str
   sink.string(name);
   sink.string_map(metadata);
   sink.end_record(at);
+  if (auto status = s.drain(); !status.ok()) return status;
   const std::uint64_t offset = s.offset();
   if (auto status = s.emit(record); !status.ok()) return status;
   s.metadata_indexes.push_back({offset, record.size(), std::move(name)});
@@ -538,11 +641,15 @@ Status McapWriter::write(std::uint16_t channel_id, std::uint64_t log_time_ns, st
 Status McapWriter::close() {
   State& s = *state_;
   if (s.closed) {
+    std::lock_guard lock(s.mutex);
     if (s.failure) return *s.failure;
     return Ok{};
   }
+  if (auto error = s.usable()) {
+    s.closed = true;
+    return *error;
+  }
   s.closed = true;
-  if (s.failure) return *s.failure;
   return s.finish_file();
 }
 

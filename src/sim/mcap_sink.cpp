@@ -1,6 +1,10 @@
 // output.mcap: the ROS 2 topics of every receiver in a rosbag2 folder `bag/` (one MCAP file),
 // stamped with the UTC of each epoch as a driver on a GNSS-synchronised clock would stamp them.
+#include <condition_variable>
+#include <deque>
 #include <map>
+#include <mutex>
+#include <thread>
 
 #include "skytrace/io/rosbag2.hpp"
 #include "skytrace/receiver/profile.hpp"
@@ -20,19 +24,85 @@ io::QosProfileKind bag_qos(Ros2Qos qos) {
   return io::QosProfileKind::kDefault;
 }
 
+// The messages of an epoch are built on the caller's thread (the builders keep state from epoch to
+// epoch) and serialized and written by the sink's own thread, so that the run's writer thread
+// carries little more than it does without the bag. At most kQueuedEpochs wait.
 class McapSink final : public EpochSink {
  public:
+  ~McapSink() override { stop(); }
+
   Status add(const SinkEpoch& e) override {
     Receiver& rx = receivers_[e.receiver_index];
     const ros2::Time stamp = unix_utc_time(e.observations->true_time);
-    const auto stamp_ns = static_cast<std::uint64_t>(stamp.nanoseconds());
-    if (auto st = rx.builder->build_into(rx.messages, *e.observations, e.fix, stamp); !st) return st;
-    const Ros2Epoch& m = rx.messages;
+    Item item;
+    {
+      std::lock_guard lock(mutex_);
+      if (error_) return *error_;
+      if (!spare_.empty()) {
+        item.messages = std::move(spare_.back());  // keeps the storage of an earlier epoch
+        spare_.pop_back();
+      }
+    }
+    item.receiver = e.receiver_index;
+    item.stamp_ns = static_cast<std::uint64_t>(stamp.nanoseconds());
+    if (auto st = rx.builder->build_into(item.messages, *e.observations, e.fix, stamp); !st) return st;
+    if (!writer_.joinable()) writer_ = std::thread([this] { write_loop(); });
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return queue_.size() < kQueuedEpochs || error_; });
+    if (error_) return *error_;
+    queue_.push_back(std::move(item));
+    changed_.notify_all();
+    return Ok{};
+  }
+
+  Status finish() override {
+    stop();
+    if (error_) return *error_;
+    return bag_->close();
+  }
+
+ private:
+  static constexpr size_t kQueuedEpochs = 16;
+  struct Item {
+    size_t receiver = 0;
+    std::uint64_t stamp_ns = 0;
+    Ros2Epoch messages;
+  };
+
+  void stop() {
+    if (!writer_.joinable()) return;
+    {
+      std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    changed_.notify_all();
+    writer_.join();
+  }
+
+  void write_loop() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      changed_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+      if (queue_.empty()) return;
+      Item item = std::move(queue_.front());
+      queue_.pop_front();
+      lock.unlock();
+      Status written = write(item);
+      lock.lock();
+      if (!written.ok() && !error_) error_ = written.error();
+      spare_.push_back(std::move(item.messages));
+      changed_.notify_all();
+    }
+  }
+
+  Status write(const Item& item) {
+    const auto& topic_ids = receivers_[item.receiver].topic_ids;
+    const Ros2Epoch& m = item.messages;
     auto put = [&](std::string_view topic, const auto& message) -> Status {
-      const auto id = rx.topic_ids.find(topic);
-      if (id == rx.topic_ids.end()) return Ok{};  // a topic this bag leaves out
+      const auto id = topic_ids.find(topic);
+      if (id == topic_ids.end()) return Ok{};  // a topic this bag leaves out
       ros2::serialize_into(message, buffer_);
-      return bag_->write(id->second, stamp_ns, buffer_);
+      return bag_->write(id->second, item.stamp_ns, buffer_);
     };
     if (auto st = put("fix", m.fix); !st) return st;
     if (m.velocity) {
@@ -56,8 +126,8 @@ class McapSink final : public EpochSink {
     if (auto st = put("sky", m.sky); !st) return st;
     return put("rays", m.rays);
   }
-  Status finish() override { return bag_->close(); }
 
+ public:
   static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
     auto sink = std::make_unique<McapSink>();
     io::Rosbag2Options options;
@@ -96,11 +166,17 @@ class McapSink final : public EpochSink {
  private:
   struct Receiver {
     std::unique_ptr<Ros2EpochBuilder> builder;
-    Ros2Epoch messages;  // reused from epoch to epoch
     std::map<std::string, std::uint16_t, std::less<>> topic_ids;
   };
   std::unique_ptr<io::Rosbag2Writer> bag_;
-  std::vector<std::uint8_t> buffer_;  // CDR of one message
+  std::vector<std::uint8_t> buffer_;  // CDR of one message (the writer thread's)
+  std::thread writer_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Item> queue_;
+  std::vector<Ros2Epoch> spare_;  // written epochs' messages, for reuse
+  std::optional<Error> error_;
+  bool stopping_ = false;
   std::vector<Receiver> receivers_;
 };
 
