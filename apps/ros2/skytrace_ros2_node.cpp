@@ -28,6 +28,7 @@
 #include "log.hpp"
 #include "params.hpp"
 #include "skytrace/core/cancellation.hpp"
+#include "skytrace/io/rosbag2.hpp"
 #include "skytrace/receiver/profile.hpp"
 #include "skytrace/ros2/messages.hpp"
 #include "skytrace/sim/live.hpp"
@@ -57,8 +58,8 @@ constexpr const char* kUsage = R"(usage: skytrace_ros2_node [--ros-args] [--para
 A simulated GNSS receiver on ROS 2 (DDS, no ROS 2 install needed). Parameters (docs/ros2.md):
   scenario (required), pose_source (scenario|tf|odometry|pose), world_frame, antenna_frame,
   frame_id, pose_topic, odom_topic, antenna_offset_m, rate_hz, start_time, start_time_scale,
-  pose_timeout_s, ray_length_m, moving_models, rinex_out, latency_report, use_sim_time,
-  ros_distro (humble|jazzy), rtcm3, gnss_comm.
+  pose_timeout_s, ray_length_m, moving_models, rinex_out, bag_out, bag_compression (lz4|zstd|none),
+  latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm.
 Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS,
   CYCLONEDDS_URI.
 )";
@@ -82,6 +83,8 @@ struct Config {
   double ray_length_m = 100.0;
   std::vector<std::string> moving_models;  // tf frames of movable world models
   std::string rinex_out;
+  std::string bag_out;                 // a rosbag2 folder of the published topics, written at the end
+  std::string bag_compression = "lz4";
   std::string latency_report;
   bool use_sim_time = false;
   ros2::RosDistro distro = ros2::RosDistro::kJazzy;
@@ -145,6 +148,12 @@ Result<Config> read_config(const Parameters& p) {
   }
   SKYTRACE_READ(p.get_strings("moving_models"), c.moving_models);
   SKYTRACE_READ(p.get_string("rinex_out", c.rinex_out), c.rinex_out);
+  SKYTRACE_READ(p.get_string("bag_out", c.bag_out), c.bag_out);
+  SKYTRACE_READ(p.get_string("bag_compression", c.bag_compression), c.bag_compression);
+  if (c.bag_compression != "lz4" && c.bag_compression != "zstd" && c.bag_compression != "none") {
+    return Error{ErrorCode::kInvalidArgument,
+                 fmt::format("parameter bag_compression '{}': expected lz4, zstd or none", c.bag_compression)};
+  }
   SKYTRACE_READ(p.get_string("latency_report", c.latency_report), c.latency_report);
   SKYTRACE_READ(p.get_bool("use_sim_time", c.use_sim_time), c.use_sim_time);
   std::string distro;
@@ -175,6 +184,10 @@ ros2::Time from_ns(std::int64_t ns) {
 struct Output {
   std::unique_ptr<DdsWriter> writer;
   bool always = false;
+  std::string name;  // the resolved ROS name ("/skytrace/fix")
+  std::string type;
+  sim::Ros2Qos qos = sim::Ros2Qos::kDefault;
+  std::optional<std::uint16_t> bag_topic;  // its id in the bag being recorded
   [[nodiscard]] bool wanted() const { return writer && (always || writer->matched_readers() > 0); }
 };
 
@@ -192,6 +205,11 @@ class Node {
       : config_(std::move(config)), command_line_(std::move(command_line)), receiver_(std::move(receiver)), log_(log) {
     period_s_ = 1.0 / config_.rate_hz;
   }
+  ~Node() {
+    if (bag_) drop_bag();  // not finished: nothing is left
+  }
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
 
   // The messages of an epoch, as the bag sink of `skytrace run` makes them (an error: the
   // scenario's receiver profile).
@@ -229,7 +247,8 @@ class Node {
       auto writer = dds_->create_writer("rt" + *name, ros2::dds_type_name(topic.type), qos);
       if (!writer) return writer.error();
       writer_gids_.push_back((*writer)->guid());
-      outputs_[std::string(topic.name)] = Output{std::move(*writer), qos.durability == QosProfile::Durability::kTransientLocal};
+      outputs_[std::string(topic.name)] = Output{std::move(*writer), qos.durability == QosProfile::Durability::kTransientLocal,
+                                                 *name, std::string(topic.type), topic.qos, std::nullopt};
     }
 
     // rclcpp's QoS for what the node reads: the clock and poses best effort (they match either
@@ -256,6 +275,43 @@ class Node {
     if (auto problem = receiver_->open_rinex(config_.rinex_out, period_s_); !problem.empty()) {
       log_.fatal("parameter rinex_out {}: {}", config_.rinex_out, problem);
       return false;
+    }
+    return true;
+  }
+
+  // bag_out: a rosbag2 folder of every published topic, recorded into a hidden sibling folder and
+  // renamed to bag_out when the node stops, so that a bag that cannot be finished leaves nothing.
+  [[nodiscard]] bool open_bag() {
+    if (config_.bag_out.empty()) return true;
+    const std::filesystem::path target = std::filesystem::absolute(config_.bag_out).lexically_normal();
+    std::error_code ec;
+    if (std::filesystem::exists(target, ec)) {
+      log_.fatal("parameter bag_out {}: exists (a bag is never written over)", config_.bag_out);
+      return false;
+    }
+    bag_target_ = target;
+    bag_partial_ = target.parent_path() / fmt::format(".{}.partial-{}", target.filename().string(), ::getpid());
+    io::Rosbag2Options options;
+    options.mcap.compression = config_.bag_compression == "none" ? "" : config_.bag_compression;
+    options.file_stem = target.filename().string();
+    options.ros_distro = config_.distro == ros2::RosDistro::kHumble ? "humble" : "jazzy";
+    auto bag = io::Rosbag2Writer::open(bag_partial_, options);
+    if (!bag) {
+      log_.fatal("parameter bag_out {}: {}", config_.bag_out, bag.error().message);
+      return false;
+    }
+    bag_ = std::move(*bag);
+    for (auto& [relative, output] : outputs_) {
+      const io::QosProfileKind kind = output.qos == sim::Ros2Qos::kLatched      ? io::QosProfileKind::kTransientLocal
+                                      : output.qos == sim::Ros2Qos::kSensorData ? io::QosProfileKind::kSensorData
+                                                                                : io::QosProfileKind::kDefault;
+      auto id = bag_->add_topic(output.name, output.type, ros2::message_definition(output.type), kind);
+      if (!id) {
+        log_.fatal("parameter bag_out {}: {}", config_.bag_out, id.error().message);
+        drop_bag();
+        return false;
+      }
+      output.bag_topic = *id;
     }
     return true;
   }
@@ -291,6 +347,22 @@ class Node {
   }
 
   void finish() {
+    if (bag_) {
+      if (auto st = bag_->close(); !st) {
+        log_.error("parameter bag_out {}: {}; nothing written", config_.bag_out, st.error().message);
+        drop_bag();
+      } else {
+        std::error_code ec;
+        std::filesystem::rename(bag_partial_, bag_target_, ec);
+        if (ec) {
+          log_.error("parameter bag_out {}: cannot move the bag into place ({}); nothing written", config_.bag_out, ec.message());
+          drop_bag();
+        } else {
+          log_.info("rosbag2 bag written to {}", bag_target_.string());
+          bag_.reset();
+        }
+      }
+    }
     if (receiver_->rinex_open()) {
       if (auto problem = receiver_->finish_rinex(); !problem.empty()) {
         log_.error("parameter rinex_out {}: {}", config_.rinex_out, problem);
@@ -480,14 +552,33 @@ class Node {
     }
   }
 
-  // Writes the messages to the topic `name` when someone listens.
+  // A bag that cannot be written is given up (the node goes on) and removed.
+  void drop_bag() {
+    bag_.reset();
+    std::error_code ignored;
+    std::filesystem::remove_all(bag_partial_, ignored);
+    for (auto& [relative, output] : outputs_) output.bag_topic.reset();
+  }
+
+  // Writes the messages to the topic `name` when someone listens, and into the bag being recorded.
   template <typename Message>
   void publish(const char* name, const Message& message) {
     const auto it = outputs_.find(name);
-    if (it == outputs_.end() || !it->second.wanted()) return;
+    if (it == outputs_.end()) return;
+    const bool wanted = it->second.wanted();
+    const bool recorded = bag_ && it->second.bag_topic;
+    if (!wanted && !recorded) return;
     ros2::serialize_into(message, cdr_);
-    if (auto st = it->second.writer->write(cdr_); !st) {
-      log_.throttled(LogLevel::kWarn, 10.0, name, fmt::format("{}: {}", name, st.error().message));
+    if (wanted) {
+      if (auto st = it->second.writer->write(cdr_); !st) {
+        log_.throttled(LogLevel::kWarn, 10.0, name, fmt::format("{}: {}", name, st.error().message));
+      }
+    }
+    if (recorded) {
+      if (auto st = bag_->write(*it->second.bag_topic, static_cast<std::uint64_t>(stamp_ns_), cdr_); !st) {
+        log_.error("parameter bag_out {}: {}; recording stopped, nothing kept", config_.bag_out, st.error().message);
+        drop_bag();
+      }
     }
   }
   template <typename Message>
@@ -521,6 +612,7 @@ class Node {
       return;
     }
     const sim::Ros2Epoch& m = messages_;
+    stamp_ns_ = stamp_ns;
     publish("fix", m.fix);
     if (m.velocity) publish("velocity", *m.velocity);
     publish("time_reference", m.time_reference);
@@ -578,6 +670,9 @@ class Node {
   std::unique_ptr<sim::Ros2EpochBuilder> builder_;
   sim::Ros2Epoch messages_;           // reused from epoch to epoch (storage kept)
   std::vector<std::uint8_t> cdr_;     // one sample's bytes, reused
+  std::int64_t stamp_ns_ = 0;         // the ROS time of the epoch being published
+  std::unique_ptr<io::Rosbag2Writer> bag_;
+  std::filesystem::path bag_target_, bag_partial_;
   // Destroyed after the endpoints below (declared first): the participant owns their entities.
   std::unique_ptr<DdsParticipant> dds_;
   std::vector<Guid> reader_gids_, writer_gids_;
@@ -620,6 +715,8 @@ int run(int argc, char** argv) {
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  // A write beyond the file size limit fails like a full disk (the bag is given up) instead of killing the node.
+  std::signal(SIGXFSZ, SIG_IGN);
   live::ReceiverOptions options;
   options.scenario_path = config->scenario;
   options.start_time = config->start_time;
@@ -642,6 +739,7 @@ int run(int argc, char** argv) {
     log.fatal("{}", st.error().message);
     return st.error().code == ErrorCode::kInvalidArgument ? kExitUsage : kExitNetwork;
   }
+  if (!node.open_bag()) return kExitOutput;
   log.info("skytrace: scenario {}, {:.3g} Hz, antenna pose from {}; DDS domain {}{}, {} graph", config->scenario,
            config->rate_hz,
            config->pose_source == PoseSource::kScenario ? "the scenario"

@@ -645,6 +645,72 @@ TEST_F(Ros2NodeTest, SigintAndSigtermEndTheNodePromptly) {
   }
 }
 
+// bag_out records what the node publishes into a rosbag2 folder that appears when the node stops;
+// Foxglove's libraries read it (tests/clients/mcap), and the fixes in it are those the peer got.
+TEST_F(Ros2NodeTest, NodeRecordsABagThatFoxgloveReads) {
+  const auto client = test::source_dir() / "tests" / "clients" / "mcap";
+  if (!std::filesystem::exists(client / "node_modules" / "@mcap" / "core")) GTEST_SKIP() << "npm packages not installed";
+  const auto bag = dir_ / "recorded";
+  Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), Qos::sensor_data());
+  start_node({"-p", "rate_hz:=10", "-p", "bag_out:=" + bag.string()});
+  expect_samples(fix, 10, "fixes");
+  // Recording: only a hidden folder so far.
+  EXPECT_FALSE(std::filesystem::exists(bag));
+  ASSERT_EQ(node_->stop(SIGINT), 0) << log_text();
+  ASSERT_TRUE(std::filesystem::exists(bag / "metadata.yaml")) << log_text();
+  for (const auto& entry : std::filesystem::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".recorded.partial"), std::string::npos) << entry.path();
+  }
+  const auto checked = test::run_command("node " + test::shell_quote((client / "check_bag.mjs").string()) + " " +
+                                         test::shell_quote(bag.string()) + " 2>&1");
+  ASSERT_EQ(checked.exit_code, 0) << checked.output.substr(0, 3000);
+  std::map<std::string, int> counts;
+  size_t at = 0;
+  // Topic names and counts from the summary's "topics" list.
+  while ((at = checked.output.find("\"name\": \"", at)) != std::string::npos) {
+    at += 9;
+    const std::string name = checked.output.substr(at, checked.output.find('"', at) - at);
+    const size_t count_at = checked.output.find("\"count\": ", at) + 9;
+    counts[name] = std::stoi(checked.output.substr(count_at));
+  }
+  EXPECT_GE(counts[namespace_ + "/fix"], static_cast<int>(fix.samples().size()) - 1) << checked.output.substr(0, 2000);
+  EXPECT_GE(counts[namespace_ + "/gnss/ephemeris"], 1);
+  EXPECT_EQ(counts[namespace_ + "/observations"], counts[namespace_ + "/fix"]);
+}
+
+TEST_F(Ros2NodeTest, BagThatCannotBeWrittenLeavesNothingAndTheNodeGoesOn) {
+  // An existing bag is never written over: exit 5 before anything starts.
+  std::filesystem::create_directories(dir_ / "taken");
+  const auto r = test::run_command("env ROS_DOMAIN_ID=" + std::to_string(domain_id_) + " ROS_LOCALHOST_ONLY=1 " +
+                                   test::shell_quote(node_binary_.string()) + " --ros-args -p " +
+                                   test::shell_quote("scenario:=" + scenario_.string()) + " -p " +
+                                   test::shell_quote("bag_out:=" + (dir_ / "taken").string()) + " 2>&1");
+  EXPECT_EQ(r.exit_code, 5) << r.output;
+  EXPECT_NE(r.output.find("exists"), std::string::npos) << r.output;
+
+  // A full disk (a file size limit) while recording: the bag is given up and removed, the node
+  // keeps publishing.
+  Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), Qos::sensor_data());
+  const auto bag = dir_ / "full";
+  log_ = dir_ / "node.log";
+  node_ = std::make_unique<test::Background>(
+      "bash -c " + test::shell_quote("ulimit -f 64; exec env ROS_DOMAIN_ID=" + std::to_string(domain_id_) +
+                                     " ROS_LOCALHOST_ONLY=1 " + test::shell_quote(node_binary_.string()) +
+                                     " --ros-args -r __ns:=" + namespace_ + " -p " +
+                                     test::shell_quote("scenario:=" + scenario_.string()) +
+                                     " -p rate_hz:=20 -p bag_compression:=none -p " +
+                                     test::shell_quote("bag_out:=" + bag.string())),
+      log_);
+  EXPECT_TRUE(wait_until([&] { return log_has("recording stopped, nothing kept"); }, 60s)) << log_text();
+  const size_t before = fix.samples().size();
+  expect_samples(fix, before + 5, "fixes after the bag was given up");
+  EXPECT_EQ(node_->stop(SIGINT), 0) << log_text();
+  EXPECT_FALSE(std::filesystem::exists(bag));
+  for (const auto& entry : std::filesystem::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().filename().string().find(".full.partial"), std::string::npos) << entry.path();
+  }
+}
+
 TEST_F(Ros2NodeTest, BadCommandLinesAndParametersExitWithTheirCodes) {
   const std::string node = test::shell_quote(node_binary_.string());
   const auto run = [&](const std::string& args) { return test::run_command(node + " " + args + " 2>&1"); };
