@@ -14,8 +14,6 @@
 #include <mutex>
 #include <thread>
 #include <cmath>
-#include <complex>
-#include <fstream>
 #include <random>
 #include <set>
 
@@ -24,7 +22,6 @@
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/output_file.hpp"
 #include "skytrace/core/text_file.hpp"
-#include "skytrace/io/report.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/nominal.hpp"
