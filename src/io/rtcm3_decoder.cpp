@@ -255,4 +255,33 @@ void Rtcm3Decoder::decode_msm(std::span<const std::uint8_t> message, int message
   }
 }
 
+positioning::EpochMeasurements RtcmMeasurementConverter::convert(const RtcmEpoch& epoch) {
+  positioning::EpochMeasurements out;
+  out.receiver_time = epoch.time;
+  std::map<std::pair<SatelliteId, Signal>, double> seen;
+  for (const auto& sat : epoch.satellites) {
+    for (const auto& o : sat.signals) {
+      if (!o.pseudorange_m) continue;  // the engines need the code
+      const SignalInfo* info = find_signal_info(o.signal);
+      if (info == nullptr) continue;
+      positioning::SignalMeasurement m;
+      m.satellite = sat.satellite;
+      m.signal = o.signal;
+      m.pseudorange_m = *o.pseudorange_m;
+      m.doppler_hz = o.doppler_hz;
+      m.carrier_hz = info->carrier_frequency_hz(sat.glonass_channel);
+      m.cn0_dbhz = o.cn0_dbhz;
+      m.carrier_phase_cycles = o.phase_cycles;
+      const auto key = std::make_pair(sat.satellite, o.signal);
+      const auto previous = last_lock_time_s_.find(key);
+      m.loss_of_lock = previous == last_lock_time_s_.end() || o.lock_time_s < previous->second;
+      m.half_cycle_unresolved = o.half_cycle;
+      seen[key] = o.lock_time_s;
+      out.signals.push_back(std::move(m));
+    }
+  }
+  last_lock_time_s_ = std::move(seen);
+  return out;
+}
+
 }  // namespace skytrace::io

@@ -247,3 +247,64 @@ TEST(RtkEngineEndToEnd, BadBaseInputGivesAClearStateNeverAWrongFix) {
 
 }  // namespace
 }  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// A base as an RTCM 3 stream (1006 and MSM7 from `output.rtcm3`, with garbage between frames as a
+// serial line or NTRIP relay delivers it): the same fixes as with the base's RINEX file, positions
+// within the fields' resolution; without 1005/1006 the base position must be given.
+TEST(RtkEngineEndToEnd, BaseAsAnRtcmStreamFixesAsItsRinexFile) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_rtcm_base");
+  const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                   test::shell_quote((contract_dir() / "rtk-pair.yaml").string()) + " --out " +
+                                   test::shell_quote((dir / "pair").string()) +
+                                   " --quiet --no-truth --set output.rtcm3=true --set time.duration_s=300");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // Garbage (with a false preamble) after every frame.
+  std::ifstream in(dir / "pair/obs_BASE.rtcm3", std::ios::binary);
+  const std::string clean((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string noisy;
+  for (size_t i = 0; i + 3 <= clean.size();) {
+    const size_t length = ((static_cast<unsigned char>(clean[i + 1]) & 0x03) << 8) | static_cast<unsigned char>(clean[i + 2]);
+    noisy += clean.substr(i, length + 6) + "\xD3\x01garbage";
+    i += length + 6;
+  }
+  std::ofstream(dir / "noisy.rtcm3", std::ios::binary) << noisy;
+
+  const std::string position = test::shell_quote(test::skytrace_executable().string()) + " position " +
+                               test::shell_quote((dir / "pair/obs_ROVR.rnx").string()) + " --nav " +
+                               test::shell_quote((dir / "pair/nav.rnx").string());
+  const auto with_rinex = test::run_command(position + " --base " + test::shell_quote((dir / "pair/obs_BASE.rnx").string()) +
+                                            " --out " + test::shell_quote((dir / "rinex.csv").string()) + " 2>&1");
+  ASSERT_EQ(with_rinex.exit_code, 0) << with_rinex.output;
+  const auto with_rtcm = test::run_command(position + " --base " + test::shell_quote((dir / "noisy.rtcm3").string()) +
+                                           " --out " + test::shell_quote((dir / "rtcm.csv").string()) + " 2>&1");
+  ASSERT_EQ(with_rtcm.exit_code, 0) << with_rtcm.output;
+  EXPECT_NE(with_rtcm.output.find("bytes outside valid frames"), std::string::npos) << with_rtcm.output;
+  const auto a = read_fix_csv(dir / "rinex.csv");
+  const auto b = read_fix_csv(dir / "rtcm.csv");
+  ASSERT_EQ(a.size(), b.size());
+  size_t both_fixed = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].fix, b[k].fix) << k;
+    if (a[k].fix == "rtk_fixed" && b[k].fix == "rtk_fixed") {
+      ++both_fixed;
+      EXPECT_LT((a[k].ecef_m - b[k].ecef_m).norm(), 0.003) << k;
+    }
+  }
+  EXPECT_GT(both_fixed, 280u);
+
+  // The real GMSD stream carries no 1005/1006: the base position is required.
+  const auto gmsd = test::shared_data_dir() / "real/gsi_0759_3040_2005092/GMSD7_20121014.rtcm3";
+  if (std::filesystem::exists(gmsd)) {
+    const auto no_position = test::run_command(position + " --base " + test::shell_quote(gmsd.string()) + " 2>&1");
+    EXPECT_EQ(no_position.exit_code, 2) << no_position.output;
+    EXPECT_NE(no_position.output.find("no station position (message 1005 or 1006)"), std::string::npos)
+        << no_position.output;
+  }
+}
+
+}  // namespace
+}  // namespace skytrace

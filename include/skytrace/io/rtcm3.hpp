@@ -18,6 +18,7 @@
 #include "skytrace/core/satellite.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/core/time.hpp"
+#include "skytrace/positioning/spp.hpp"
 #include "skytrace/orbits/ephemeris.hpp"
 
 namespace skytrace::io {
@@ -227,6 +228,17 @@ class Rtcm3Decoder {
   std::vector<RtcmEpoch> done_;
   std::optional<RtcmStation> station_;
   Counts counts_;
+};
+
+// A reference station's epochs as the position engines take them. The loss-of-lock flag comes from
+// the lock time, as RTKLIB derives it: set when a signal's lock time is shorter than at its previous
+// epoch, or when the signal is new.
+class RtcmMeasurementConverter {
+ public:
+  [[nodiscard]] positioning::EpochMeasurements convert(const RtcmEpoch& epoch);
+
+ private:
+  std::map<std::pair<SatelliteId, Signal>, double> last_lock_time_s_;
 };
 
 }  // namespace skytrace::io
