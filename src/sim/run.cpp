@@ -301,7 +301,31 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   if (!sinks) return sinks.error();
 
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  std::vector<std::optional<positioning::BaseEpoch>> base_epochs(receivers.size());
+  // The bases' recent epochs: a rover takes the latest one that has reached it (rtk.latency_s,
+  // rtk.interval_s, rtk.outages_s); older than the engine's age limit is never used.
+  constexpr double kBaseHistory_s = 90.0;
+  std::vector<std::deque<positioning::BaseEpoch>> base_history(receivers.size());
+  auto base_for = [&](size_t rover, const GnssTime& rover_time) -> const positioning::BaseEpoch* {
+    const RtkSettings& link = *receivers[rover].settings->rtk;
+    const auto& history = base_history[*receivers[rover].base_index];
+    for (auto it = history.rbegin(); it != history.rend(); ++it) {
+      const GnssTime sent = it->measurements.receiver_time;
+      if (link.interval_s > 0.0) {
+        const double since_start_s = sent - s.time.start;
+        const double phase_s = since_start_s - link.interval_s * std::round(since_start_s / link.interval_s);
+        if (std::abs(phase_s) > 1e-3) continue;  // the base does not send this epoch
+      }
+      const GnssTime arrival = sent + link.latency_s;
+      if (arrival - rover_time > 1e-3) continue;  // not here yet
+      const double arrival_s = arrival - s.time.start;
+      const bool lost = std::any_of(link.outages_s.begin(), link.outages_s.end(), [&](const auto& outage) {
+        return arrival_s >= outage.first && arrival_s < outage.second;
+      });
+      if (lost) continue;
+      return &*it;
+    }
+    return nullptr;
+  };
   // The receivers' fixes of one instant: the bases' epochs first, so that their rovers' RTK fixes
   // have this instant's corrections. Computed where the observations are (the worker thread when
   // there is one), which balances the two threads.
@@ -309,17 +333,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     const auto& epochs = instant.receivers;
     instant.fixes.assign(receivers.size(), std::nullopt);
     for (size_t i = 0; i < receivers.size(); ++i) {
-      base_epochs[i].reset();
-      if (receivers[i].is_base) {
-        // The base's known position: its marker's antenna reference point.
-        base_epochs[i] = positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)};
+      if (!receivers[i].is_base) continue;
+      // The base's known position: its marker's antenna reference point.
+      auto& history = base_history[i];
+      history.push_back(positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)});
+      while (history.back().measurements.receiver_time - history.front().measurements.receiver_time > kBaseHistory_s) {
+        history.pop_front();
       }
     }
     for (size_t i = 0; i < receivers.size(); ++i) {
       ReceiverRun& rx = receivers[i];
       if (!rx.fixes) continue;
-      const positioning::BaseEpoch* base = nullptr;
-      if (rx.base_index && base_epochs[*rx.base_index]) base = &*base_epochs[*rx.base_index];
+      const positioning::BaseEpoch* base = rx.base_index ? base_for(i, epochs[i].receiver_time) : nullptr;
       auto fix = rx.fixes->solve(epochs[i], base);
       if (!fix) return fix.error();
       instant.fixes[i] = std::move(*fix);

@@ -27,6 +27,7 @@ struct FixRow {
   std::string fix;
   Eigen::Vector3d ecef_m = Eigen::Vector3d::Zero();
   std::string message;
+  std::optional<double> age_s;
 };
 
 // fix.csv rows (the columns this test needs; messages hold no commas here).
@@ -46,6 +47,7 @@ std::vector<FixRow> read_fix_csv(const std::filesystem::path& path) {
     row.fix = cells[3];
     if (!cells[8].empty()) row.ecef_m = Eigen::Vector3d(std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
     row.message = cells[26];
+    if (cells.size() > 29 && !cells[29].empty()) row.age_s = std::stod(cells[29]);
     rows.push_back(row);
   }
   return rows;
@@ -304,6 +306,47 @@ TEST(RtkEngineEndToEnd, BaseAsAnRtcmStreamFixesAsItsRinexFile) {
     EXPECT_NE(no_position.output.find("no station position (message 1005 or 1006)"), std::string::npos)
         << no_position.output;
   }
+}
+
+}  // namespace
+}  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// Corrections that arrive late, every few seconds, and stop for a minute (rtk.latency_s,
+// rtk.interval_s, rtk.outages_s): the age of corrections follows, the rover falls back to its own
+// fix once they are older than the engine's limit (30 s) and fixes again when they return.
+TEST(RtkEngineEndToEnd, LateSparseAndInterruptedCorrectionsShowInAgeAndSolutionType) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_link");
+  const auto r = test::run_command(
+      test::shell_quote(test::skytrace_executable().string()) + " run " +
+      test::shell_quote((contract_dir() / "rtk-pair.yaml").string()) + " --out " + test::shell_quote((dir / "pair").string()) +
+      " --quiet --no-truth --set time.duration_s=300 --set receivers.1.rtk.latency_s=2 --set receivers.1.rtk.interval_s=5"
+      " --set 'receivers.1.rtk.outages_s=[[100, 160]]' 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = read_fix_csv(dir / "pair/fix_ROVR.csv");
+  ASSERT_EQ(rows.size(), 301u);
+  const double t0 = rows.front().tow_s;
+  size_t fixed_before = 0, single_in_outage = 0, fixed_after = 0;
+  for (const auto& row : rows) {
+    const double t = row.tow_s - t0;
+    if (t >= 60.0 && t < 100.0) {
+      ASSERT_TRUE(row.age_s.has_value()) << row.time;
+      EXPECT_GE(*row.age_s, 2.0 - 1e-6) << row.time;
+      EXPECT_LE(*row.age_s, 7.0 + 1e-6) << row.time;
+      fixed_before += row.fix == "rtk_fixed";
+    }
+    if (t >= 130.0 && t < 160.0) {
+      EXPECT_TRUE(row.fix == "3d") << row.time << " " << row.fix;
+      single_in_outage += row.fix == "3d";
+    }
+    if (t >= 200.0) fixed_after += row.fix == "rtk_fixed";
+  }
+  EXPECT_GE(fixed_before, 38u);
+  EXPECT_EQ(single_in_outage, 30u);
+  EXPECT_GE(fixed_after, 95u);
 }
 
 }  // namespace

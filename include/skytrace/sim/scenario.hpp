@@ -43,6 +43,12 @@ struct TrajectorySetting {
 // corrections of a base (docs/scenario.md).
 struct RtkSettings {
   std::string base;  // another receiver of the same scenario
+  // How the corrections reach the rover: each base epoch arrives latency_s after its time; the base
+  // sends every interval_s (0: every epoch); none arrive during the outages (seconds after the
+  // scenario's start, [from, to)). The engine's age of corrections and its limit follow.
+  double latency_s = 0.0;
+  double interval_s = 0.0;
+  std::vector<std::pair<double, double>> outages_s;
 };
 
 struct ReceiverSettings {
