@@ -314,7 +314,8 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
 
   if (auto models = root.child("models")) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
-                         "multipath_radius_m", "multipath_order", "diffraction"});
+                         "multipath_radius_m", "multipath_order", "diffraction", "ionosphere_residual_ppm",
+                         "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
     if (auto c = models->child("ionex_file")) s.models.ionex_file = existing_file(*c, base);
     if (s.models.ionosphere == "ionex" && !s.models.ionex_file) {
@@ -333,6 +334,14 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
       s.models.multipath_order = static_cast<int>(order);
     }
     if (auto c = models->child("diffraction")) s.models.diffraction = c->as_bool();
+    if (auto c = models->child("ionosphere_residual_ppm")) s.models.ionosphere_residual_ppm = c->as_double_in(0.0, 50.0);
+    if (auto c = models->child("ionosphere_residual_length_km")) {
+      s.models.ionosphere_residual_length_km = c->as_double_in(10.0, 5000.0);
+    }
+    if (auto c = models->child("troposphere_residual_ppm")) s.models.troposphere_residual_ppm = c->as_double_in(0.0, 10.0);
+    if (auto c = models->child("troposphere_residual_length_km")) {
+      s.models.troposphere_residual_length_km = c->as_double_in(1.0, 1000.0);
+    }
   }
 
   if (auto world = root.child("world")) parse_world(*world, base, s.world);
@@ -513,7 +522,11 @@ std::string scenario_to_json(const Scenario& s) {
                  {"multipath", s.models.multipath},
                  {"multipath_radius_m", s.models.multipath_radius_m},
                  {"multipath_order", s.models.multipath_order},
-                 {"diffraction", s.models.diffraction}};
+                 {"diffraction", s.models.diffraction},
+                 {"ionosphere_residual_ppm", s.models.ionosphere_residual_ppm},
+                 {"ionosphere_residual_length_km", s.models.ionosphere_residual_length_km},
+                 {"troposphere_residual_ppm", s.models.troposphere_residual_ppm},
+                 {"troposphere_residual_length_km", s.models.troposphere_residual_length_km}};
   json w;
   if (s.world.sdf) w["sdf"] = s.world.sdf->string();
   w["model_paths"] = paths(s.world.model_paths);

@@ -83,6 +83,12 @@ struct ModelSettings {
   double multipath_radius_m = 150.0;
   int multipath_order = 1;
   bool diffraction = true;
+  // Residual fields the models leave, shared by the receivers (docs/models/atmosphere-residuals.md):
+  // gradients in parts per million of the distance (0: none), correlation lengths.
+  double ionosphere_residual_ppm = 0.0;
+  double ionosphere_residual_length_km = 300.0;
+  double troposphere_residual_ppm = 0.0;
+  double troposphere_residual_length_km = 50.0;
 };
 
 // A mesh file placed in the world frame (world.meshes).
