@@ -223,6 +223,27 @@ struct ReceiverRun {
   bool is_base = false;
 };
 
+// Heading and pitch of a moving-base rover's fixed baseline (base antenna to rover antenna), with
+// their 1-sigma from the baseline's covariance.
+void add_heading(positioning::PositionFix& fix) {
+  if (fix.type != positioning::FixType::kRtkFixed || !fix.relative || !fix.relative->baseline_valid) return;
+  auto& r = *fix.relative;
+  const double e = r.baseline_enu_m.x(), n = r.baseline_enu_m.y(), u = r.baseline_enu_m.z();
+  const double h2 = e * e + n * n, h = std::sqrt(h2);
+  if (h < 0.05) return;  // antennas on top of each other: no direction
+  constexpr double kDeg = 180.0 / M_PI;
+  double heading = std::atan2(e, n) * kDeg;
+  if (heading < 0.0) heading += 360.0;
+  r.heading_deg = heading;
+  r.pitch_deg = std::atan2(u, h) * kDeg;
+  const Eigen::Matrix3d& c = fix.covariance_enu_m2;
+  const Eigen::RowVector3d dh(n / h2, -e / h2, 0.0);
+  const double l2 = h2 + u * u;
+  const Eigen::RowVector3d dp(-u * e / (h * l2), -u * n / (h * l2), h / l2);
+  r.heading_sigma_deg = std::sqrt(std::max(0.0, (dh * c * dh.transpose())(0, 0))) * kDeg;
+  r.pitch_sigma_deg = std::sqrt(std::max(0.0, (dp * c * dp.transpose())(0, 0))) * kDeg;
+}
+
 orbits::NavigationData used_navigation(const orbits::NavigationData& all, const std::vector<ReceiverRun>& receivers) {
   orbits::NavigationData used;
   used.ionosphere = all.ionosphere;
@@ -332,22 +353,37 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   auto solve_instant = [&](QueuedEpoch& instant) -> Status {
     const auto& epochs = instant.receivers;
     instant.fixes.assign(receivers.size(), std::nullopt);
-    for (size_t i = 0; i < receivers.size(); ++i) {
-      if (!receivers[i].is_base) continue;
-      // The base's known position: its marker's antenna reference point.
-      auto& history = base_history[i];
-      history.push_back(positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)});
-      while (history.back().measurements.receiver_time - history.front().measurements.receiver_time > kBaseHistory_s) {
-        history.pop_front();
+    // Receivers that are not RTK rovers first (the bases among them), then the rovers.
+    for (const bool rovers : {false, true}) {
+      for (size_t i = 0; i < receivers.size(); ++i) {
+        ReceiverRun& rx = receivers[i];
+        if (!rx.fixes || rx.base_index.has_value() != rovers) continue;
+        const positioning::BaseEpoch* base = rx.base_index ? base_for(i, epochs[i].receiver_time) : nullptr;
+        std::optional<positioning::BaseEpoch> moving;
+        if (base != nullptr && rx.settings->rtk->moving_base) {
+          // A moving base knows where it is only from its own fix of that epoch.
+          const auto& base_fix = instant.fixes[*rx.base_index];
+          if (base_fix && base_fix->type != positioning::FixType::kNone &&
+              std::abs(base->measurements.receiver_time - epochs[*rx.base_index].receiver_time) < 1e-3) {
+            moving = positioning::BaseEpoch{base->measurements, base_fix->position_ecef_m};
+          }
+          base = moving ? &*moving : nullptr;
+        }
+        auto fix = rx.fixes->solve(epochs[i], base);
+        if (!fix) return fix.error();
+        if (moving) add_heading(*fix);
+        instant.fixes[i] = std::move(*fix);
       }
-    }
-    for (size_t i = 0; i < receivers.size(); ++i) {
-      ReceiverRun& rx = receivers[i];
-      if (!rx.fixes) continue;
-      const positioning::BaseEpoch* base = rx.base_index ? base_for(i, epochs[i].receiver_time) : nullptr;
-      auto fix = rx.fixes->solve(epochs[i], base);
-      if (!fix) return fix.error();
-      instant.fixes[i] = std::move(*fix);
+      if (rovers) break;
+      for (size_t i = 0; i < receivers.size(); ++i) {
+        if (!receivers[i].is_base) continue;
+        // The base's known position: its marker's antenna reference point.
+        auto& history = base_history[i];
+        history.push_back(positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)});
+        while (history.back().measurements.receiver_time - history.front().measurements.receiver_time > kBaseHistory_s) {
+          history.pop_front();
+        }
+      }
     }
     return Ok{};
   };

@@ -120,10 +120,11 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
   if (auto c = node.child("receiver_type")) r.receiver_type = c->as_string();
   if (auto c = node.child("antenna_type")) r.antenna_type = c->as_string();
   if (auto c = node.child("rtk")) {
-    c->expect_keys({"base", "latency_s", "interval_s", "outages_s"});
+    c->expect_keys({"base", "latency_s", "interval_s", "outages_s", "moving_base"});
     RtkSettings rtk;
     rtk.base = c->required("base").as_string();
     if (auto v = c->child("latency_s")) rtk.latency_s = v->as_double_in(0.0, 60.0);
+    if (auto v = c->child("moving_base")) rtk.moving_base = v->as_bool();
     if (auto v = c->child("interval_s")) rtk.interval_s = v->as_double_in(0.0, 3600.0);
     if (auto v = c->child("outages_s")) {
       for (const auto& interval : v->elements()) {
@@ -506,7 +507,7 @@ std::string scenario_to_json(const Scenario& s) {
     jr["antenna_type"] = r.antenna_type;
     if (r.rtk) {
       jr["rtk"] = {{"base", r.rtk->base}, {"latency_s", r.rtk->latency_s}, {"interval_s", r.rtk->interval_s},
-                   {"outages_s", r.rtk->outages_s}};
+                   {"outages_s", r.rtk->outages_s}, {"moving_base", r.rtk->moving_base}};
     }
     j["receivers"].push_back(jr);
   }

@@ -351,3 +351,59 @@ TEST(RtkEngineEndToEnd, LateSparseAndInterruptedCorrectionsShowInAgeAndSolutionT
 
 }  // namespace
 }  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// Two antennas on one body, 1.4 m apart at azimuth 30 degrees and level: the moving-base rover's
+// fixed baseline gives the heading and pitch (fix.csv, NMEA HDT/THS), its sigma from the baseline
+// covariance.
+TEST(RtkEngineEndToEnd, MovingBaseGivesTheHeadingOfTheBaseline) {
+  const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
+  if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
+  const auto dir = test::make_temp_dir("rtk_heading");
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  std::ofstream(dir / "heading.yaml")
+      << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 120\n  interval_s: 1\n"
+         "receivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
+      << antenna
+      << "  - name: ANT2\n    position:\n      world_enu_m: [0.7, 1.2124356, 1.5]\n" << antenna
+      << "    rtk:\n      base: ANT1\n      moving_base: true\n"
+         "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+         "ephemeris:\n  navigation:\n    - "
+      << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                   test::shell_quote((dir / "heading.yaml").string()) + " --out " +
+                                   test::shell_quote((dir / "out").string()) + " --quiet --no-truth --set output.nmea=true 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "out/fix_ANT2.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> columns;
+  for (std::stringstream s(line); std::getline(s, line, ',');) columns.push_back(line);
+  const auto at = [&](const char* name) { return static_cast<size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin()); };
+  size_t with_heading = 0;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    for (std::stringstream s(line); std::getline(s, line, ',');) cells.push_back(line);
+    cells.resize(columns.size());
+    if (cells[at("heading_deg")].empty()) continue;
+    ++with_heading;
+    EXPECT_EQ(cells[at("fix")], "rtk_fixed");
+    EXPECT_NEAR(std::stod(cells[at("heading_deg")]), 30.0, 0.3);
+    EXPECT_NEAR(std::stod(cells[at("pitch_deg")]), 0.0, 0.5);
+    const double sigma = std::stod(cells[at("heading_sigma_deg")]);
+    EXPECT_GT(sigma, 0.0);
+    EXPECT_LT(sigma, 0.5);
+  }
+  EXPECT_GT(with_heading, 100u);
+  std::ifstream nmea(dir / "out/fix_ANT2.nmea");
+  const std::string text((std::istreambuf_iterator<char>(nmea)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("$GNHDT,30.0"), std::string::npos);
+  EXPECT_NE(text.find(",A*"), std::string::npos);
+  EXPECT_NE(text.find("THS,"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace skytrace

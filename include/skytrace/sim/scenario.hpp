@@ -49,6 +49,9 @@ struct RtkSettings {
   double latency_s = 0.0;
   double interval_s = 0.0;
   std::vector<std::pair<double, double>> outages_s;
+  // Two antennas on one body: the base moves, its position at each epoch is its own fix, and the
+  // rover reports the heading and pitch of the baseline (fix.csv, NMEA HDT/THS).
+  bool moving_base = false;
 };
 
 struct ReceiverSettings {
