@@ -320,6 +320,9 @@ Status attach_antenna(ReceiverProfile& profile, const AntennaProfile& antenna, c
     }
     profile.system_noise_temperature_k = system_k;
   }
+  // Signals without a table of their own (none once attached) and callers reading the profile's
+  // table get the L1 band's.
+  if (const auto l1 = antenna.bands.find("1"); l1 != antenna.bands.end()) profile.antenna = *l1->second.pattern;
   profile.antenna_name = antenna.name;
   profile.antenna_rinex_type = antenna.rinex_type;
   return Ok{};
@@ -352,6 +355,19 @@ Status attach_antenna(ReceiverProfile& profile, const std::string& antenna, cons
                                                    : "receiver.antenna");
   }
   return Ok{};
+}
+
+Result<ReceiverProfile> builtin_profile(const std::string& name) {
+  auto profile = load_profile(name);
+  if (!profile) return profile;
+  std::vector<Signal> signals;
+  if (profile->all_signals) {
+    for (const SignalInfo& info : skytrace::all_signals()) signals.push_back(info.signal);
+  } else {
+    for (const TrackedSignal& t : profile->signals) signals.push_back(t.signal);
+  }
+  if (auto st = attach_antenna(*profile, std::string(), signals, {}); !st) return st.error();
+  return profile;
 }
 
 Result<ReceiverProfile> load_profile_with_antenna(const std::string& profile_name, const std::string& antenna,

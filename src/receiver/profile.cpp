@@ -303,7 +303,6 @@ std::vector<std::string> available_profile_names(const std::filesystem::path& sc
   return {names.begin(), names.end()};
 }
 
-Result<ReceiverProfile> builtin_profile(const std::string& name) { return load_profile(name); }
 
 TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& signal, double carrier_hz,
                              double cn0_dbhz) {

@@ -46,6 +46,9 @@ struct AntennaPattern {
 };
 
 struct TrackedSignal {
+  TrackedSignal() = default;
+  TrackedSignal(const Signal& tracked_signal, double extra_loss) : signal(tracked_signal), extra_loss_db(extra_loss) {}
+
   Signal signal;
   // Beyond the implementation loss (semi-codeless tracking, the receiver's reporting, satellites
   // stronger than their ICD row); negative when a fit on real data finds the signal stronger than
@@ -138,7 +141,8 @@ struct ReceiverProfile {
 // Names of the profiles found on the search path (sorted, without duplicates).
 [[nodiscard]] std::vector<std::string> available_profile_names(const std::filesystem::path& scenario_dir = {});
 
-// Former built-in lookup, now by name from the project's folder (kept for existing callers).
+// Former built-in lookup, now by name from the project's folder (kept for existing callers), with
+// its default antenna attached for every signal it tracks (antenna.hpp).
 [[nodiscard]] Result<ReceiverProfile> builtin_profile(const std::string& name);
 
 // 1-sigma thermal noise of the code (m), carrier phase (m) and Doppler (m/s) for a signal at a
