@@ -186,15 +186,18 @@ LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& sign
   LinkBudget b;
   b.received_power_dbw =
       received_power_dbw(*spec, range_m, orbit_radius_m, std::acos(cos_angle) / kDeg) + satellite_power_offset_db;
-  b.antenna_gain_dbic = profile.antenna.rhcp_dbic(elevation_deg, azimuth_deg);
-  b.implementation_loss_db = profile.implementation_loss_db + signal.extra_loss_db;
+  const AntennaPattern& antenna = signal.antenna ? *signal.antenna : profile.antenna;
+  b.antenna_gain_dbic = antenna.rhcp_dbic(elevation_deg, azimuth_deg);
+  // The band response joins the signal's extra loss (both quarter-dB steps: the sum is exact, so a
+  // response moved from a profile's extra loss into its antenna keeps the C/N0 to the bit).
+  b.implementation_loss_db = profile.implementation_loss_db + (signal.extra_loss_db - signal.antenna_band_response_db);
   b.noise_density_dbw_per_hz = noise_density_dbw_per_hz(profile.system_noise_temperature_k);
   b.attenuation_db = attenuation_db;
   if (is_semicodeless(signal.signal)) {
     // The loss acts on the P(Y) signal as it reaches the correlators; the signal's extra loss is
     // then what the receiver's reporting adds or removes.
-    const double before_squaring_dbhz = b.received_power_dbw + b.antenna_gain_dbic - profile.implementation_loss_db -
-                                        b.attenuation_db - b.noise_density_dbw_per_hz;
+    const double before_squaring_dbhz = b.received_power_dbw + b.antenna_gain_dbic - profile.implementation_loss_db +
+                                        signal.antenna_band_response_db - b.attenuation_db - b.noise_density_dbw_per_hz;
     b.squaring_loss_db = squaring_loss_db(before_squaring_dbhz, kWBitDuration_s);
   }
   return b;

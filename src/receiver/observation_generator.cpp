@@ -195,6 +195,26 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   return epoch;
 }
 
+const AntennaPattern* ObservationGenerator::signal_antenna(const TrackedSignal* tracked) const {
+  return tracked != nullptr && tracked->antenna ? tracked->antenna.get() : &settings_.profile.antenna;
+}
+
+const std::vector<ReceivedPath>& ObservationGenerator::received_through(const AntennaPattern* antenna,
+                                                                        const std::vector<ReceivedPath>& received,
+                                                                        const SatelliteObservation& obs) {
+  for (const auto& [pattern, paths] : band_received_) {
+    if (pattern == antenna) return paths;
+  }
+  std::vector<ReceivedPath> paths = received;
+  for (size_t i = 0; i < paths.size(); ++i) {
+    const AzimuthElevation& arrival = obs.path_directions[i];
+    paths[i].amplitude = antenna_amplitude(*antenna, obs.paths[i], arrival.elevation_deg, arrival.azimuth_deg,
+                                           obs.direction.elevation_deg, obs.direction.azimuth_deg);
+  }
+  band_received_.emplace_back(antenna, std::move(paths));
+  return band_received_.back().second;
+}
+
 void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pending_index,
                                              const Eigen::Matrix3d& rx_to_enu, int& channels_used) {
   const Pending& p = pending_[pending_index];
@@ -208,6 +228,8 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
   double attenuation_db = 0.0;
   bool direct_blocked = false;
   std::vector<ReceivedPath> received;  // multipath: the paths through the antenna
+  const AntennaPattern* received_antenna = nullptr;  // the band table `received` went through
+  band_received_.clear();
   if (!world_outcomes_.direct.empty()) {
     const RayOutcome& outcome = world_outcomes_.direct[pending_index];
     std::vector<PathSet>& path_sets = world_outcomes_.path_sets;
@@ -228,8 +250,9 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       const Eigen::Vector3d direction_rate =
           stages::direction_rate_per_s(p.light_time.line_of_sight, p.light_time.range_m, p.light_time.velocity_mps,
                                        epoch.receiver.velocity_mps);
+      received_antenna = signal_antenna(settings_.signals.empty() ? nullptr : &tracked_.at(settings_.signals.front()));
       stages::ReceivedPaths arriving =
-          stages::receive_paths(path_sets[pending_index].paths, profile.antenna, obs.direction,
+          stages::receive_paths(path_sets[pending_index].paths, *received_antenna, obs.direction,
                                 rx_to_enu * to_world.transpose(), to_world * epoch.receiver.velocity_mps,
                                 to_world * direction_rate);
       obs.path_kind = arriving.kind;
@@ -257,8 +280,12 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       continue;
     }
     // Multipath: the loops lock on the composite of the signal's paths.
+    // A band whose antenna table differs from the first signal's gets its own path amplitudes.
+    const AntennaPattern* antenna = signal_antenna(&tracked_.at(signal));
+    const std::vector<ReceivedPath>& through_antenna =
+        received.empty() || antenna == received_antenna ? received : received_through(antenna, received, obs);
     const MultipathErrors multipath = stages::signal_multipath_errors(*signal_info_.at(signal), obs.glonass_channel,
-                                                                      profile.correlator_spacing_chips, received);
+                                                                      profile.correlator_spacing_chips, through_antenna);
     const double cn0_dbhz = stages::signal_cn0_dbhz(profile, tracked_.at(signal), obs.satellite_position_m, rx_m,
                                                     obs.direction, attenuation_db,
                                                     satellite_signals_.power_offset_db(sat, signal, tag),

@@ -13,44 +13,22 @@
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/core/yaml_field.hpp"
+#include "pattern_table.hpp"
 
 #ifndef SKYTRACE_PROFILE_DIR
 #define SKYTRACE_PROFILE_DIR "profiles"
 #endif
 
 namespace skytrace::receiver {
+
+using detail::check_increasing;
+using detail::looks_like_path;
+using detail::parse_gain_rows;
+
 namespace {
 
 // Profile keys with their path and line in every message (core/yaml_field.hpp).
 using Field = YamlField;
-
-// Gain rows: one list (no azimuth) or one list per azimuth, each as long as the elevations.
-std::vector<std::vector<double>> parse_gain_rows(const Field& node, size_t elevations, size_t azimuths) {
-  std::vector<std::vector<double>> rows;
-  if (azimuths == 0) {
-    rows.push_back(node.as_doubles_in(-60.0, 25.0));
-  } else {
-    const auto items = node.elements();
-    if (items.size() != azimuths) {
-      node.fail("expected one row per azimuth (" + std::to_string(azimuths) + "), got " + std::to_string(items.size()));
-    }
-    for (const Field& row : items) rows.push_back(row.as_doubles_in(-60.0, 25.0));
-  }
-  for (size_t i = 0; i < rows.size(); ++i) {
-    if (rows[i].size() != elevations) {
-      node.fail("expected " + std::to_string(elevations) + " gains (one per elevation), got " +
-                std::to_string(rows[i].size()));
-    }
-  }
-  return rows;
-}
-
-void check_increasing(const Field& node, const std::vector<double>& values) {
-  if (values.size() < 2) node.fail("expected at least 2 values");
-  for (size_t i = 1; i < values.size(); ++i) {
-    if (values[i] <= values[i - 1]) node.fail("values must increase");
-  }
-}
 
 AntennaPattern parse_antenna(const Field& node) {
   node.expect_keys({"model", "elevation_deg", "azimuth_deg", "rhcp_gain_dbic", "lhcp_gain_dbic"});
@@ -62,8 +40,10 @@ AntennaPattern parse_antenna(const Field& node) {
     a.azimuth_deg = c->as_doubles_in(0.0, 359.999999);
     check_increasing(*c, a.azimuth_deg);
   }
-  a.rhcp_gain_dbic = parse_gain_rows(node.required("rhcp_gain_dbic"), a.elevation_deg.size(), a.azimuth_deg.size());
-  a.lhcp_gain_dbic = parse_gain_rows(node.required("lhcp_gain_dbic"), a.elevation_deg.size(), a.azimuth_deg.size());
+  a.rhcp_gain_dbic = parse_gain_rows(node.required("rhcp_gain_dbic"), a.elevation_deg.size(), a.azimuth_deg.size(),
+                                     -60.0, 25.0);
+  a.lhcp_gain_dbic = parse_gain_rows(node.required("lhcp_gain_dbic"), a.elevation_deg.size(), a.azimuth_deg.size(),
+                                     -60.0, 25.0);
   return a;
 }
 
@@ -90,7 +70,7 @@ OscillatorSettings parse_oscillator(const Field& node) {
 
 ReceiverProfile parse_root(const Field& root, const std::string& source) {
   root.expect_keys({"name", "description", "signals", "signal_extra_loss_db", "channels", "elevation_mask_deg",
-                    "antenna", "front_end", "tracking", "oscillator", "rtk"});
+                    "default_antenna", "antenna", "front_end", "tracking", "oscillator", "rtk"});
   ReceiverProfile p;
   p.source = source;
   p.name = root.required("name").as_string();
@@ -120,7 +100,15 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   }
   p.channel_count = root.required("channels").as_int_in(0, 100000);
   p.elevation_mask_deg = root.required("elevation_mask_deg").as_double_in(-10.0, 90.0);
-  p.antenna = parse_antenna(root.required("antenna"));
+  if (auto c = root.child("default_antenna")) {
+    p.default_antenna = c->as_string();
+    if (p.default_antenna.empty()) c->fail("expected the name of an antenna profile (profiles/antennas)");
+  }
+  if (auto c = root.child("antenna")) {
+    if (!p.default_antenna.empty()) c->fail("give default_antenna or an inline antenna table, not both");
+    p.antenna = parse_antenna(*c);
+    p.inline_antenna = true;
+  }
 
   const Field front_end = root.required("front_end");
   front_end.expect_keys({"system_noise_temperature_k", "implementation_loss_db"});
@@ -170,10 +158,6 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
     if (auto c = rtk->child("ambiguity_noise_cycles")) r.ambiguity_noise_cycles = c->as_double_in(0.0, 10.0);
   }
   return p;
-}
-
-bool looks_like_path(const std::string& text) {
-  return text.find('/') != std::string::npos || (text.size() > 5 && text.ends_with(".yaml"));
 }
 
 double interpolate_row(const std::vector<double>& x, const std::vector<double>& y, double at) {
@@ -234,13 +218,13 @@ double AntennaPattern::lhcp_dbic(double elevation_deg_, double azimuth_deg_) con
 }
 
 const TrackedSignal* ReceiverProfile::tracked(const Signal& signal) const {
+  for (const TrackedSignal& s : signals) {
+    if (s.signal == signal) return &s;
+  }
   if (all_signals) {
     static thread_local TrackedSignal any;
     any = TrackedSignal{signal, 0.0};
     return &any;
-  }
-  for (const TrackedSignal& s : signals) {
-    if (s.signal == signal) return &s;
   }
   return nullptr;
 }
@@ -319,7 +303,6 @@ std::vector<std::string> available_profile_names(const std::filesystem::path& sc
   return {names.begin(), names.end()};
 }
 
-Result<ReceiverProfile> builtin_profile(const std::string& name) { return load_profile(name); }
 
 TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& signal, double carrier_hz,
                              double cn0_dbhz) {
@@ -397,5 +380,42 @@ bool has_data_modulation(const SignalInfo& signal) {
   }
   return true;
 }
+
+namespace detail {
+
+std::vector<std::vector<double>> parse_gain_rows(const YamlField& node, size_t elevations, size_t azimuths,
+                                                 double low_db, double high_db) {
+  // One list (no azimuth) or one list per azimuth, each as long as the elevations.
+  std::vector<std::vector<double>> rows;
+  if (azimuths == 0) {
+    rows.push_back(node.as_doubles_in(low_db, high_db));
+  } else {
+    const auto items = node.elements();
+    if (items.size() != azimuths) {
+      node.fail("expected one row per azimuth (" + std::to_string(azimuths) + "), got " + std::to_string(items.size()));
+    }
+    for (const YamlField& row : items) rows.push_back(row.as_doubles_in(low_db, high_db));
+  }
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].size() != elevations) {
+      node.fail("expected " + std::to_string(elevations) + " gains (one per elevation), got " +
+                std::to_string(rows[i].size()));
+    }
+  }
+  return rows;
+}
+
+void check_increasing(const YamlField& node, const std::vector<double>& values) {
+  if (values.size() < 2) node.fail("expected at least 2 values");
+  for (size_t i = 1; i < values.size(); ++i) {
+    if (values[i] <= values[i - 1]) node.fail("values must increase");
+  }
+}
+
+bool looks_like_path(const std::string& text) {
+  return text.find('/') != std::string::npos || (text.size() > 5 && text.ends_with(".yaml"));
+}
+
+}  // namespace detail
 
 }  // namespace skytrace::receiver

@@ -127,7 +127,8 @@ Result<std::unique_ptr<LiveSession>> LiveSession::create(const Scenario& scenari
   impl->pose = std::make_shared<ExternalPose>(*kinematics, options.pose_timeout_s);
   if (auto st = impl->restart(); !st) return st.error();
   impl->header = make_observation_header(impl->scenario, rx, impl->marker_m, *impl->resources.ephemerides,
-                                         impl->resources.left_out_systems);
+                                         impl->resources.left_out_systems,
+                                         impl->generator->settings().profile.antenna_rinex_type);
   impl->records = std::make_unique<RinexRecordMaker>(impl->header);
   return std::unique_ptr<LiveSession>(new LiveSession(std::move(impl)));
 }

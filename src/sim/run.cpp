@@ -286,7 +286,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     auto generator = make_generator(s, *resources, i, rx.kinematics);
     if (!generator) return generator.error();
     rx.generator = std::move(*generator);
-    rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides, resources->left_out_systems);
+    rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides, resources->left_out_systems,
+                                        rx.generator->settings().profile.antenna_rinex_type);
   }
 
   RunSummary summary;

@@ -72,7 +72,7 @@ PositionSetting::Kind parse_frame(const Node& node) {
 
 ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& base, const std::string& default_name) {
   node.expect_keys({"name", "position", "trajectory", "antenna_height_m", "antenna_offset_en_m", "elevation_mask_deg",
-                    "profile", "signals", "receiver_type", "antenna_type", "rtk"});
+                    "profile", "antenna", "signals", "receiver_type", "antenna_type", "rtk"});
   ReceiverSettings r;
   r.name = default_name;
   if (auto c = node.child("name")) {
@@ -107,6 +107,10 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
   }
   if (auto c = node.child("elevation_mask_deg")) r.elevation_mask_deg = c->as_double_in(-10.0, 90.0);
   if (auto c = node.child("profile")) r.profile = c->as_string();
+  if (auto c = node.child("antenna")) {
+    r.antenna = c->as_string();
+    if (r.antenna.empty()) c->fail("expected an antenna profile's name, path or IGS name");
+  }
   const Node signals = node.required("signals");
   for (const Node& s : signals.elements()) {
     auto signal = Signal::parse(s.as_string());
@@ -501,6 +505,7 @@ std::string scenario_to_json(const Scenario& s) {
     jr["antenna_offset_en_m"] = {r.antenna_offset_en_m.x(), r.antenna_offset_en_m.y()};
     jr["elevation_mask_deg"] = r.elevation_mask_deg;
     jr["profile"] = r.profile;
+    if (!r.antenna.empty()) jr["antenna"] = r.antenna;
     jr["signals"] = json::array();
     for (const auto& sig : r.signals) jr["signals"].push_back(sig.to_string());
     jr["receiver_type"] = r.receiver_type;

@@ -12,6 +12,7 @@
 #include "skytrace/atmosphere/ionex.hpp"
 #include "skytrace/orbits/nominal.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
+#include "skytrace/receiver/antenna.hpp"
 #include "skytrace/sim/trajectory.hpp"
 
 namespace skytrace::sim {
@@ -369,6 +370,9 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
     return make_error(ErrorCode::kInvalidArgument, s.source.string() + ": receiver.signals: profile '" + profile->name +
                                                        "' cannot track " + signal.to_string() + " (it tracks " + list + ")");
   }
+  if (auto st = receiver::attach_antenna(*profile, rx.antenna, rx.signals, s.source.parent_path()); !st) {
+    return st.error().with_context(s.source.string());
+  }
   if (auto preset = receiver::oscillator_preset(s.models.receiver_clock)) {
     profile->oscillator.h0 = preset->h0;
     profile->oscillator.h_minus1 = preset->h_minus1;
@@ -400,7 +404,8 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
 
 io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverSettings& rx,
                                               const Eigen::Vector3d& marker_m, const orbits::BroadcastEphemerides& eph,
-                                              const std::map<GnssSystem, std::string>& left_out_systems) {
+                                              const std::map<GnssSystem, std::string>& left_out_systems,
+                                              const std::string& antenna_in_use) {
   io::ObservationHeader h;
   h.version = s.output.rinex_version == "4.00" ? 4.00 : 3.04;
   h.program = "skytrace 0.1.0";
@@ -416,7 +421,8 @@ io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverS
   h.receiver_type = rx.receiver_type;
   h.receiver_version = "0.1.0";
   h.antenna_number = "1";
-  h.antenna_type = rx.antenna_type;
+  // The scenario's antenna_type says what the header says; else the IGS name of the antenna in use.
+  h.antenna_type = rx.antenna_type.empty() ? antenna_in_use : rx.antenna_type;
   h.approx_position_ecef_m = {marker_m.x(), marker_m.y(), marker_m.z()};
   h.antenna_delta_hen_m = {rx.antenna_height_m, rx.antenna_offset_en_m.x(), rx.antenna_offset_en_m.y()};
   for (const Signal& signal : served_signals(rx, left_out_systems)) {

@@ -403,6 +403,33 @@ TEST_F(BadInputCatalogue, DuplicateYamlKeyNamesBothLines) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "s.yaml:2: name: duplicate key \\(first at line 1");
 }
 
+// Antennas (issue #13): an unknown name lists the known ones; a band the antenna lacks and a gain
+// beyond -40..+20 dBic name the antenna's file and field.
+std::string receiver_with_antenna(const std::string& antenna, const std::string& signals) {
+  return "receiver:\n  name: CATA\n  position:\n    lla_deg_m: [48.1, 11.6, 520.0]\n  antenna: " + antenna +
+         "\n  signals: " + signals + "\n";
+}
+
+TEST_F(BadInputCatalogue, UnknownAntennaListsTheKnownOnes) {
+  write_text(dir_ / "s.yaml", nominal_scenario(receiver_with_antenna("no-such-antenna", "[G1C]")));
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3,
+           "s.yaml: receiver.antenna: unknown antenna 'no-such-antenna' .*known: ann-mb, choke-ring-ash701945e");
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "obs.rnx"));
+}
+
+TEST_F(BadInputCatalogue, AntennaWithoutTheSignalsBandNamesFileAndBand) {
+  write_text(dir_ / "s.yaml", nominal_scenario(receiver_with_antenna("smartphone", "[G1C, G2L]")));
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "antennas/smartphone.yaml: gain_dbic: no band 2 for G2L");
+}
+
+TEST_F(BadInputCatalogue, AntennaGainBeyondTwentyDbiNamesFileLineAndField) {
+  fs::create_directories(dir_ / "profiles" / "antennas");  // beside the scenario
+  write_text(dir_ / "profiles" / "antennas" / "hot.yaml",
+             "name: hot\nelevation_deg: [0, 90]\ngain_dbic:\n  1: [-5, 25]\nlhcp_rejection_db: [3, 20]\n");
+  write_text(dir_ / "s.yaml", nominal_scenario(receiver_with_antenna("hot", "[G1C]")));
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "hot.yaml:4: gain_dbic.1\\[1\\]: value 25 out of range \\[-40, 20\\]");
+}
+
 TEST_F(BadInputCatalogue, ServePortAbove65535IsRefused) {
   run_case(skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") + " --nmea-tcp :99999 --duration-s 1", 2,
            "port must be a number from 0 to 65535");

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 
+#include "skytrace/receiver/antenna.hpp"
+#include "skytrace/receiver/link_budget.hpp"
+#include "skytrace/receiver/multipath.hpp"
 #include "skytrace/receiver/profile.hpp"
 
 namespace skytrace::receiver {
@@ -243,6 +247,170 @@ TEST(ReceiverProfiles, DataAndPilotComponents) {
   EXPECT_FALSE(data("C1P"));
   EXPECT_FALSE(data("J2L"));
   EXPECT_TRUE(data("C7I"));  // B2I (BDS-2) has data on I
+}
+
+// ---------------------------------------------------------------- antenna profiles
+
+constexpr const char* kAntenna = R"(name: mine
+igs_names: ["MINE0001 NONE"]
+elevation_deg: [0, 90]
+gain_dbic:
+  "1, 2": [-5, 5]
+  R1: [-6, 4]
+band_response_db:
+  2: -1.25
+lhcp_rejection_db: [3, 20]
+front_end:
+  antenna_temperature_k: 100
+  lna_gain_db: 30
+  lna_noise_figure_db: 2
+  cable_loss_db: 3
+)";
+
+std::string antenna_error_of(const std::string& text) {
+  auto a = parse_antenna_profile(text, "mine.yaml");
+  EXPECT_FALSE(a) << "accepted";
+  return a ? std::string() : a.error().message;
+}
+
+TEST(AntennaProfiles, BandsByDigitOrSystemAndLhcpFromTheRejection) {
+  const AntennaProfile a = parse_antenna_profile(kAntenna, "mine.yaml").value();
+  EXPECT_EQ(a.igs_names, std::vector<std::string>{"MINE0001        NONE"});
+  EXPECT_EQ(a.rinex_type, "MINE0001        NONE");
+  const AntennaBand* l1 = a.band_for(Signal::parse("G1C").value());
+  const AntennaBand* l2 = a.band_for(Signal::parse("G2W").value());
+  const AntennaBand* g1 = a.band_for(Signal::parse("R1C").value());
+  ASSERT_TRUE(l1 && l2 && g1);
+  EXPECT_EQ(l1->pattern, l2->pattern);  // one table shared by the bands of an entry
+  EXPECT_DOUBLE_EQ(l2->response_db, -1.25);
+  EXPECT_DOUBLE_EQ(g1->pattern->rhcp_dbic(90.0, 0.0), 4.0);  // GLONASS G1 has its own
+  EXPECT_DOUBLE_EQ(l1->pattern->lhcp_dbic(90.0, 0.0), 5.0 - 20.0);
+  EXPECT_DOUBLE_EQ(g1->pattern->lhcp_dbic(0.0, 0.0), -6.0 - 3.0);
+  EXPECT_EQ(a.band_for(Signal::parse("G5Q").value()), nullptr);
+  // Friis: 100 K + 290 (10^0.2 - 1) + 290 (10^0.3 - 1) / 10^3.
+  EXPECT_NEAR(a.front_end->noise_temperature_k(), 100.0 + 169.6 + 0.289, 0.05);
+}
+
+TEST(AntennaProfiles, MessagesNameFileLineAndField) {
+  std::string e = antenna_error_of(replaced(kAntenna, "[-6, 4]", "[-6, 25]"));
+  EXPECT_NE(e.find("mine.yaml:6: gain_dbic.R1[1]: value 25 out of range [-40, 20]"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "[-5, 5]", "[-45, 5]"));
+  EXPECT_NE(e.find("gain_dbic.1, 2[0]: value -45 out of range [-40, 20]"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "  R1:", "  X1:"));
+  EXPECT_NE(e.find("mine.yaml:6: gain_dbic.X1: band 'X1'"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "  2: -1.25", "  5: -1.25"));
+  EXPECT_NE(e.find("band_response_db.5: band 5 has no gain_dbic table"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "lhcp_rejection_db: [3, 20]\n", ""));
+  EXPECT_NE(e.find("give one of lhcp_gain_dbic"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "[-5, 5]", "[-5, 5, 6]"));
+  EXPECT_NE(e.find("gain_dbic.1, 2: expected 2 gains"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "  cable_loss_db: 3\n", ""));
+  EXPECT_NE(e.find("front_end: missing required key 'cable_loss_db'"), std::string::npos) << e;
+  e = antenna_error_of(replaced(kAntenna, "name: mine\n", "name: mine\nradome: SCIS\n"));
+  EXPECT_NE(e.find("radome: unknown key"), std::string::npos) << e;
+}
+
+TEST(AntennaProfiles, ShippedAntennasAndEveryProfilesDefaultCoverItsSignals) {
+  const auto names = available_antenna_names();
+  for (const char* name : {"choke-ring-ash701945e", "choke-ring-dm", "survey-patch", "ann-mb", "helical", "smartphone",
+                           "generic-geodetic"}) {
+    EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
+    auto a = load_antenna(name);
+    ASSERT_TRUE(a) << a.error().message;
+    EXPECT_EQ(a->name, name);
+    EXPECT_TRUE(a->front_end.has_value()) << name;
+  }
+  for (const char* name : {"ideal", "septentrio-polarx5", "septentrio-mosaic-x5", "trimble-netr9", "ublox-f9p",
+                           "ublox-m8t"}) {
+    auto p = builtin_profile(name);  // attaches the default antenna for every tracked signal
+    ASSERT_TRUE(p) << p.error().message;
+    EXPECT_FALSE(p->default_antenna.empty()) << name;
+    EXPECT_FALSE(p->inline_antenna) << name;  // receiver properties only
+    for (const TrackedSignal& t : p->signals) EXPECT_TRUE(t.antenna) << name << " " << t.signal.to_string();
+  }
+}
+
+TEST(AntennaProfiles, DefaultAntennasKeepTheFormerLinkBudgetToTheBit) {
+  // The PolaRx5's former inline table and extra losses (before issue #13).
+  AntennaPattern former;
+  former.elevation_deg = {-90, -10, 0, 5, 10, 15, 20, 25, 30, 40, 50, 60, 70, 80, 90};
+  former.rhcp_gain_dbic = {{-40, -25.0, -18.6, -12.6, -10.0, -8.4, -6.7, -5.1, -2.9, -0.3, 1.9, 3.2, 4.1, 4.5, 4.7}};
+  const std::map<std::string, double> former_extra_db = {{"G1C", 0.0}, {"G5Q", 5.5}, {"E5Q", 8.0}, {"E6C", 12.0},
+                                                         {"C6I", 2.75}, {"C5P", 0.0}, {"J5Q", 0.0}, {"G2W", -9.75},
+                                                         {"E8Q", 2.0}, {"R3Q", 0.0}};
+  const ReceiverProfile p = builtin_profile("septentrio-polarx5").value();
+  EXPECT_EQ(p.system_noise_temperature_k, 290.0);  // the default's chain replaced by itself
+  EXPECT_EQ(p.antenna_rinex_type, "ASH701945E_M    SCIS");
+  const Eigen::Vector3d satellite_m(15e6, 5e6, 20e6), receiver_m(3582105.0, 532589.0, 5232754.0);
+  for (const auto& [code, extra_db] : former_extra_db) {
+    const TrackedSignal& t = *p.tracked(Signal::parse(code).value());
+    for (const double elevation_deg : {3.0, 17.0, 44.4, 88.0}) {
+      const LinkBudget b = link_budget(p, t, satellite_m, receiver_m, elevation_deg, 0.0, 0.0);
+      EXPECT_EQ(b.antenna_gain_dbic, former.rhcp_dbic(elevation_deg, 0.0)) << code;
+      EXPECT_EQ(b.implementation_loss_db, 1.5 + extra_db) << code;
+    }
+  }
+}
+
+TEST(AntennaProfiles, AnotherAntennaChangesGainNoiseAndReflections) {
+  ReceiverProfile p = load_profile("ublox-f9p").value();
+  const std::vector<Signal> signals = {Signal::parse("G1C").value()};
+  ASSERT_TRUE(attach_antenna(p, "smartphone", signals, {}));
+  const AntennaProfile phone = load_antenna("smartphone").value();
+  const AntennaProfile patch = load_antenna("ann-mb").value();
+  EXPECT_EQ(p.antenna_name, "smartphone");
+  EXPECT_EQ(p.antenna_rinex_type, "");  // no IGS name
+  EXPECT_NEAR(p.system_noise_temperature_k,
+              350.0 - patch.front_end->noise_temperature_k() + phone.front_end->noise_temperature_k(), 1e-9);
+  EXPECT_GT(p.system_noise_temperature_k, 350.0);
+  EXPECT_LT(p.tracked(signals[0])->antenna->rhcp_dbic(60.0, 0.0), -9.0);
+  // A once-reflected (LHCP) path from 10 degrees: the phone's linear antenna barely rejects it.
+  SignalPath reflected;
+  reflected.type = PathType::kReflected;
+  reflected.rhcp_amplitude = 0.0;
+  reflected.lhcp_amplitude = 0.5;
+  const double through_phone = std::abs(antenna_amplitude(*phone.bands.at("1").pattern,
+                                                          reflected, 10.0, 0.0, 60.0, 0.0));
+  const double through_choke =
+      std::abs(antenna_amplitude(*load_antenna("choke-ring-ash701945e").value().bands.at("1").pattern, reflected, 10.0,
+                                 0.0, 60.0, 0.0));
+  EXPECT_GT(through_phone, 10.0 * through_choke);
+  // A band the antenna lacks names the antenna's file and the band.
+  ReceiverProfile polarx5 = load_profile("septentrio-polarx5").value();
+  const Status st = attach_antenna(polarx5, "smartphone", {Signal::parse("G2W").value()}, {});
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.error().message.find("smartphone.yaml: gain_dbic: no band 2 for G2W"), std::string::npos)
+      << st.error().message;
+}
+
+TEST(AntennaProfiles, FoundByNamePathOrIgsName) {
+  const AntennaProfile exact = load_antenna("ASH701945E_M    SCIS").value();
+  EXPECT_EQ(exact.name, "choke-ring-ash701945e");
+  EXPECT_EQ(exact.rinex_type, "ASH701945E_M    SCIS");
+  // One space, lower case, a radome no profile lists: the type decides, the header keeps the radome.
+  const AntennaProfile other_radome = load_antenna("trm59800.00 leit").value();
+  EXPECT_EQ(other_radome.name, "survey-patch");
+  EXPECT_EQ(other_radome.rinex_type, "TRM59800.00     LEIT");
+  EXPECT_EQ(load_antenna("TRM59800.80").value().name, "choke-ring-dm");  // radome NONE
+  TempDir dir;
+  const auto scenario_dir = dir.path() / "scenario";
+  write(scenario_dir / "profiles" / "antennas" / "mine.yaml", kAntenna);
+  write(scenario_dir / "ant" / "other.yaml", replaced(kAntenna, "name: mine", "name: other"));
+  EXPECT_EQ(load_antenna("mine", scenario_dir).value().name, "mine");
+  EXPECT_EQ(load_antenna("ant/other.yaml", scenario_dir).value().name, "other");
+  EXPECT_EQ(load_antenna("MINE0001", scenario_dir).value().name, "mine");
+  auto unknown = load_antenna("no-such-antenna", scenario_dir);
+  ASSERT_FALSE(unknown);
+  const std::string& e = unknown.error().message;
+  EXPECT_NE(e.find("unknown antenna 'no-such-antenna'"), std::string::npos) << e;
+  EXPECT_NE(e.find("known: ann-mb, choke-ring-ash701945e, choke-ring-dm, generic-geodetic, helical, mine, "),
+            std::string::npos) << e;
+  auto missing = load_antenna("ant/none.yaml", scenario_dir);
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().message.find("antenna profile file not found"), std::string::npos);
+  // A receiver profile names its default antenna; an inline table and a default together are refused.
+  std::string e2 = error_of(replaced(kValid, "channels: 12\n", "channels: 12\ndefault_antenna: survey-patch\n"));
+  EXPECT_NE(e2.find("antenna: give default_antenna or an inline antenna table, not both"), std::string::npos) << e2;
 }
 
 }  // namespace

@@ -67,7 +67,7 @@ inline constexpr double kWBitDuration_s = 20.0 / 10.23e6;
 struct LinkBudget {
   double received_power_dbw = 0.0;
   double antenna_gain_dbic = 0.0;
-  double implementation_loss_db = 0.0;  // profile's loss plus the signal's extra loss
+  double implementation_loss_db = 0.0;  // profile's loss plus the signal's extra loss less the antenna's band response
   double noise_density_dbw_per_hz = 0.0;
   double attenuation_db = 0.0;          // vegetation, ...
   double squaring_loss_db = 0.0;        // semi-codeless tracking only

@@ -149,6 +149,13 @@ class ObservationGenerator {
   stages::WorldOutcomes world_outcomes_;
   std::vector<size_t> order_;
   std::vector<stages::Candidate> candidates_;
+  // Multipath: a satellite's paths through the antenna tables of bands other than the first
+  // signal's (bands sharing a table share one entry).
+  std::vector<std::pair<const AntennaPattern*, std::vector<ReceivedPath>>> band_received_;
+  [[nodiscard]] const AntennaPattern* signal_antenna(const TrackedSignal* tracked) const;
+  [[nodiscard]] const std::vector<ReceivedPath>& received_through(const AntennaPattern* antenna,
+                                                                  const std::vector<ReceivedPath>& received,
+                                                                  const SatelliteObservation& obs);
   // The records a satellite's signals used this epoch, entered into used_* once it is output.
   std::vector<std::tuple<const orbits::KeplerEphemeris*, const orbits::GlonassEphemeris*, const orbits::SbasEphemeris*>>
       records_used_;

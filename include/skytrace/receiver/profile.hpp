@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,10 +46,18 @@ struct AntennaPattern {
 };
 
 struct TrackedSignal {
+  TrackedSignal() = default;
+  TrackedSignal(const Signal& tracked_signal, double extra_loss) : signal(tracked_signal), extra_loss_db(extra_loss) {}
+
   Signal signal;
-  // Beyond the implementation loss (semi-codeless tracking, antenna band response); negative when
-  // a fit on real data finds the signal stronger than the link budget says.
+  // Beyond the implementation loss (semi-codeless tracking, the receiver's reporting, satellites
+  // stronger than their ICD row); negative when a fit on real data finds the signal stronger than
+  // the link budget says. The antenna's band response is the antenna's (below).
   double extra_loss_db = 0.0;
+  // The antenna's table for the signal's band and the band's response (antenna.hpp); no table: the
+  // profile's `antenna`.
+  std::shared_ptr<const AntennaPattern> antenna;
+  double antenna_band_response_db = 0.0;
 };
 
 // How the receiver's navigation engine computes RTK (scenario key receivers[].rtk): the profile's
@@ -74,7 +83,17 @@ struct ReceiverProfile {
   std::vector<TrackedSignal> signals;
   int channel_count = 0;  // signal channels; 0 = unlimited
   double elevation_mask_deg = 0.0;
+  // The antenna profile used when the scenario names none (profiles/antennas; antenna.hpp).
+  std::string default_antenna;
+  // The older form: an antenna table inside the receiver profile (`antenna:`), then the pattern of
+  // every band; also the table of signals without an antenna of their own.
+  bool inline_antenna = false;
   AntennaPattern antenna;
+  // The antenna in use once attached (attach_antenna): its profile name and RINEX ANT # / TYPE.
+  std::string antenna_name;
+  std::string antenna_rinex_type;
+  // Referred to the antenna element's port, with the default antenna's chain (LNA, cable) when the
+  // profile names one: attach_antenna swaps that chain for the one in use.
   double system_noise_temperature_k = 290.0;
   double implementation_loss_db = 0.0;
   // Tracking-loop parameters for the thermal-noise formulas (Kaplan & Hegarty, ch. 8).
@@ -122,7 +141,8 @@ struct ReceiverProfile {
 // Names of the profiles found on the search path (sorted, without duplicates).
 [[nodiscard]] std::vector<std::string> available_profile_names(const std::filesystem::path& scenario_dir = {});
 
-// Former built-in lookup, now by name from the project's folder (kept for existing callers).
+// Former built-in lookup, now by name from the project's folder (kept for existing callers), with
+// its default antenna attached for every signal it tracks (antenna.hpp).
 [[nodiscard]] Result<ReceiverProfile> builtin_profile(const std::string& name);
 
 // 1-sigma thermal noise of the code (m), carrier phase (m) and Doppler (m/s) for a signal at a

@@ -62,6 +62,9 @@ struct ReceiverSettings {
   Eigen::Vector2d antenna_offset_en_m = Eigen::Vector2d::Zero();  // RINEX DELTA E/N
   double elevation_mask_deg = 5.0;
   std::string profile = "ideal";
+  // The antenna profile (name, path or IGS name; receiver/antenna.hpp); empty: the receiver
+  // profile's default_antenna.
+  std::string antenna;
   std::vector<Signal> signals;
   std::string receiver_type = "SKYTRACE";
   std::string antenna_type = "";

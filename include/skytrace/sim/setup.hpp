@@ -113,10 +113,12 @@ struct SystemCoverage {
     std::shared_ptr<const receiver::KinematicsSource> kinematics);
 
 // The RINEX header of a receiver's observation file.
-// Signals of `left_out_systems` (ScenarioResources) are not listed.
+// Signals of `left_out_systems` (ScenarioResources) are not listed. ANT # / TYPE: the scenario's
+// antenna_type, else `antenna_in_use` (the generator profile's antenna_rinex_type).
 [[nodiscard]] io::ObservationHeader make_observation_header(
     const Scenario& scenario, const ReceiverSettings& receiver, const Eigen::Vector3d& marker_m,
-    const orbits::BroadcastEphemerides& ephemerides, const std::map<GnssSystem, std::string>& left_out_systems = {});
+    const orbits::BroadcastEphemerides& ephemerides, const std::map<GnssSystem, std::string>& left_out_systems = {},
+    const std::string& antenna_in_use = {});
 
 // The creation date written into RINEX headers ("YYYYMMDD HHMMSS UTC"): SOURCE_DATE_EPOCH (seconds
 // since 1970, the reproducible-builds convention) when set, else the scenario's start time, so
