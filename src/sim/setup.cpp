@@ -346,7 +346,7 @@ Result<std::shared_ptr<const receiver::AntennaPhaseCentre>> load_antenna_phase_c
   const std::string name = antex_antenna_name(rx);
   const std::string where = s.source.string() + ": receiver '" + rx.name + "'";
   if (name.empty()) {
-    return make_error(ErrorCode::kInvalidArgument,
+    return make_error(ErrorCode::kParse,  // a scenario mistake, exit 3 like the others
                       where + ": receiver.antex needs receiver.antenna_type, the antenna's IGS name "
                               "(e.g. 'TRM59800.00     NONE') to look up in " + rx.antex->string());
   }
