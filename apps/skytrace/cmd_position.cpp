@@ -3,6 +3,8 @@
 // CSV.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -16,6 +18,7 @@
 #include "skytrace/io/fix_csv.hpp"
 #include "skytrace/io/rinex_measurements.hpp"
 #include "skytrace/io/rinex_obs.hpp"
+#include "skytrace/io/rtcm3.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/core/frames.hpp"
@@ -79,6 +82,74 @@ Result<Eigen::Vector3d> base_position(const PositionArgs& args, const io::Observ
   return enu_to_ecef(Eigen::Vector3d(d[1], d[2], d[0]), ecef_to_geodetic(marker));
 }
 
+// Whether a file holds RTCM 3 (a frame preamble within its first bytes) rather than RINEX text.
+bool looks_like_rtcm3(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[64] = {};
+  in.read(head, sizeof head);
+  for (std::streamsize i = 0; i + 2 < in.gcount(); ++i) {
+    if (static_cast<unsigned char>(head[i]) == 0xD3 && (static_cast<unsigned char>(head[i + 1]) & 0xFC) == 0) return true;
+  }
+  return false;
+}
+
+// The base's epochs, each with the base's antenna reference point: from a RINEX file (position from
+// --base-position or the header), or from an RTCM 3 file (position from --base-position or its
+// 1005/1006; `rover_start` places the RTCM times of week).
+Result<std::vector<positioning::BaseEpoch>> read_base(const PositionArgs& args, const GnssTime& rover_start) {
+  std::vector<positioning::BaseEpoch> out;
+  if (looks_like_rtcm3(args.base_path)) {
+    std::ifstream in(args.base_path, std::ios::binary);
+    if (!in) return make_error(ErrorCode::kIo, args.base_path + ": cannot open");
+    io::Rtcm3Decoder decoder(rover_start);
+    std::vector<std::uint8_t> chunk(1 << 16);
+    while (in) {
+      in.read(reinterpret_cast<char*>(chunk.data()), static_cast<std::streamsize>(chunk.size()));
+      decoder.feed(std::span<const std::uint8_t>(chunk.data(), static_cast<size_t>(in.gcount())));
+    }
+    decoder.finish();
+    const auto& counts = decoder.counts();
+    if (counts.skipped_bytes > 0 || counts.malformed_messages > 0 || counts.unknown_signal_cells > 0) {
+      std::cerr << fmt::format("skytrace position: warning: {}: {} bytes outside valid frames, {} malformed messages, "
+                               "{} MSM cells of unknown signals skipped\n",
+                               args.base_path, counts.skipped_bytes, counts.malformed_messages, counts.unknown_signal_cells);
+    }
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    if (!args.base_position.empty()) {
+      io::ObservationHeader none;
+      auto given = base_position(args, none);
+      if (!given) return given.error();
+      position = *given;
+    } else if (decoder.station()) {
+      position = decoder.station()->arp_ecef_m;
+    } else {
+      return make_error(ErrorCode::kInvalidArgument,
+                        args.base_path + ": the RTCM stream carries no station position (message 1005 or 1006): give "
+                                         "the base position with --base-position X,Y,Z");
+    }
+    io::RtcmMeasurementConverter converter;
+    for (const auto& epoch : decoder.take_epochs()) out.push_back(positioning::BaseEpoch{converter.convert(epoch), position});
+    if (out.empty()) {
+      return make_error(ErrorCode::kNotFound, args.base_path + ": no MSM observation message in the RTCM stream");
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+      return a.measurements.receiver_time < b.measurements.receiver_time;
+    });
+    return out;
+  }
+  auto base = io::read_rinex_obs(args.base_path);
+  if (!base) return base.error();
+  for (const auto& warning : base->warnings) std::cerr << "skytrace position: warning: " << warning << "\n";
+  auto position = base_position(args, base->header);
+  if (!position) return position.error();
+  const io::MeasurementExtractor extractor(base->header);
+  for (const auto& b : base->epochs) {
+    if (b.flag != io::EpochFlag::kOk && b.flag != io::EpochFlag::kPowerFailure) continue;
+    out.push_back(positioning::BaseEpoch{extractor.measurements(b), *position});
+  }
+  return out;
+}
+
 int run_position(const PositionArgs& args) {
   positioning::SolverSettings settings;
   settings.elevation_mask_deg = args.elevation_mask_deg;
@@ -123,20 +194,14 @@ int run_position(const PositionArgs& args) {
   const io::MeasurementExtractor extractor(observations->header);
   positioning::SinglePointSolver solver(ephemerides, settings, klobuchar);
 
-  // RTK with a base: its epochs, position and the engine.
-  std::optional<io::ObservationFile> base_observations;
-  std::optional<io::MeasurementExtractor> base_extractor;
+  // RTK with a base: its epochs (a RINEX observation file, or an RTCM 3 file as a reference
+  // station streams it), its position and the engine.
+  std::vector<positioning::BaseEpoch> base_epochs;
   std::optional<positioning::RtkEngine> rtk;
-  Eigen::Vector3d base_m = Eigen::Vector3d::Zero();
   if (!args.base_path.empty()) {
-    auto base = io::read_rinex_obs(args.base_path);
+    auto base = read_base(args, observations->epochs.empty() ? GnssTime{} : observations->epochs.front().time);
     if (!base) return report_error(base.error());
-    for (const auto& warning : base->warnings) std::cerr << "skytrace position: warning: " << warning << "\n";
-    auto position = base_position(args, base->header);
-    if (!position) return report_error(position.error());
-    base_m = *position;
-    base_extractor.emplace(base->header);
-    base_observations = std::move(*base);
+    base_epochs = std::move(*base);
     positioning::RtkSettings rtk_settings;
     rtk_settings.single_point = settings;
     rtk_settings.systems = settings.systems;
@@ -152,7 +217,7 @@ int run_position(const PositionArgs& args) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "--base-position needs --base"));
   }
   size_t base_next = 0;  // the first base epoch not yet passed
-  std::optional<positioning::BaseEpoch> base_epoch;
+  const positioning::BaseEpoch* base_epoch = nullptr;
 
   std::string csv = io::fix_csv_header();
   size_t epochs = 0, fixes = 0;
@@ -163,14 +228,11 @@ int run_position(const PositionArgs& args) {
     if (rtk) {
       // The latest base epoch at or before the rover's (within a millisecond): the engine says
       // when it is too old.
-      const auto& list = base_observations->epochs;
-      while (base_next < list.size() && list[base_next].time - epoch.time <= 1e-3) {
-        const io::ObservationEpoch& b = list[base_next++];
-        if (b.flag != io::EpochFlag::kOk && b.flag != io::EpochFlag::kPowerFailure) continue;
-        base_epoch = positioning::BaseEpoch{base_extractor->measurements(b), base_m};
+      while (base_next < base_epochs.size() && base_epochs[base_next].measurements.receiver_time - epoch.time <= 1e-3) {
+        base_epoch = &base_epochs[base_next++];
       }
     }
-    auto fix = rtk ? rtk->solve(extractor.measurements(epoch), base_epoch ? &*base_epoch : nullptr)
+    auto fix = rtk ? rtk->solve(extractor.measurements(epoch), base_epoch)
                    : solver.solve(extractor.measurements(epoch));
     if (!fix) return report_error(fix.error().with_context(args.obs_path));
     if (fix->type != positioning::FixType::kNone) {
@@ -215,7 +277,8 @@ void register_position_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-ionosphere", args->no_ionosphere, "Do not apply the Klobuchar model");
   cmd->add_flag("--no-troposphere", args->no_troposphere, "Do not apply the Saastamoinen model");
   cmd->add_option("--base", args->base_path,
-                  "RTK: base station observation file; the rover's fixes become rtk_fixed / rtk_float / dgnss");
+                  "RTK: base station observations, a RINEX file or an RTCM 3 file (MSM4-7, 1005/1006); the "
+                  "rover's fixes become rtk_fixed / rtk_float / dgnss");
   cmd->add_option("--base-position", args->base_position,
                   "RTK: base antenna reference point X,Y,Z (m, ECEF); default: the base header's APPROX POSITION "
                   "XYZ plus its antenna delta");

@@ -11,11 +11,12 @@ constexpr const char* kFixCsvHeader =
     "time_gpst,week,tow_s,fix,satellites_used,latitude_deg,longitude_deg,height_m,x_m,y_m,z_m,"
     "sigma_east_m,sigma_north_m,sigma_up_m,velocity_east_mps,velocity_north_mps,velocity_up_mps,"
     "clock_bias_m,clock_drift_mps,gdop,pdop,hdop,vdop,tdop,system_clocks_m,rejected,message,"
-    "ratio,fixed_ambiguities,age_s,baseline_east_m,baseline_north_m,baseline_up_m\n";
+    "ratio,fixed_ambiguities,age_s,baseline_east_m,baseline_north_m,baseline_up_m,heading_deg,pitch_deg,"
+    "heading_sigma_deg,pitch_sigma_deg\n";
 
 // The relative-positioning cells (empty without an RTK engine).
 std::string relative_cells(const positioning::PositionFix& fix) {
-  if (!fix.relative) return ",,,,,";
+  if (!fix.relative) return ",,,,,,,,,";
   const auto& r = *fix.relative;
   std::string out = fmt::format("{:.2f},{},{:.3f},", r.ratio, r.fixed_ambiguities, r.age_s);
   if (r.baseline_valid) {
@@ -23,6 +24,10 @@ std::string relative_cells(const positioning::PositionFix& fix) {
   } else {
     out += ",,";
   }
+  const auto cell = [](const std::optional<double>& v, int decimals) {
+    return v ? fmt::format(",{:.{}f}", *v, decimals) : std::string(",");
+  };
+  out += cell(r.heading_deg, 3) + cell(r.pitch_deg, 3) + cell(r.heading_sigma_deg, 3) + cell(r.pitch_sigma_deg, 3);
   return out;
 }
 

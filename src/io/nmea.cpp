@@ -360,6 +360,11 @@ std::vector<std::string> nmea_epoch(const positioning::PositionFix& fix, const N
   if (settings.vtg) sentences.push_back(nmea_sentence(vtg(fix, talker)));
   if (settings.zda) sentences.push_back(nmea_sentence(zda(talker, stamp)));
   if (settings.gst) sentences.push_back(nmea_sentence(gst(fix, talker, stamp)));
+  // A moving-base rover's heading: HDT (true heading) and THS (with mode A, autonomous).
+  if (fix.relative && fix.relative->heading_deg) {
+    sentences.push_back(nmea_sentence(fmt::format("{}HDT,{:.3f},T", talker, *fix.relative->heading_deg)));
+    sentences.push_back(nmea_sentence(fmt::format("{}THS,{:.2f},A", talker, *fix.relative->heading_deg)));
+  }
   return sentences;
 }
 

@@ -330,6 +330,26 @@ std::optional<int> msm_signal_id(const Signal& signal) {
   }
 }
 
+std::optional<Signal> msm_signal(GnssSystem system, int signal_id) {
+  const auto find = [&](const auto& table) -> std::optional<Signal> {
+    for (const auto& row : table) {
+      if (row.id == signal_id) {
+        auto signal = Signal::from_code(system, row.code);
+        if (signal) return *signal;
+      }
+    }
+    return std::nullopt;
+  };
+  switch (system) {
+    case GnssSystem::kGps: return find(kGpsSignals);
+    case GnssSystem::kGlonass: return find(kGlonassSignals);
+    case GnssSystem::kGalileo: return find(kGalileoSignals);
+    case GnssSystem::kQzss: return find(kQzssSignals);
+    case GnssSystem::kBeiDou: return find(kBeiDouSignals);
+    default: return std::nullopt;
+  }
+}
+
 // DF407: indicators 0-63 count milliseconds; each further block of 32 doubles the step, block k
 // (k = 1..20) starting at indicator 32 + 32 k with 2^(k+5) ms; 704 means at least 2^26 ms.
 int msm_lock_time_indicator(double lock_time_s) {

@@ -163,6 +163,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
                                                rx_geodetic, obs.direction);
     if (!atmosphere) return atmosphere.error().with_context(sat.to_string());
     obs.troposphere_m = atmosphere->troposphere_m;
+    if (settings_.troposphere_residual) {
+      obs.troposphere_m += atmosphere::troposphere_residual_m(*settings_.troposphere_residual, epoch.true_time,
+                                                              rx_geodetic, obs.direction);
+    }
     obs.ionosphere_l1_m = atmosphere->ionosphere_l1_m;
 
     pending_.push_back(Pending{epoch.satellites.size(), *record, truth, precise_truth, light_time});

@@ -14,8 +14,6 @@
 #include <mutex>
 #include <thread>
 #include <cmath>
-#include <complex>
-#include <fstream>
 #include <random>
 #include <set>
 
@@ -24,7 +22,6 @@
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/output_file.hpp"
 #include "skytrace/core/text_file.hpp"
-#include "skytrace/io/report.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/nominal.hpp"
@@ -226,6 +223,27 @@ struct ReceiverRun {
   bool is_base = false;
 };
 
+// Heading and pitch of a moving-base rover's fixed baseline (base antenna to rover antenna), with
+// their 1-sigma from the baseline's covariance.
+void add_heading(positioning::PositionFix& fix) {
+  if (fix.type != positioning::FixType::kRtkFixed || !fix.relative || !fix.relative->baseline_valid) return;
+  auto& r = *fix.relative;
+  const double e = r.baseline_enu_m.x(), n = r.baseline_enu_m.y(), u = r.baseline_enu_m.z();
+  const double h2 = e * e + n * n, h = std::sqrt(h2);
+  if (h < 0.05) return;  // antennas on top of each other: no direction
+  constexpr double kDeg = 180.0 / M_PI;
+  double heading = std::atan2(e, n) * kDeg;
+  if (heading < 0.0) heading += 360.0;
+  r.heading_deg = heading;
+  r.pitch_deg = std::atan2(u, h) * kDeg;
+  const Eigen::Matrix3d& c = fix.covariance_enu_m2;
+  const Eigen::RowVector3d dh(n / h2, -e / h2, 0.0);
+  const double l2 = h2 + u * u;
+  const Eigen::RowVector3d dp(-u * e / (h * l2), -u * n / (h * l2), h / l2);
+  r.heading_sigma_deg = std::sqrt(std::max(0.0, (dh * c * dh.transpose())(0, 0))) * kDeg;
+  r.pitch_sigma_deg = std::sqrt(std::max(0.0, (dp * c * dp.transpose())(0, 0))) * kDeg;
+}
+
 orbits::NavigationData used_navigation(const orbits::NavigationData& all, const std::vector<ReceiverRun>& receivers) {
   orbits::NavigationData used;
   used.ionosphere = all.ionosphere;
@@ -304,28 +322,68 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   if (!sinks) return sinks.error();
 
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  std::vector<std::optional<positioning::BaseEpoch>> base_epochs(receivers.size());
+  // The bases' recent epochs: a rover takes the latest one that has reached it (rtk.latency_s,
+  // rtk.interval_s, rtk.outages_s); older than the engine's age limit is never used.
+  constexpr double kBaseHistory_s = 90.0;
+  std::vector<std::deque<positioning::BaseEpoch>> base_history(receivers.size());
+  auto base_for = [&](size_t rover, const GnssTime& rover_time) -> const positioning::BaseEpoch* {
+    const RtkSettings& link = *receivers[rover].settings->rtk;
+    const auto& history = base_history[*receivers[rover].base_index];
+    for (auto it = history.rbegin(); it != history.rend(); ++it) {
+      const GnssTime sent = it->measurements.receiver_time;
+      if (link.interval_s > 0.0) {
+        const double since_start_s = sent - s.time.start;
+        const double phase_s = since_start_s - link.interval_s * std::round(since_start_s / link.interval_s);
+        if (std::abs(phase_s) > 1e-3) continue;  // the base does not send this epoch
+      }
+      const GnssTime arrival = sent + link.latency_s;
+      if (arrival - rover_time > 1e-3) continue;  // not here yet
+      const double arrival_s = arrival - s.time.start;
+      const bool lost = std::any_of(link.outages_s.begin(), link.outages_s.end(), [&](const auto& outage) {
+        return arrival_s >= outage.first && arrival_s < outage.second;
+      });
+      if (lost) continue;
+      return &*it;
+    }
+    return nullptr;
+  };
   // The receivers' fixes of one instant: the bases' epochs first, so that their rovers' RTK fixes
   // have this instant's corrections. Computed where the observations are (the worker thread when
   // there is one), which balances the two threads.
   auto solve_instant = [&](QueuedEpoch& instant) -> Status {
     const auto& epochs = instant.receivers;
     instant.fixes.assign(receivers.size(), std::nullopt);
-    for (size_t i = 0; i < receivers.size(); ++i) {
-      base_epochs[i].reset();
-      if (receivers[i].is_base) {
-        // The base's known position: its marker's antenna reference point.
-        base_epochs[i] = positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)};
+    // Receivers that are not RTK rovers first (the bases among them), then the rovers.
+    for (const bool rovers : {false, true}) {
+      for (size_t i = 0; i < receivers.size(); ++i) {
+        ReceiverRun& rx = receivers[i];
+        if (!rx.fixes || rx.base_index.has_value() != rovers) continue;
+        const positioning::BaseEpoch* base = rx.base_index ? base_for(i, epochs[i].receiver_time) : nullptr;
+        std::optional<positioning::BaseEpoch> moving;
+        if (base != nullptr && rx.settings->rtk->moving_base) {
+          // A moving base knows where it is only from its own fix of that epoch.
+          const auto& base_fix = instant.fixes[*rx.base_index];
+          if (base_fix && base_fix->type != positioning::FixType::kNone &&
+              std::abs(base->measurements.receiver_time - epochs[*rx.base_index].receiver_time) < 1e-3) {
+            moving = positioning::BaseEpoch{base->measurements, base_fix->position_ecef_m};
+          }
+          base = moving ? &*moving : nullptr;
+        }
+        auto fix = rx.fixes->solve(epochs[i], base);
+        if (!fix) return fix.error();
+        if (moving) add_heading(*fix);
+        instant.fixes[i] = std::move(*fix);
       }
-    }
-    for (size_t i = 0; i < receivers.size(); ++i) {
-      ReceiverRun& rx = receivers[i];
-      if (!rx.fixes) continue;
-      const positioning::BaseEpoch* base = nullptr;
-      if (rx.base_index && base_epochs[*rx.base_index]) base = &*base_epochs[*rx.base_index];
-      auto fix = rx.fixes->solve(epochs[i], base);
-      if (!fix) return fix.error();
-      instant.fixes[i] = std::move(*fix);
+      if (rovers) break;
+      for (size_t i = 0; i < receivers.size(); ++i) {
+        if (!receivers[i].is_base) continue;
+        // The base's known position: its marker's antenna reference point.
+        auto& history = base_history[i];
+        history.push_back(positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)});
+        while (history.back().measurements.receiver_time - history.front().measurements.receiver_time > kBaseHistory_s) {
+          history.pop_front();
+        }
+      }
     }
     return Ok{};
   };

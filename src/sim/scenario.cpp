@@ -121,9 +121,21 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
   if (auto c = node.child("antenna_type")) r.antenna_type = c->as_string();
   if (auto c = node.child("antex")) r.antex = existing_file(*c, base);
   if (auto c = node.child("rtk")) {
-    c->expect_keys({"base"});
+    c->expect_keys({"base", "latency_s", "interval_s", "outages_s", "moving_base"});
     RtkSettings rtk;
     rtk.base = c->required("base").as_string();
+    if (auto v = c->child("latency_s")) rtk.latency_s = v->as_double_in(0.0, 60.0);
+    if (auto v = c->child("moving_base")) rtk.moving_base = v->as_bool();
+    if (auto v = c->child("interval_s")) rtk.interval_s = v->as_double_in(0.0, 3600.0);
+    if (auto v = c->child("outages_s")) {
+      for (const auto& interval : v->elements()) {
+        const auto bounds = interval.elements();
+        if (bounds.size() != 2) interval.fail("expected [from_s, to_s], seconds after the start");
+        const double from_s = bounds[0].as_double_in(0.0, 1e9), to_s = bounds[1].as_double_in(0.0, 1e9);
+        if (!(to_s > from_s)) interval.fail("an outage must end after it begins");
+        rtk.outages_s.emplace_back(from_s, to_s);
+      }
+    }
     r.rtk = rtk;
   }
   return r;
@@ -304,7 +316,8 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
 
   if (auto models = root.child("models")) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
-                         "multipath_radius_m", "multipath_order", "diffraction"});
+                         "multipath_radius_m", "multipath_order", "diffraction", "ionosphere_residual_ppm",
+                         "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
     if (auto c = models->child("ionex_file")) s.models.ionex_file = existing_file(*c, base);
     if (s.models.ionosphere == "ionex" && !s.models.ionex_file) {
@@ -323,6 +336,14 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
       s.models.multipath_order = static_cast<int>(order);
     }
     if (auto c = models->child("diffraction")) s.models.diffraction = c->as_bool();
+    if (auto c = models->child("ionosphere_residual_ppm")) s.models.ionosphere_residual_ppm = c->as_double_in(0.0, 50.0);
+    if (auto c = models->child("ionosphere_residual_length_km")) {
+      s.models.ionosphere_residual_length_km = c->as_double_in(10.0, 5000.0);
+    }
+    if (auto c = models->child("troposphere_residual_ppm")) s.models.troposphere_residual_ppm = c->as_double_in(0.0, 10.0);
+    if (auto c = models->child("troposphere_residual_length_km")) {
+      s.models.troposphere_residual_length_km = c->as_double_in(1.0, 1000.0);
+    }
   }
 
   if (auto world = root.child("world")) parse_world(*world, base, s.world);
@@ -380,17 +401,37 @@ Status apply_override(YAML::Node& root, const std::string& assignment) {
   YAML::Node node;
   node.reset(root);
   std::string walked;  // the key path of `node`
+  // A key of a list is an index from 0: receivers.1.rtk.latency_s.
+  const auto list_index = [&](const std::string& key) -> std::optional<size_t> {
+    if (!node.IsSequence()) return std::nullopt;
+    if (key.empty() || key.size() > 6 || !std::all_of(key.begin(), key.end(), [](unsigned char c) { return std::isdigit(c); })) {
+      return std::nullopt;
+    }
+    const size_t index = std::stoul(key);
+    if (index >= node.size()) return std::nullopt;
+    return index;
+  };
   for (size_t i = 0; i < keys.size(); ++i) {
-    if (node.IsDefined() && !node.IsMap() && !node.IsNull()) {
+    if (node.IsSequence()) {
+      if (!list_index(keys[i])) {
+        return make_error(ErrorCode::kInvalidArgument, "--set " + path + ": '" + walked + "' is a list of " +
+                                                           std::to_string(node.size()) + ": '" + keys[i] +
+                                                           "' is not an index from 0 to " + std::to_string(node.size() - 1));
+      }
+    } else if (node.IsDefined() && !node.IsMap() && !node.IsNull()) {
       return make_error(ErrorCode::kInvalidArgument,
                         "--set " + path + ": " + (walked.empty() ? "the document" : "'" + walked + "'") + " is not a mapping");
     }
     if (i + 1 == keys.size()) break;
     walked += (walked.empty() ? "" : ".") + keys[i];
-    YAML::Node child = node[keys[i]];
+    YAML::Node child = node.IsSequence() ? node[*list_index(keys[i])] : node[keys[i]];
     node.reset(child);
   }
-  node[keys.back()] = value;
+  if (node.IsSequence()) {
+    node[*list_index(keys.back())] = value;
+  } else {
+    node[keys.back()] = value;
+  }
   return Ok{};
 }
 
@@ -466,7 +507,10 @@ std::string scenario_to_json(const Scenario& s) {
     jr["receiver_type"] = r.receiver_type;
     jr["antenna_type"] = r.antenna_type;
     if (r.antex) jr["antex"] = r.antex->string();
-    if (r.rtk) jr["rtk"] = {{"base", r.rtk->base}};
+    if (r.rtk) {
+      jr["rtk"] = {{"base", r.rtk->base}, {"latency_s", r.rtk->latency_s}, {"interval_s", r.rtk->interval_s},
+                   {"outages_s", r.rtk->outages_s}, {"moving_base", r.rtk->moving_base}};
+    }
     j["receivers"].push_back(jr);
   }
   j["ephemeris"] = {{"navigation", paths(s.ephemeris.navigation)},
@@ -481,7 +525,11 @@ std::string scenario_to_json(const Scenario& s) {
                  {"multipath", s.models.multipath},
                  {"multipath_radius_m", s.models.multipath_radius_m},
                  {"multipath_order", s.models.multipath_order},
-                 {"diffraction", s.models.diffraction}};
+                 {"diffraction", s.models.diffraction},
+                 {"ionosphere_residual_ppm", s.models.ionosphere_residual_ppm},
+                 {"ionosphere_residual_length_km", s.models.ionosphere_residual_length_km},
+                 {"troposphere_residual_ppm", s.models.troposphere_residual_ppm},
+                 {"troposphere_residual_length_km", s.models.troposphere_residual_length_km}};
   json w;
   if (s.world.sdf) w["sdf"] = s.world.sdf->string();
   w["model_paths"] = paths(s.world.model_paths);

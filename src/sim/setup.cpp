@@ -265,6 +265,21 @@ Result<ScenarioResources> prepare_resources(const Scenario& s) {
     }
     r.ionosphere = std::make_shared<atmosphere::KlobucharIonosphere>(*navigation->ionosphere.gps);
   }
+  // What the model leaves, one field for every receiver: correlated over about a few hundred km
+  // and ten minutes (docs/models/atmosphere-residuals.md).
+  constexpr double kIonosphereResidualTime_s = 600.0;
+  constexpr double kTroposphereResidualTime_s = 1800.0;
+  if (s.models.ionosphere_residual_ppm > 0.0) {
+    const auto field = atmosphere::ResidualField::for_gradient_ppm(
+        s.models.ionosphere_residual_ppm, s.models.ionosphere_residual_length_km * 1e3, kIonosphereResidualTime_s,
+        s.seed * 0x9E3779B97F4A7C15ULL + 1);
+    r.ionosphere = std::make_shared<atmosphere::IonosphereWithResidual>(r.ionosphere, atmosphere::ResidualField(field));
+  }
+  if (s.models.troposphere_residual_ppm > 0.0) {
+    r.troposphere_residual = std::make_shared<atmosphere::ResidualField>(atmosphere::ResidualField::for_gradient_ppm(
+        s.models.troposphere_residual_ppm, s.models.troposphere_residual_length_km * 1e3, kTroposphereResidualTime_s,
+        s.seed * 0x9E3779B97F4A7C15ULL + 2));
+  }
   r.ephemerides = std::make_unique<orbits::BroadcastEphemerides>(std::move(*navigation));
   if (!s.ephemeris.precise_orbits.empty()) {
     auto orbits_data = orbits::read_sp3(s.ephemeris.precise_orbits);
@@ -390,6 +405,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.elevation_mask_deg = rx.elevation_mask_deg;
   g.profile = *profile;
   g.ionosphere = resources.ionosphere;
+  g.troposphere_residual = resources.troposphere_residual;
   g.troposphere = s.models.troposphere == "saastamoinen" ? atmosphere::TroposphereModel::kSaastamoinen
                  : s.models.troposphere == "unb3m"      ? atmosphere::TroposphereModel::kUnb3m
                                                         : atmosphere::TroposphereModel::kNone;

@@ -27,6 +27,7 @@ struct FixRow {
   std::string fix;
   Eigen::Vector3d ecef_m = Eigen::Vector3d::Zero();
   std::string message;
+  std::optional<double> age_s;
 };
 
 // fix.csv rows (the columns this test needs; messages hold no commas here).
@@ -46,6 +47,7 @@ std::vector<FixRow> read_fix_csv(const std::filesystem::path& path) {
     row.fix = cells[3];
     if (!cells[8].empty()) row.ecef_m = Eigen::Vector3d(std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
     row.message = cells[26];
+    if (cells.size() > 29 && !cells[29].empty()) row.age_s = std::stod(cells[29]);
     rows.push_back(row);
   }
   return rows;
@@ -243,6 +245,164 @@ TEST(RtkEngineEndToEnd, BadBaseInputGivesAClearStateNeverAWrongFix) {
                         " --base-position 1,2 --out " + test::shell_quote((dir / "x.csv").string()));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--base-position"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// A base as an RTCM 3 stream (1006 and MSM7 from `output.rtcm3`, with garbage between frames as a
+// serial line or NTRIP relay delivers it): the same fixes as with the base's RINEX file, positions
+// within the fields' resolution; without 1005/1006 the base position must be given.
+TEST(RtkEngineEndToEnd, BaseAsAnRtcmStreamFixesAsItsRinexFile) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_rtcm_base");
+  const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                   test::shell_quote((contract_dir() / "rtk-pair.yaml").string()) + " --out " +
+                                   test::shell_quote((dir / "pair").string()) +
+                                   " --quiet --no-truth --set output.rtcm3=true --set time.duration_s=300");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // Garbage (with a false preamble) after every frame.
+  std::ifstream in(dir / "pair/obs_BASE.rtcm3", std::ios::binary);
+  const std::string clean((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string noisy;
+  for (size_t i = 0; i + 3 <= clean.size();) {
+    const size_t length = ((static_cast<unsigned char>(clean[i + 1]) & 0x03) << 8) | static_cast<unsigned char>(clean[i + 2]);
+    noisy += clean.substr(i, length + 6) + "\xD3\x01garbage";
+    i += length + 6;
+  }
+  std::ofstream(dir / "noisy.rtcm3", std::ios::binary) << noisy;
+
+  const std::string position = test::shell_quote(test::skytrace_executable().string()) + " position " +
+                               test::shell_quote((dir / "pair/obs_ROVR.rnx").string()) + " --nav " +
+                               test::shell_quote((dir / "pair/nav.rnx").string());
+  const auto with_rinex = test::run_command(position + " --base " + test::shell_quote((dir / "pair/obs_BASE.rnx").string()) +
+                                            " --out " + test::shell_quote((dir / "rinex.csv").string()) + " 2>&1");
+  ASSERT_EQ(with_rinex.exit_code, 0) << with_rinex.output;
+  const auto with_rtcm = test::run_command(position + " --base " + test::shell_quote((dir / "noisy.rtcm3").string()) +
+                                           " --out " + test::shell_quote((dir / "rtcm.csv").string()) + " 2>&1");
+  ASSERT_EQ(with_rtcm.exit_code, 0) << with_rtcm.output;
+  EXPECT_NE(with_rtcm.output.find("bytes outside valid frames"), std::string::npos) << with_rtcm.output;
+  const auto a = read_fix_csv(dir / "rinex.csv");
+  const auto b = read_fix_csv(dir / "rtcm.csv");
+  ASSERT_EQ(a.size(), b.size());
+  size_t both_fixed = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].fix, b[k].fix) << k;
+    if (a[k].fix == "rtk_fixed" && b[k].fix == "rtk_fixed") {
+      ++both_fixed;
+      EXPECT_LT((a[k].ecef_m - b[k].ecef_m).norm(), 0.003) << k;
+    }
+  }
+  EXPECT_GT(both_fixed, 280u);
+
+  // The real GMSD stream carries no 1005/1006: the base position is required.
+  const auto gmsd = test::shared_data_dir() / "real/gsi_0759_3040_2005092/GMSD7_20121014.rtcm3";
+  if (std::filesystem::exists(gmsd)) {
+    const auto no_position = test::run_command(position + " --base " + test::shell_quote(gmsd.string()) + " 2>&1");
+    EXPECT_EQ(no_position.exit_code, 2) << no_position.output;
+    EXPECT_NE(no_position.output.find("no station position (message 1005 or 1006)"), std::string::npos)
+        << no_position.output;
+  }
+}
+
+}  // namespace
+}  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// Corrections that arrive late, every few seconds, and stop for a minute (rtk.latency_s,
+// rtk.interval_s, rtk.outages_s): the age of corrections follows, the rover falls back to its own
+// fix once they are older than the engine's limit (30 s) and fixes again when they return.
+TEST(RtkEngineEndToEnd, LateSparseAndInterruptedCorrectionsShowInAgeAndSolutionType) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_link");
+  const auto r = test::run_command(
+      test::shell_quote(test::skytrace_executable().string()) + " run " +
+      test::shell_quote((contract_dir() / "rtk-pair.yaml").string()) + " --out " + test::shell_quote((dir / "pair").string()) +
+      " --quiet --no-truth --set time.duration_s=300 --set receivers.1.rtk.latency_s=2 --set receivers.1.rtk.interval_s=5"
+      " --set 'receivers.1.rtk.outages_s=[[100, 160]]' 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto rows = read_fix_csv(dir / "pair/fix_ROVR.csv");
+  ASSERT_EQ(rows.size(), 301u);
+  const double t0 = rows.front().tow_s;
+  size_t fixed_before = 0, single_in_outage = 0, fixed_after = 0;
+  for (const auto& row : rows) {
+    const double t = row.tow_s - t0;
+    if (t >= 60.0 && t < 100.0) {
+      ASSERT_TRUE(row.age_s.has_value()) << row.time;
+      EXPECT_GE(*row.age_s, 2.0 - 1e-6) << row.time;
+      EXPECT_LE(*row.age_s, 7.0 + 1e-6) << row.time;
+      fixed_before += row.fix == "rtk_fixed";
+    }
+    if (t >= 130.0 && t < 160.0) {
+      EXPECT_TRUE(row.fix == "3d") << row.time << " " << row.fix;
+      single_in_outage += row.fix == "3d";
+    }
+    if (t >= 200.0) fixed_after += row.fix == "rtk_fixed";
+  }
+  EXPECT_GE(fixed_before, 38u);
+  EXPECT_EQ(single_in_outage, 30u);
+  EXPECT_GE(fixed_after, 95u);
+}
+
+}  // namespace
+}  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// Two antennas on one body, 1.4 m apart at azimuth 30 degrees and level: the moving-base rover's
+// fixed baseline gives the heading and pitch (fix.csv, NMEA HDT/THS), its sigma from the baseline
+// covariance.
+TEST(RtkEngineEndToEnd, MovingBaseGivesTheHeadingOfTheBaseline) {
+  const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
+  if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
+  const auto dir = test::make_temp_dir("rtk_heading");
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  std::ofstream(dir / "heading.yaml")
+      << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 120\n  interval_s: 1\n"
+         "receivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
+      << antenna
+      << "  - name: ANT2\n    position:\n      world_enu_m: [0.7, 1.2124356, 1.5]\n" << antenna
+      << "    rtk:\n      base: ANT1\n      moving_base: true\n"
+         "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+         "ephemeris:\n  navigation:\n    - "
+      << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                   test::shell_quote((dir / "heading.yaml").string()) + " --out " +
+                                   test::shell_quote((dir / "out").string()) + " --quiet --no-truth --set output.nmea=true 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "out/fix_ANT2.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> columns;
+  for (std::stringstream s(line); std::getline(s, line, ',');) columns.push_back(line);
+  const auto at = [&](const char* name) { return static_cast<size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin()); };
+  size_t with_heading = 0;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    for (std::stringstream s(line); std::getline(s, line, ',');) cells.push_back(line);
+    cells.resize(columns.size());
+    if (cells[at("heading_deg")].empty()) continue;
+    ++with_heading;
+    EXPECT_EQ(cells[at("fix")], "rtk_fixed");
+    EXPECT_NEAR(std::stod(cells[at("heading_deg")]), 30.0, 0.3);
+    EXPECT_NEAR(std::stod(cells[at("pitch_deg")]), 0.0, 0.5);
+    const double sigma = std::stod(cells[at("heading_sigma_deg")]);
+    EXPECT_GT(sigma, 0.0);
+    EXPECT_LT(sigma, 0.5);
+  }
+  EXPECT_GT(with_heading, 100u);
+  std::ifstream nmea(dir / "out/fix_ANT2.nmea");
+  const std::string text((std::istreambuf_iterator<char>(nmea)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("$GNHDT,30.0"), std::string::npos);
+  EXPECT_NE(text.find(",A*"), std::string::npos);
+  EXPECT_NE(text.find("THS,"), std::string::npos);
 }
 
 }  // namespace

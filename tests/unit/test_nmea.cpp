@@ -232,11 +232,12 @@ TEST(Nmea, RtkFixesReportTheirQualityModeAndCorrectionAge) {
   auto fix = esbc_like_fix();
   fix.relative = positioning::PositionFix::Relative{};
   fix.relative->age_s = 1.25;
-  auto sentence = [&](const char* type) {
+  auto sentence = [&](std::string_view type) {
+    std::string found;
     for (const auto& s : nmea_epoch(fix)) {
-      if (s.find(type) != std::string::npos) return s;
+      if (s.compare(3, type.size(), type) == 0) found = s;
     }
-    return std::string();
+    return found;
   };
   fix.type = positioning::FixType::kRtkFixed;
   EXPECT_NE(sentence("GGA").find(",E,4,03,0.83,58.123,M,0.000,M,1.2,*"), std::string::npos) << sentence("GGA");

@@ -60,6 +60,16 @@ TEST(Scenario, OverridesReplaceAndAddKeys) {
   EXPECT_EQ(s.seed, 9u);
 }
 
+TEST(Scenario, OverridesReachIntoListsByIndex) {
+  const Scenario s = parse_scenario(kMinimal, "s.yaml", "/tmp", {"receiver.signals.1=E5Q"}).value();
+  EXPECT_EQ(s.receivers[0].signals[1].to_string(), "E5Q");
+  auto r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"receiver.signals.2=E5Q"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("'receiver.signals' is a list of 2: '2' is not an index from 0 to 1"),
+            std::string::npos)
+      << r.error().message;
+}
+
 TEST(Scenario, BadOverridesAreNamed) {
   auto r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"models.ionosphere"});
   ASSERT_FALSE(r.ok());

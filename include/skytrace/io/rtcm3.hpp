@@ -18,6 +18,7 @@
 #include "skytrace/core/satellite.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/core/time.hpp"
+#include "skytrace/positioning/spp.hpp"
 #include "skytrace/orbits/ephemeris.hpp"
 
 namespace skytrace::io {
@@ -182,6 +183,62 @@ class Rtcm3Stream {
   std::optional<GnssTime> last_station_;
   // Per record: when it was last sent.
   std::map<const void*, GnssTime> sent_;
+};
+
+// ---- Decoding -----------------------------------------------------------------------------------
+
+// The signal of an MSM signal ID (1-32) of a system, nullopt when RTCM 3.3 defines none.
+[[nodiscard]] std::optional<Signal> msm_signal(GnssSystem system, int signal_id);
+
+// Reads what a reference station streams: 1005/1006 (its antenna reference point) and MSM4-MSM7
+// observations of GPS, GLONASS, Galileo, QZSS and BeiDou, gathered into epochs (the MSMs of one
+// instant end with the one whose multiple-message bit is 0, or at the next instant). Frames are
+// found in any byte stream (garbage between them, frames split across feed() calls, bad CRCs
+// skipped and counted); other messages are counted and ignored.
+class Rtcm3Decoder {
+ public:
+  // `reference`: an instant within half a week of the data, to place GPS/Galileo/BeiDou times of
+  // week and GLONASS days (e.g. the start of the navigation data or of the rover's observations).
+  explicit Rtcm3Decoder(GnssTime reference) : reference_(reference) {}
+  void feed(std::span<const std::uint8_t> bytes);
+  // The epoch being gathered, when the stream ends.
+  void finish();
+  // Complete epochs in stream order since the last call.
+  [[nodiscard]] std::vector<RtcmEpoch> take_epochs();
+  [[nodiscard]] const std::optional<RtcmStation>& station() const { return station_; }
+
+  struct Counts {
+    size_t frames = 0;              // with a good CRC
+    size_t msm_messages = 0;
+    size_t station_messages = 0;
+    size_t other_messages = 0;      // ephemerides, 1230, ... (not used)
+    size_t malformed_messages = 0;  // shorter than their masks and fields say
+    size_t unknown_signal_cells = 0;  // MSM cells of signal IDs RTCM 3.3 (or skytrace) does not define
+    size_t skipped_bytes = 0;       // garbage and frames with a bad CRC
+  };
+  [[nodiscard]] const Counts& counts() const { return counts_; }
+
+ private:
+  void decode(std::span<const std::uint8_t> message, int message_number);
+  void decode_station(std::span<const std::uint8_t> message, int message_number);
+  void decode_msm(std::span<const std::uint8_t> message, int message_number);
+  GnssTime reference_;
+  std::vector<std::uint8_t> pending_;  // bytes not yet part of a complete frame
+  std::optional<RtcmEpoch> current_;
+  std::vector<RtcmEpoch> done_;
+  std::optional<RtcmStation> station_;
+  Counts counts_;
+};
+
+// A reference station's epochs as the position engines take them. The loss-of-lock flag comes from
+// the lock time, as RTKLIB derives it: set when a signal's lock time is shorter than at its previous
+// epoch, or when the signal is new.
+class RtcmMeasurementConverter {
+ public:
+  [[nodiscard]] positioning::EpochMeasurements convert(const RtcmEpoch& epoch);
+
+ private:
+  std::map<std::pair<SatelliteId, Signal>, double> last_lock_time_s_;
 };
 
 }  // namespace skytrace::io

@@ -99,6 +99,10 @@ struct PositionFix {
     double age_s = 0.0;              // rover time tag minus the base epoch's
     Eigen::Vector3d baseline_enu_m = Eigen::Vector3d::Zero();  // rover minus base, at the base
     bool baseline_valid = false;
+    // A moving base on the same body (two antennas): the baseline's direction from the base antenna
+    // to the rover antenna, clockwise from true north, and its elevation; 1-sigma from the fixed
+    // baseline's covariance. Set only for moving-base solutions with integer ambiguities.
+    std::optional<double> heading_deg, pitch_deg, heading_sigma_deg, pitch_sigma_deg;
   };
   std::optional<Relative> relative;
 };

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "skytrace/atmosphere/ionosphere.hpp"
+#include "skytrace/atmosphere/residual_field.hpp"
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/core/path_query.hpp"
@@ -63,6 +64,8 @@ struct GeneratorSettings {
   // The ionosphere the signals cross (nullptr: none); Klobuchar or an IONEX map.
   std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;
   atmosphere::TroposphereModel troposphere = atmosphere::TroposphereModel::kSaastamoinen;
+  // The residual field of the zenith wet delay shared by the scenario's receivers (nullptr: none).
+  std::shared_ptr<const atmosphere::ResidualField> troposphere_residual;
   bool noise = false;
   bool ideal_clock = true;
   std::uint64_t seed = 1;

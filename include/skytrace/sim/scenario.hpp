@@ -43,6 +43,15 @@ struct TrajectorySetting {
 // corrections of a base (docs/scenario.md).
 struct RtkSettings {
   std::string base;  // another receiver of the same scenario
+  // How the corrections reach the rover: each base epoch arrives latency_s after its time; the base
+  // sends every interval_s (0: every epoch); none arrive during the outages (seconds after the
+  // scenario's start, [from, to)). The engine's age of corrections and its limit follow.
+  double latency_s = 0.0;
+  double interval_s = 0.0;
+  std::vector<std::pair<double, double>> outages_s;
+  // Two antennas on one body: the base moves, its position at each epoch is its own fix, and the
+  // rover reports the heading and pitch of the baseline (fix.csv, NMEA HDT/THS).
+  bool moving_base = false;
 };
 
 struct ReceiverSettings {
@@ -80,6 +89,12 @@ struct ModelSettings {
   double multipath_radius_m = 150.0;
   int multipath_order = 1;
   bool diffraction = true;
+  // Residual fields the models leave, shared by the receivers (docs/models/atmosphere-residuals.md):
+  // gradients in parts per million of the distance (0: none), correlation lengths.
+  double ionosphere_residual_ppm = 0.0;
+  double ionosphere_residual_length_km = 300.0;
+  double troposphere_residual_ppm = 0.0;
+  double troposphere_residual_length_km = 50.0;
 };
 
 // A mesh file placed in the world frame (world.meshes).

@@ -53,7 +53,8 @@ struct ScenarioResources {
   std::unique_ptr<orbits::BroadcastEphemerides> ephemerides;
   std::unique_ptr<orbits::PreciseEphemerides> precise;             // signal truth when given
   std::optional<PreciseTruthCoverage> precise_coverage;            // with precise: over the scenario's span
-  std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;  // nullptr: none
+  std::shared_ptr<const atmosphere::IonosphereModel> ionosphere;  // nullptr: none (with its residual field)
+  std::shared_ptr<const atmosphere::ResidualField> troposphere_residual;  // nullptr: none
   std::vector<std::string> warnings;                               // for the user (run: stderr, summary)
   // Systems of the receivers' signals without any usable ephemeris at the start (check_coverage),
   // with the warning: left out of the generators and the observation headers.
