@@ -326,6 +326,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     m.satellite_clock_m = kC * p.truth.state.clock_bias_s;
     m.group_delay_m = kC * stages::signal_group_delay_s(p.truth, candidate.record, signal, p.precise_truth);
     m.ionosphere_code_m = stages::ionosphere_code_delay_m(obs.ionosphere_l1_m, m.carrier_hz);
+    m.antenna_phase_centre_m = stages::antenna_phase_centre_m(settings_.antenna_phase_centre.get(), signal, obs.direction);
     m.cn0_dbhz = stages::quantize(cn0_dbhz, profile.cn0_resolution_dbhz);
     const bool aided = profile.semicodeless_aiding_bandwidth_hz > 0.0 && aiding_phase_noise_m.has_value() &&
                        is_semicodeless(signal);

@@ -72,7 +72,7 @@ PositionSetting::Kind parse_frame(const Node& node) {
 
 ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& base, const std::string& default_name) {
   node.expect_keys({"name", "position", "trajectory", "antenna_height_m", "antenna_offset_en_m", "elevation_mask_deg",
-                    "profile", "antenna", "signals", "receiver_type", "antenna_type", "rtk"});
+                    "profile", "antenna", "signals", "receiver_type", "antenna_type", "antex", "rtk"});
   ReceiverSettings r;
   r.name = default_name;
   if (auto c = node.child("name")) {
@@ -123,6 +123,7 @@ ReceiverSettings parse_receiver(const Node& node, const std::filesystem::path& b
   if (r.signals.empty()) signals.fail("list at least one signal");
   if (auto c = node.child("receiver_type")) r.receiver_type = c->as_string();
   if (auto c = node.child("antenna_type")) r.antenna_type = c->as_string();
+  if (auto c = node.child("antex")) r.antex = existing_file(*c, base);
   if (auto c = node.child("rtk")) {
     c->expect_keys({"base", "latency_s", "interval_s", "outages_s", "moving_base"});
     RtkSettings rtk;
@@ -510,6 +511,7 @@ std::string scenario_to_json(const Scenario& s) {
     for (const auto& sig : r.signals) jr["signals"].push_back(sig.to_string());
     jr["receiver_type"] = r.receiver_type;
     jr["antenna_type"] = r.antenna_type;
+    if (r.antex) jr["antex"] = r.antex->string();
     if (r.rtk) {
       jr["rtk"] = {{"base", r.rtk->base}, {"latency_s", r.rtk->latency_s}, {"interval_s", r.rtk->interval_s},
                    {"outages_s", r.rtk->outages_s}, {"moving_base", r.rtk->moving_base}};

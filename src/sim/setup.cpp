@@ -349,6 +349,31 @@ Result<std::shared_ptr<const receiver::KinematicsSource>> make_kinematics(const 
   return std::shared_ptr<const receiver::KinematicsSource>(*trajectory);
 }
 
+std::string antex_antenna_name(const ReceiverSettings& receiver, const std::string& antenna_rinex_type) {
+  return receiver.antenna_type.empty() ? antenna_rinex_type : receiver.antenna_type;
+}
+
+Result<std::shared_ptr<const receiver::AntennaPhaseCentre>> load_antenna_phase_centre(const Scenario& s,
+                                                                                     const ReceiverSettings& rx,
+                                                                                     std::span<const Signal> signals,
+                                                                                     const std::string& antenna_rinex_type) {
+  if (!rx.antex) return std::shared_ptr<const receiver::AntennaPhaseCentre>{};
+  const std::string name = antex_antenna_name(rx, antenna_rinex_type);
+  const std::string where = s.source.string() + ": receiver '" + rx.name + "'";
+  if (name.empty()) {
+    return make_error(ErrorCode::kParse,  // a scenario mistake, exit 3 like the others
+                      where + ": receiver.antex needs the antenna's IGS name to look up in " + rx.antex->string() +
+                              ": give receiver.antenna_type (e.g. 'TRM59800.00     NONE') or an antenna profile that has one");
+  }
+  auto file = receiver::read_antex(*rx.antex);
+  if (!file) return file.error();
+  auto antenna = file->find(name, s.time.start);
+  if (!antenna) return antenna.error().with_context(where);
+  auto model = receiver::AntennaPhaseCentre::create(**antenna, signals, rx.antex->string());
+  if (!model) return model.error().with_context(where);
+  return std::make_shared<const receiver::AntennaPhaseCentre>(std::move(*model));
+}
+
 Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
     const Scenario& s, const ScenarioResources& resources, size_t index,
     std::shared_ptr<const receiver::KinematicsSource> kinematics) {
@@ -396,6 +421,9 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.path_search.max_reflection_order = s.models.multipath_order;
   g.path_search.diffraction = s.models.diffraction;
   if (resources.precise_coverage) g.broadcast_truth = resources.precise_coverage->broadcast_truth();
+  auto phase_centre = load_antenna_phase_centre(s, rx, g.signals, g.profile.antenna_rinex_type);
+  if (!phase_centre) return phase_centre.error();
+  g.antenna_phase_centre = std::move(*phase_centre);
   auto generator = std::make_unique<receiver::ObservationGenerator>(std::move(g), *resources.ephemerides,
                                                                     std::move(kinematics), resources.precise.get());
   if (resources.world) generator->set_world(resources.world->scene.get(), resources.world->frame);

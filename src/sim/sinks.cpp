@@ -75,7 +75,7 @@ constexpr const char* kTruthHeader =
     "group_delay_m,iono_m,tropo_m,rx_clock_m,code_noise_m,phase_noise_m,doppler_noise_mps,ambiguity_cycles,"
     "pseudorange_m,carrier_phase_cycles,doppler_hz,cn0_dbhz,rx_x_m,rx_y_m,rx_z_m,rx_vx_mps,rx_vy_mps,rx_vz_mps,"
     "rx_clock_drift_mps,vegetation_attenuation_db,detail,path_type,code_multipath_m,phase_multipath_m,"
-    "multipath_power_db\n";
+    "multipath_power_db,antenna_pc_m\n";
 
 // paths.csv (models.multipath): every path of every satellite-epoch with any path.
 constexpr const char* kPathsHeader =
@@ -152,7 +152,7 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
     const std::string geometry = geometry_with(sat.satellite_clock_m);
     // A row per signal its navigation record declares unusable (the others may be tracked).
     for (const auto& unhealthy : sat.unhealthy_signals) {
-      fmt::format_to(std::back_inserter(out), "{},{},{},{},unhealthy,{},,,{},{},{},{},{:.2f},{},{},,,\n", time,
+      fmt::format_to(std::back_inserter(out), "{},{},{},{},unhealthy,{},,,{},{},{},{},{:.2f},{},{},,,,\n", time,
                      receiver_name, sat_name, unhealthy.signal.to_string(), geometry,
                      fmt::format("{:.4f}", sat.troposphere_m), rx_clock, kNoSignalValues, receiver_part,
                      sat.vegetation_attenuation_db, csv_text(unhealthy.reason), receiver::to_string(sat.path_kind));
@@ -165,7 +165,7 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
                                              sat.waiting_for_ephemeris
                                          ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
                                          : std::string(",");
-      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,\n", time, receiver_name, sat_name,
+      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,,\n", time, receiver_name, sat_name,
                      status, geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part,
                      sat.vegetation_attenuation_db, csv_text(sat.detail), receiver::to_string(sat.path_kind));
       continue;
@@ -180,8 +180,8 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
                      m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
                      m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);
       out.pop_back();  // the row's newline: the multipath cells follow
-      fmt::format_to(std::back_inserter(out), ",{},{:.4f},{:.4f},{:.2f}\n", receiver::to_string(sat.path_kind),
-                     m.code_multipath_m, m.phase_multipath_m, m.multipath_power_db);
+      fmt::format_to(std::back_inserter(out), ",{},{:.4f},{:.4f},{:.2f},{:.4f}\n", receiver::to_string(sat.path_kind),
+                     m.code_multipath_m, m.phase_multipath_m, m.multipath_power_db, m.antenna_phase_centre_m);
     }
   }
 }

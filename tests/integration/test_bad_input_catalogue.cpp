@@ -341,6 +341,42 @@ TEST_F(BadInputCatalogue, IonexExponentOf400BlamesTheIonexFile) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "exp.26i:12: field EXPONENT: expected an integer from -9 to 9");
 }
 
+// An ANTEX file with one receiver antenna, TEST0 NONE (G01 only), its G01 offsets record as given.
+std::string antex_text(const std::string& offsets_record) {
+  auto record = [](std::string content, const std::string& label) {
+    content.resize(60, ' ');
+    return content + label + "\n";
+  };
+  return record("     1.4            M", "ANTEX VERSION / SYST") + record("A", "PCV TYPE / REFANT") +
+         record("", "END OF HEADER") + record("", "START OF ANTENNA") + record("TEST0           NONE", "TYPE / SERIAL NO") +
+         record("     0.0", "DAZI") + record("     0.0  90.0  45.0", "ZEN1 / ZEN2 / DZEN") +
+         record("   G01", "START OF FREQUENCY") + offsets_record + "   NOAZI    0.00    0.00    0.00\n" +
+         record("   G01", "END OF FREQUENCY") + record("", "END OF ANTENNA");
+}
+
+std::string antex_receiver(const std::string& antenna_type) {
+  return "receiver:\n  name: CATA\n  position:\n    lla_deg_m: [48.1, 11.6, 520.0]\n  signals: [G1C]\n"
+         "  antenna_type: \"" + antenna_type + "\"\n  antex: ant.atx\n";
+}
+
+TEST_F(BadInputCatalogue, AntexWithoutTheNamedAntennaNamesFileAntennaAndClosest) {
+  write_text(dir_ / "ant.atx",
+             antex_text("      0.00      0.00     90.00                              NORTH / EAST / UP\n"));
+  write_text(dir_ / "s.yaml", nominal_scenario(antex_receiver("TEST1           NONE")));
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3,
+           "ant.atx: no receiver antenna 'TEST1           NONE'.*closest: 'TEST0           NONE'");
+  EXPECT_TRUE(!fs::exists(dir_ / "out") || fs::is_empty(dir_ / "out")) << "a failed run left files";
+}
+
+TEST_F(BadInputCatalogue, AntexOffsetThatIsNoNumberNamesItsLine) {
+  write_text(dir_ / "ant.atx",
+             antex_text("      0.00      0.00       NaN                              NORTH / EAST / UP\n"));
+  write_text(dir_ / "s.yaml", nominal_scenario(antex_receiver("TEST0           NONE")));
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3,
+           "ant.atx:9: expected a phase centre offset in mm \\(3F10.2\\) in columns 21-30, got 'NaN'");
+  EXPECT_TRUE(!fs::exists(dir_ / "out") || fs::is_empty(dir_ / "out")) << "a failed run left files";
+}
+
 TEST_F(BadInputCatalogue, GzipBombStopsAtTheDecompressionLimit) {
   // 64 MiB of blanks in about 64 KiB; the limit lowered to 16 MiB keeps the case fast.
   const fs::path bomb = dir_ / "nav.rnx.gz";

@@ -3,6 +3,8 @@
 // clock; once with multipath) must give the recorded FNV-1a 64 digests of the observation records
 // of obs.rnx (after END OF HEADER, so that a version or header change does not count) and of
 // truth.csv. The generator was split into stages (issue #13) with these outputs byte-identical.
+// truth.csv's digests were re-recorded when it gained its last column antenna_pc_m (ANTEX phase
+// centres, issue #13): obs.rnx unchanged, truth.csv the old rows plus that column (0.0000 or empty).
 //
 // When a model change is intended: check the new outputs (skytrace compare, the report), then
 // record the digests this test prints on failure, and say so in the commit message.
@@ -69,13 +71,13 @@ Digests run_quickstart(const std::string& name, const std::string& sets) {
 TEST(ObservationDigest, QuickstartMinute) {
   const Digests d = run_quickstart("quick", "--set time.duration_s=60");
   EXPECT_EQ(d.obs_records, "2fdf0f5af25a5d42") << "obs.rnx records changed (see the comment at the top to re-record)";
-  EXPECT_EQ(d.truth, "cc151a397e1ae7ad") << "truth.csv changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "9a79b9fa949b4e66") << "truth.csv changed (see the comment at the top to re-record)";
 }
 
 TEST(ObservationDigest, QuickstartMultipath) {
   const Digests d = run_quickstart("multipath", "--set time.duration_s=30 --set models.multipath=true");
   EXPECT_EQ(d.obs_records, "a651348b96316f4e") << "obs.rnx records changed (see the comment at the top to re-record)";
-  EXPECT_EQ(d.truth, "f200ca0bd9227390") << "truth.csv changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "a0cba55e4fff1377") << "truth.csv changed (see the comment at the top to re-record)";
 }
 
 }  // namespace

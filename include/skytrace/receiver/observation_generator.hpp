@@ -25,6 +25,7 @@
 #include "skytrace/core/random.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/orbits/broadcast.hpp"
+#include "skytrace/receiver/antex.hpp"
 #include "skytrace/receiver/clock.hpp"
 #include "skytrace/receiver/observations.hpp"
 #include "skytrace/receiver/stages/geometry.hpp"
@@ -77,6 +78,9 @@ struct GeneratorSettings {
   // them, or cannot serve all of the run: sim::check_precise_coverage). For every other satellite a
   // time the products cannot serve is an error of observe(), never a silent switch of truth.
   std::set<SatelliteId> broadcast_truth;
+  // The receiver antenna's phase centre offsets and variations per frequency (receiver.antex;
+  // nullptr: the phase centre is the antenna reference point).
+  std::shared_ptr<const AntennaPhaseCentre> antenna_phase_centre;
 };
 
 // Generates one receiver's observations epoch by epoch (in increasing time), keeping the carrier

@@ -49,6 +49,9 @@ struct SignalMeasurement {
   double satellite_clock_m = 0.0;   // c * the satellite's clock (one per satellite: reference record or precise)
   double group_delay_m = 0.0;       // c * code group delay of the signal relative to that clock
   double ionosphere_code_m = 0.0;   // code delay (the phase is advanced by the same amount)
+  // The receiver antenna's phase centre for this signal's frequency (ANTEX): -(e . PCO) + PCV, added
+  // to code and phase alike (0 without an ANTEX file).
+  double antenna_phase_centre_m = 0.0;
   double code_noise_m = 0.0;
   double phase_noise_m = 0.0;
   double doppler_noise_mps = 0.0;

@@ -67,7 +67,10 @@ struct ReceiverSettings {
   std::string antenna;
   std::vector<Signal> signals;
   std::string receiver_type = "SKYTRACE";
-  std::string antenna_type = "";
+  std::string antenna_type = "";  // IGS name (RINEX ANT # / TYPE), e.g. "TRM59800.00     NONE"
+  // receiver.antex: an ANTEX file whose calibration of the antenna (antex_antenna_name) moves each
+  // frequency's phase centre off the reference point (docs/models/antenna.md).
+  std::optional<std::filesystem::path> antex;
   std::optional<RtkSettings> rtk;
 };
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -106,6 +107,17 @@ struct SystemCoverage {
 [[nodiscard]] Result<std::shared_ptr<const receiver::KinematicsSource>> make_kinematics(
     const Scenario& scenario, const ReceiverSettings& receiver, const std::optional<LocalFrame>& world_frame,
     Eigen::Vector3d& marker_m);
+
+// The IGS name (type and radome) under which a receiver's antenna is looked up in its ANTEX file:
+// receiver.antenna_type, else the IGS name of the antenna profile in use (receiver.antenna or the
+// receiver profile's default, `antenna_rinex_type`); empty when neither has one.
+[[nodiscard]] std::string antex_antenna_name(const ReceiverSettings& receiver, const std::string& antenna_rinex_type = {});
+
+// The phase centre model of a receiver for `signals` from its ANTEX file (receiver.antex; nullptr
+// without one): the type-mean calibration of antex_antenna_name valid at the scenario's start.
+[[nodiscard]] Result<std::shared_ptr<const receiver::AntennaPhaseCentre>> load_antenna_phase_centre(
+    const Scenario& scenario, const ReceiverSettings& receiver, std::span<const Signal> signals,
+    const std::string& antenna_rinex_type = {});
 
 // The generator of receiver `index`, moving as `kinematics` says, in the scenario's world.
 [[nodiscard]] Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(

@@ -12,6 +12,7 @@
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/orbits/broadcast.hpp"
+#include "skytrace/receiver/antex.hpp"
 
 namespace skytrace::receiver::stages {
 
@@ -52,6 +53,14 @@ struct LightTime {
   const double azimuth_deg = std::atan2(enu.x(), enu.y()) * 180.0 / std::numbers::pi;
   d.azimuth_deg = azimuth_deg < 0.0 ? azimuth_deg + 360.0 : azimuth_deg;
   return d;
+}
+
+// The receiver-side geometric term of a signal: its frequency's phase centre (ANTEX PCO and PCV)
+// seen from the direction of the satellite at the antenna reference point (0 without a model).
+// The geometric range stays the one to the reference point; this term goes into the observables.
+[[nodiscard]] inline double antenna_phase_centre_m(const AntennaPhaseCentre* model, const Signal& signal,
+                                                   const AzimuthElevation& direction) {
+  return model != nullptr ? model->range_correction_m(signal, direction) : 0.0;
 }
 
 }  // namespace skytrace::receiver::stages
