@@ -163,8 +163,10 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   // (commit 1d3c1d5), byte for byte, except for two deliberate changes of session 4, each checked
   // column by column: L2W's phase (L1 C/A aiding of semi-codeless loops; the profile without the
   // aiding key reproduces 1d3c1d5's hash 0x11e6ee0c3fde63f7), then the four L2C columns (L2C power
-  // per GPS block, and the refitted G2L loss; 0x06976b7b5220e15c before it). Update the value only
-  // with a deliberate change of the GPS model.
+  // per GPS block, and the refitted G2L loss; 0x06976b7b5220e15c before it), and in session 6 the
+  // header's ANT # / TYPE, which now names the antenna profile in use (ASH701945E_M SCIS; the
+  // records unchanged, 0x56b465d10e205e1f before). Update the value only with a deliberate change
+  // of the GPS model.
   const auto scenario = test::shared_data_dir().parent_path() / "contract" / "esbc-realistic.yaml";
   if (!std::filesystem::exists(scenario)) GTEST_SKIP() << "contract scenario absent";
   const auto out = dir_ / "gps";
@@ -172,7 +174,7 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string bytes = read_bytes(out / "obs.rnx");
   EXPECT_EQ(bytes.size(), 264615u);
-  EXPECT_EQ(fnv1a64(bytes), 0x56b465d10e205e1fULL);
+  EXPECT_EQ(fnv1a64(bytes), 0x8584037ad1e1a088ULL);
 }
 
 }  // namespace
