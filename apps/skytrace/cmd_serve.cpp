@@ -54,7 +54,9 @@ constexpr size_t kMaxClientBacklogBytes = size_t{1} << 20;
 
 struct ServeArgs {
   std::string scenario;
+  std::string receiver;  // the receiver of a scenario with several (by name); empty: the first
   std::string nmea_tcp, rtcm_tcp, pty, pose_udp;
+  std::string rtk_base_tcp;  // HOST:PORT of a base's RTCM 3 stream
   double rate_hz = 1.0;
   double duration_s = 0.0;
   std::vector<std::string> overrides;
@@ -290,6 +292,81 @@ class PtyStream final : public sim::ByteStream {
   std::unique_ptr<PseudoTerminal> pty_;
 };
 
+// A base station's RTCM 3 stream over TCP (skytrace serve --rtcm-tcp, str2str, an NTRIP relay),
+// decoded into base epochs for live RTK. Connects again every second while the base is away; what
+// arrives between frames is skipped by the decoder.
+class RtcmBaseClient {
+ public:
+  RtcmBaseClient(std::string endpoint, GnssTime reference) : endpoint_(std::move(endpoint)), decoder_(reference) {}
+  ~RtcmBaseClient() {
+    if (fd_ >= 0) close(fd_);
+  }
+  [[nodiscard]] int fd() const { return fd_; }
+  // Connects when not connected (at most once a second); reads what is there; hands complete epochs
+  // with the base's position (1005/1006) to the session.
+  void service(sim::LiveSession& live) {
+    using Clock = std::chrono::steady_clock;
+    if (fd_ < 0) {
+      if (Clock::now() - last_attempt_ < std::chrono::seconds(1)) return;
+      last_attempt_ = Clock::now();
+      connect_now();
+      return;
+    }
+    std::uint8_t buffer[8192];
+    for (int reads = 0; reads < 64; ++reads) {
+      const ssize_t n = recv(fd_, buffer, sizeof buffer, MSG_DONTWAIT);
+      if (n > 0) {
+        decoder_.feed(std::span<const std::uint8_t>(buffer, static_cast<size_t>(n)));
+        continue;
+      }
+      if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+        std::cerr << "skytrace serve: warning: RTK base " << endpoint_ << " closed the connection\n";
+        close(fd_);
+        fd_ = -1;
+      }
+      break;
+    }
+    for (const auto& epoch : decoder_.take_epochs()) {
+      if (!decoder_.station()) {
+        if (!warned_position_) std::cerr << "skytrace serve: warning: RTK base " << endpoint_ << ": no 1005/1006 yet, epochs wait\n";
+        warned_position_ = true;
+        continue;
+      }
+      live.add_base_epoch(positioning::BaseEpoch{converter_.convert(epoch), decoder_.station()->arp_ecef_m});
+    }
+  }
+
+ private:
+  void connect_now() {
+    const size_t colon = endpoint_.rfind(':');
+    addrinfo hints{};
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* found = nullptr;
+    if (colon == std::string::npos ||
+        getaddrinfo(endpoint_.substr(0, colon).c_str(), endpoint_.substr(colon + 1).c_str(), &hints, &found) != 0) {
+      return;
+    }
+    std::unique_ptr<addrinfo, decltype(&freeaddrinfo)> guard(found, freeaddrinfo);
+    const int fd = socket(found->ai_family, found->ai_socktype | SOCK_CLOEXEC, found->ai_protocol);
+    if (fd < 0) return;
+    if (connect(fd, found->ai_addr, found->ai_addrlen) != 0) {
+      close(fd);
+      if (!warned_connect_) std::cerr << "skytrace serve: warning: RTK base " << endpoint_ << ": " << std::strerror(errno) << " (trying again every second)\n";
+      warned_connect_ = true;
+      return;
+    }
+    fd_ = fd;
+    std::cout << "skytrace serve: RTK corrections from " << endpoint_ << std::endl;
+  }
+  std::string endpoint_;
+  int fd_ = -1;
+  io::Rtcm3Decoder decoder_;
+  io::RtcmMeasurementConverter converter_;
+  std::chrono::steady_clock::time_point last_attempt_{};
+  bool warned_connect_ = false, warned_position_ = false;
+};
+
 int serve(const ServeArgs& args) {
   if (!(args.rate_hz > 0.0 && args.rate_hz <= 100.0)) {
     return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--rate-hz {}: expected 0 < R <= 100", args.rate_hz)));
@@ -302,7 +379,18 @@ int serve(const ServeArgs& args) {
   }
   auto scenario = sim::load_scenario(args.scenario, args.overrides);
   if (!scenario) return report_error(scenario.error());
-  auto session = sim::LiveSession::create(*scenario);
+  sim::LiveOptions live_options;
+  if (!args.receiver.empty()) {
+    const auto it = std::find_if(scenario->receivers.begin(), scenario->receivers.end(),
+                                 [&](const sim::ReceiverSettings& r) { return r.name == args.receiver; });
+    if (it == scenario->receivers.end()) {
+      return report_error(make_error(ErrorCode::kInvalidArgument, "--receiver " + args.receiver + ": no such receiver in " +
+                                                                      args.scenario));
+    }
+    live_options.receiver_index = static_cast<size_t>(it - scenario->receivers.begin());
+  }
+  live_options.rtk = !args.rtk_base_tcp.empty();
+  auto session = sim::LiveSession::create(*scenario, live_options);
   if (!session) return report_error(session.error());
   sim::LiveSession& live = **session;
   for (const auto& warning : live.resources().warnings) std::cerr << "skytrace serve: warning: " << warning << "\n";
@@ -338,6 +426,8 @@ int serve(const ServeArgs& args) {
     sinks.push_back(std::make_unique<sim::StreamSink>(0, sim::make_nmea_encoder(), std::make_unique<PtyStream>(std::move(*opened))));
   }
   int pose_fd = -1;
+  std::unique_ptr<RtcmBaseClient> rtk_base;
+  if (!args.rtk_base_tcp.empty()) rtk_base = std::make_unique<RtcmBaseClient>(args.rtk_base_tcp, scenario->time.start);
   if (!args.pose_udp.empty()) {
     auto fd = bind_socket(args.pose_udp, SOCK_DGRAM, "--pose-udp");
     if (!fd) return report_error(fd.error());
@@ -375,12 +465,14 @@ int serve(const ServeArgs& args) {
       std::vector<pollfd> fds;
       for (const auto& server : servers) server->add_poll_fds(fds);
       if (pose_fd >= 0) fds.push_back({pose_fd, POLLIN, 0});
+      if (rtk_base && rtk_base->fd() >= 0) fds.push_back({rtk_base->fd(), POLLIN, 0});
       const auto now = Clock::now();
       if (now >= deadline || g_stop) break;
       const auto wait_ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count() + 1;
       const int ready = poll(fds.data(), fds.size(), static_cast<int>(std::min<long long>(wait_ms, 100)));
       if (ready < 0 && errno != EINTR) return report_error(io_error("poll"));
       for (const auto& server : servers) server->service();
+      if (rtk_base) rtk_base->service(live);
       if (pose_fd >= 0) {
         char buffer[2048];
         for (size_t datagrams = 0; datagrams < kMaxDatagramsPerWakeup; ++datagrams) {
@@ -449,6 +541,10 @@ void register_serve_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--pose-udp", args->pose_udp,
                   "Receive antenna poses as UDP text datagrams on HOST:PORT ('ecef X Y Z [VX VY VZ]', "
                   "'world X Y Z [VX VY VZ]', 'llh LAT LON H')");
+  cmd->add_option("--receiver", args->receiver, "The receiver of a scenario with several, by name (default: the first)");
+  cmd->add_option("--rtk-base-tcp", args->rtk_base_tcp,
+                  "RTK: a base station's RTCM 3 stream on HOST:PORT (MSM and 1005/1006, e.g. another skytrace serve "
+                  "--rtcm-tcp or str2str); the fixes become rtk_fixed / rtk_float (NMEA GGA quality 4/5)");
   cmd->add_option("--rate-hz", args->rate_hz, "Epochs per second (default 1)");
   cmd->add_option("--duration-s", args->duration_s, "Stop after this many seconds (default: until SIGINT/SIGTERM)");
   cmd->add_option("--set", args->overrides, "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable)");

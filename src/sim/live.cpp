@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <deque>
 #include <mutex>
 
 #include "skytrace/core/constants.hpp"
@@ -82,6 +83,8 @@ struct LiveSession::Impl {
   std::shared_ptr<ExternalPose> pose;
   std::unique_ptr<receiver::ObservationGenerator> generator;
   std::optional<positioning::SinglePointSolver> solver;
+  std::optional<positioning::RtkEngine> rtk;
+  std::deque<positioning::BaseEpoch> base_epochs;  // newest last, about a minute
   io::ObservationHeader header;
   std::unique_ptr<RinexRecordMaker> records;
   std::optional<GnssTime> last_tag;
@@ -96,6 +99,12 @@ struct LiveSession::Impl {
     generator = std::move(*generator_made);
     if (options.solve_position) {
       solver.emplace(*resources.ephemerides, solver_settings(), resources.ephemerides->data().ionosphere.gps);
+      if (options.rtk) {
+        auto settings = rtk_settings_without_base(scenario.receivers[options.receiver_index], scenario,
+                                                  *resources.ephemerides);
+        if (!settings) return settings.error();
+        rtk.emplace(*resources.ephemerides, std::move(*settings), resources.ephemerides->data().ionosphere.gps);
+      }
     }
     return Ok{};
   }
@@ -190,12 +199,36 @@ Result<LiveEpoch> LiveSession::step(const GnssTime& tag) {
   auto observations = impl_->generator->observe(tag);
   if (!observations) return observations.error();
   out.observations = std::move(*observations);
-  if (impl_->solver) {
+  if (impl_->rtk) {
+    const positioning::BaseEpoch* base = nullptr;
+    for (auto it = impl_->base_epochs.rbegin(); it != impl_->base_epochs.rend(); ++it) {
+      if (it->measurements.receiver_time - out.observations.receiver_time <= 1e-3) {
+        base = &*it;
+        break;
+      }
+    }
+    auto fix = impl_->rtk->solve(to_measurements(out.observations), base);
+    if (!fix) return fix.error();
+    out.fix = std::move(*fix);
+  } else if (impl_->solver) {
     auto fix = impl_->solver->solve(to_measurements(out.observations));
     if (!fix) return fix.error();
     out.fix = std::move(*fix);
   }
   return out;
+}
+
+void LiveSession::add_base_epoch(positioning::BaseEpoch base) {
+  constexpr double kKept_s = 60.0;
+  auto& epochs = impl_->base_epochs;
+  // In time order (a stream may repeat or reorder an epoch: the later copy wins).
+  while (!epochs.empty() && !(epochs.back().measurements.receiver_time < base.measurements.receiver_time)) {
+    epochs.pop_back();
+  }
+  epochs.push_back(std::move(base));
+  while (epochs.back().measurements.receiver_time - epochs.front().measurements.receiver_time > kKept_s) {
+    epochs.pop_front();
+  }
 }
 
 const Scenario& LiveSession::scenario() const { return impl_->scenario; }

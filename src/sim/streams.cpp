@@ -81,20 +81,10 @@ positioning::SolverSettings default_solver_settings(const ReceiverSettings& rece
   return settings;
 }
 
-Result<positioning::RtkSettings> rtk_settings(const Scenario& s, size_t rover_index,
-                                              const orbits::BroadcastEphemerides& ephemerides) {
-  const ReceiverSettings& rover = s.receivers.at(rover_index);
-  if (!rover.rtk) return make_error(ErrorCode::kInvalidArgument, "receiver '" + rover.name + "' has no rtk key");
-  const auto base = std::find_if(s.receivers.begin(), s.receivers.end(),
-                                 [&](const ReceiverSettings& r) { return r.name == rover.rtk->base; });
-  if (base == s.receivers.end()) {
-    return make_error(ErrorCode::kInvalidArgument, "receiver '" + rover.name + "': no base '" + rover.rtk->base + "'");
-  }
-  auto profile = receiver::load_profile(rover.profile, s.source.parent_path());
-  if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
-  auto base_profile = receiver::load_profile(base->profile, s.source.parent_path());
-  if (!base_profile) return base_profile.error().with_context(s.source.string() + ": receiver.profile");
-  const receiver::RtkProfile& p = profile->rtk;
+namespace {
+positioning::RtkSettings rtk_settings_of(const ReceiverSettings& rover, const receiver::ReceiverProfile& profile,
+                                         const orbits::BroadcastEphemerides& ephemerides) {
+  const receiver::RtkProfile& p = profile.rtk;
   positioning::RtkSettings out;
   out.single_point = default_solver_settings(rover, ephemerides);
   out.elevation_mask_deg = std::max(p.elevation_mask_deg, rover.elevation_mask_deg);
@@ -109,8 +99,35 @@ Result<positioning::RtkSettings> rtk_settings(const Scenario& s, size_t rover_in
   out.code_phase_ratio = p.code_phase_ratio;
   out.acceleration_noise_mps2 = p.acceleration_noise_mps2;
   out.ambiguity_noise_cycles = p.ambiguity_noise_cycles;
+  return out;
+}
+}  // namespace
+
+Result<positioning::RtkSettings> rtk_settings(const Scenario& s, size_t rover_index,
+                                              const orbits::BroadcastEphemerides& ephemerides) {
+  const ReceiverSettings& rover = s.receivers.at(rover_index);
+  if (!rover.rtk) return make_error(ErrorCode::kInvalidArgument, "receiver '" + rover.name + "' has no rtk key");
+  const auto base = std::find_if(s.receivers.begin(), s.receivers.end(),
+                                 [&](const ReceiverSettings& r) { return r.name == rover.rtk->base; });
+  if (base == s.receivers.end()) {
+    return make_error(ErrorCode::kInvalidArgument, "receiver '" + rover.name + "': no base '" + rover.rtk->base + "'");
+  }
+  auto profile = receiver::load_profile(rover.profile, s.source.parent_path());
+  if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
+  auto base_profile = receiver::load_profile(base->profile, s.source.parent_path());
+  if (!base_profile) return base_profile.error().with_context(s.source.string() + ": receiver.profile");
+  positioning::RtkSettings out = rtk_settings_of(rover, *profile, ephemerides);
   // GLONASS inter-frequency biases differ between receiver designs: integers only within one.
   out.fix_glonass = profile->name == base_profile->name;
+  return out;
+}
+
+Result<positioning::RtkSettings> rtk_settings_without_base(const ReceiverSettings& rover, const Scenario& s,
+                                                           const orbits::BroadcastEphemerides& ephemerides) {
+  auto profile = receiver::load_profile(rover.profile, s.source.parent_path());
+  if (!profile) return profile.error().with_context(s.source.string() + ": receiver.profile");
+  positioning::RtkSettings out = rtk_settings_of(rover, *profile, ephemerides);
+  out.fix_glonass = false;
   return out;
 }
 

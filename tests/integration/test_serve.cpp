@@ -201,3 +201,73 @@ TEST_F(Serve, PseudoTerminalCarriesNmeaAndDisappearsOnStop) {
 
 }  // namespace
 }  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// Reads what a TCP server sends for `seconds`.
+std::string read_tcp(int port, double seconds) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  std::string text;
+  if (connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    close(fd);
+    return text;
+  }
+  timeval timeout{0, 200000};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  char buffer[4096];
+  while (std::chrono::steady_clock::now() < end) {
+    const ssize_t n = recv(fd, buffer, sizeof buffer, 0);
+    if (n > 0) text.append(buffer, static_cast<size_t>(n));
+    if (n == 0) break;
+  }
+  close(fd);
+  return text;
+}
+
+// Live RTK between two virtual receivers: one serve streams the base's RTCM 3 (the contract pair's
+// BASE), another (its ROVR) takes it with --rtk-base-tcp, connecting again while the base is not
+// up yet: its NMEA reports GGA quality 4 (RTK fixed) at the rover's position.
+TEST(ServeRtk, RoverFixesFromABaseStreamOverTcp) {
+  const auto contract = test::shared_data_dir().parent_path() / "contract" / "rtk-pair.yaml";
+  if (!std::filesystem::exists(contract) ||
+      !std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx")) {
+    GTEST_SKIP() << "contract scenario or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  }
+  const auto dir = test::make_temp_dir("serve_rtk_" + std::to_string(getpid()));
+  const std::string skytrace = test::shell_quote(test::skytrace_executable().string());
+  const int base_port = free_tcp_port();
+  // The rover first: it waits for the base.
+  Background rover(skytrace + " serve " + test::shell_quote(contract.string()) + " --receiver ROVR --rate-hz 2" +
+                       " --duration-s 40 --nmea-tcp 127.0.0.1:0 --rtk-base-tcp 127.0.0.1:" + std::to_string(base_port),
+                   dir / "rover.log");
+  const std::string rover_port = wait_for_line(dir / "rover.log", "skytrace serve: NMEA on tcp port ");
+  ASSERT_FALSE(rover_port.empty()) << read_file(dir / "rover.log");
+  Background base(skytrace + " serve " + test::shell_quote(contract.string()) + " --receiver BASE --rate-hz 2" +
+                      " --duration-s 40 --rtcm-tcp 127.0.0.1:" + std::to_string(base_port),
+                  dir / "base.log");
+  ASSERT_FALSE(wait_for_line(dir / "rover.log", "skytrace serve: RTK corrections from ").empty()) << read_file(dir / "rover.log");
+  const std::string nmea = read_tcp(std::stoi(rover_port), 15.0);
+  size_t fixed = 0;
+  std::istringstream lines(nmea);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("GGA,") == std::string::npos) continue;
+    std::vector<std::string> f;
+    for (std::stringstream s(line); std::getline(s, line, ',');) f.push_back(line);
+    if (f.size() < 10 || f[6] != "4") continue;
+    ++fixed;
+    // 55.4935 N, 8.4880 E, 75 m: ddmm.mmmmmmm to within a few centimetres.
+    EXPECT_NEAR(std::stod(f[2].substr(2)) / 60.0 + std::stod(f[2].substr(0, 2)), 55.4935, 1e-6) << line;
+    EXPECT_NEAR(std::stod(f[4].substr(3)) / 60.0 + std::stod(f[4].substr(0, 3)), 8.4880, 2e-6) << line;
+    EXPECT_NEAR(std::stod(f[9]), 75.0, 0.1) << line;
+  }
+  EXPECT_GT(fixed, 5u) << nmea.substr(0, 2000) << "\n" << read_file(dir / "rover.log");
+}
+
+}  // namespace
+}  // namespace skytrace

@@ -13,6 +13,7 @@
 
 #include "skytrace/core/error.hpp"
 #include "skytrace/core/frames.hpp"
+#include "skytrace/positioning/rtk.hpp"
 #include "skytrace/positioning/spp.hpp"
 #include "skytrace/receiver/observation_generator.hpp"
 #include "skytrace/sim/scenario.hpp"
@@ -28,6 +29,9 @@ struct LiveOptions {
   std::optional<positioning::SolverSettings> solver;
   // An external pose older than this is stale: the receiver stays where it was last put, at rest.
   double pose_timeout_s = 1.0;
+  // RTK against corrections given with add_base_epoch (a base's RTCM stream): the receiver
+  // profile's `rtk` section, GLONASS ambiguities float (the base's make is unknown).
+  bool rtk = false;
 };
 
 struct LiveEpoch {
@@ -66,6 +70,10 @@ class LiveSession {
   // The same in world_frame() coordinates (the Gazebo world frame).
   [[nodiscard]] Status set_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
                                               const std::optional<Eigen::Vector3d>& velocity_world_mps = std::nullopt);
+  // A base station's epoch (its observations and antenna reference point) for RTK (LiveOptions::rtk):
+  // each step uses the latest one at or before its tag. Not while step() runs.
+  void add_base_epoch(positioning::BaseEpoch base);
+
   // Moves a movable model of the world (not while step() runs).
   [[nodiscard]] Status set_object_pose(const std::string& name, const Eigen::Isometry3d& pose_world);
 

@@ -48,6 +48,10 @@ struct RecordsInUse {
 // rover are of one profile, single-point settings as default_solver_settings.
 [[nodiscard]] Result<positioning::RtkSettings> rtk_settings(const Scenario& scenario, size_t rover_index,
                                                             const orbits::BroadcastEphemerides& ephemerides);
+// The same for corrections from outside the scenario (an RTCM stream): GLONASS ambiguities float.
+[[nodiscard]] Result<positioning::RtkSettings> rtk_settings_without_base(const ReceiverSettings& rover,
+                                                                         const Scenario& scenario,
+                                                                         const orbits::BroadcastEphemerides& ephemerides);
 
 // The position engine of one receiver of a run: single point, or RTK for a rover (receivers[].rtk)
 // with its base's epoch of the same instant.
