@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "dds.hpp"
+#include "latency_report.hpp"
 #include "live_receiver.hpp"
 #include "log.hpp"
 #include "params.hpp"
@@ -635,24 +636,12 @@ class Node {
 
   void report_latency() {
     if (latencies_s_.empty()) return;
-    std::vector<double> sorted = latencies_s_;
-    std::sort(sorted.begin(), sorted.end());
-    const auto quantile_ms = [&](double q) {
-      const auto index = static_cast<size_t>(std::ceil(q * static_cast<double>(sorted.size()))) - 1;
-      return 1e3 * sorted[std::min(index, sorted.size() - 1)];
-    };
-    double sum_s = 0.0;
-    for (double s : sorted) sum_s += s;
-    const std::string json = fmt::format(
-        "{{\"scenario\": \"{}\", \"rate_hz\": {}, \"epochs\": {}, \"mean_ms\": {:.4f}, \"p50_ms\": {:.4f}, "
-        "\"p90_ms\": {:.4f}, \"p99_ms\": {:.4f}, \"max_ms\": {:.4f}}}\n",
-        config_.scenario, config_.rate_hz, sorted.size(), 1e3 * sum_s / static_cast<double>(sorted.size()),
-        quantile_ms(0.5), quantile_ms(0.9), quantile_ms(0.99), 1e3 * sorted.back());
-    log_.info("per-epoch latency (step and publish): {} epochs, p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms", sorted.size(),
-              quantile_ms(0.5), quantile_ms(0.99), 1e3 * sorted.back());
+    const live::LatencySummary summary = live::summarize_latencies(latencies_s_);
+    log_.info("per-epoch latency (step and publish): {} epochs, p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms", summary.epochs,
+              summary.p50_ms, summary.p99_ms, summary.max_ms);
     if (!config_.latency_report.empty()) {
       std::ofstream out(config_.latency_report);
-      out << json;
+      out << live::latency_json(config_.scenario, config_.rate_hz, summary);
       if (!out) log_.error("parameter latency_report {}: cannot write", config_.latency_report);
     }
   }

@@ -53,18 +53,6 @@ std::string_view content_of(std::string_view line) {
   return line.substr(0, std::min<size_t>(line.size(), 60));
 }
 
-std::vector<std::string_view> tokens(std::string_view text) {
-  std::vector<std::string_view> out;
-  size_t i = 0;
-  while (i < text.size()) {
-    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
-    const size_t start = i;
-    while (i < text.size() && text[i] != ' ' && text[i] != '\t') ++i;
-    if (i > start) out.push_back(text.substr(start, i - start));
-  }
-  return out;
-}
-
 std::string file_name_of(const std::string& source) {
   const auto slash = source.find_last_of('/');
   return slash == std::string::npos ? source : source.substr(slash + 1);
@@ -108,7 +96,7 @@ class Parser {
         values.push_back(*v);
     }
     if (fixed_ok) return values;
-    const auto parts = tokens(line);
+    const auto parts = split_words(line);
     values.clear();
     for (const auto& part : parts) {
       auto v = parse_fortran_double(part);
@@ -123,7 +111,7 @@ class Parser {
   }
 
   Result<double> real_token(size_t index, std::string_view what) const {
-    const auto parts = tokens(content_of(lines_[index]));
+    const auto parts = split_words(content_of(lines_[index]));
     if (parts.empty()) return error_at(index, cat("field ", what, ": blank"));
     auto v = parse_fortran_double(parts.front());
     if (!v.ok())
@@ -132,7 +120,7 @@ class Parser {
   }
 
   Result<long> integer_token(size_t index, std::string_view what) const {
-    const auto parts = tokens(content_of(lines_[index]));
+    const auto parts = split_words(content_of(lines_[index]));
     if (parts.empty()) return error_at(index, cat("field ", what, ": blank"));
     auto v = parse_integer(parts.front());
     if (!v.ok())
@@ -142,7 +130,7 @@ class Parser {
 
   // Year, month, day, hour, minute, second (6I6; some producers write the second as a real), UT.
   Result<GnssTime> epoch(size_t index, std::string_view what) const {
-    const auto parts = tokens(content_of(lines_[index]));
+    const auto parts = split_words(content_of(lines_[index]));
     if (parts.size() != 6) {
       return error_at(index,
                       cat("field ", what, ": expected year month day hour minute second, found \"",

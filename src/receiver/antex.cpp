@@ -35,18 +35,6 @@ bool has_label(std::string_view line, std::string_view label) {
   return line.size() >= 60 + label.size() && trim(line.substr(60)) == label;
 }
 
-std::vector<std::string_view> tokens(std::string_view text) {
-  std::vector<std::string_view> out;
-  size_t i = 0;
-  while (i < text.size()) {
-    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
-    const size_t start = i;
-    while (i < text.size() && text[i] != ' ' && text[i] != '\t') ++i;
-    if (i > start) out.push_back(text.substr(start, i - start));
-  }
-  return out;
-}
-
 bool is_satellite_code(std::string_view serial) {
   static constexpr std::string_view kSystems = "GRECJSI";
   return serial.size() == 3 && kSystems.find(serial[0]) != std::string_view::npos &&
@@ -242,7 +230,7 @@ class Parser {
     const std::string_view line = lines_[index];
     std::vector<double> out;
     out.reserve(count);
-    const auto items = tokens(line.size() > from ? line.substr(from) : std::string_view{});
+    const auto items = split_words(line.size() > from ? line.substr(from) : std::string_view{});
     if (items.size() != count) {
       return lines_.error_at(index, "expected " + std::to_string(count) + " PCV values (one per zenith node), got " +
                                         std::to_string(items.size()));
@@ -396,7 +384,7 @@ std::optional<IgsAntennaName> split_igs_antenna_name(std::string_view text) {
     }
   }
   if (out.type.empty()) {
-    const auto items = tokens(trimmed);
+    const auto items = split_words(trimmed);
     if (items.size() > 2) return std::nullopt;
     out.type = std::string(items[0]);
     out.radome = items.size() == 2 ? std::string(items[1]) : std::string();

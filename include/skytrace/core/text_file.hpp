@@ -37,6 +37,8 @@ class TextLines {
 // Fixed-column field helpers for RINEX-like formats: the substring [start, start+width), clipped
 // to the line, with surrounding blanks removed.
 [[nodiscard]] std::string_view field(std::string_view line, size_t start, size_t width);
+// The blank- or tab-separated words of a line (free-format records: IONEX, ANTEX grids).
+[[nodiscard]] std::vector<std::string_view> split_words(std::string_view text);
 // Parses a Fortran-style number ("1.234D-05", "-.5E+01"); a blank field is an error.
 [[nodiscard]] Result<double> parse_fortran_double(std::string_view text);
 [[nodiscard]] Result<long> parse_integer(std::string_view text);
