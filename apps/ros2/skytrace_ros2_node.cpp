@@ -561,9 +561,9 @@ class Node {
     for (auto& [relative, output] : outputs_) output.bag_topic.reset();
   }
 
-  // Writes the messages to the topic `name` when someone listens, and into the bag being recorded.
+  // Writes a message to the topic `name` when someone listens, and into the bag being recorded.
   template <typename Message>
-  void publish(const char* name, const Message& message) {
+  void publish(std::string_view name, const Message& message) {
     const auto it = outputs_.find(name);
     if (it == outputs_.end()) return;
     const bool wanted = it->second.wanted();
@@ -572,7 +572,7 @@ class Node {
     ros2::serialize_into(message, cdr_);
     if (wanted) {
       if (auto st = it->second.writer->write(cdr_); !st) {
-        log_.throttled(LogLevel::kWarn, 10.0, name, fmt::format("{}: {}", name, st.error().message));
+        log_.throttled(LogLevel::kWarn, 10.0, std::string(name), fmt::format("{}: {}", name, st.error().message));
       }
     }
     if (recorded) {
@@ -581,10 +581,6 @@ class Node {
         drop_bag();
       }
     }
-  }
-  template <typename Message>
-  void publish(const char* name, const std::vector<Message>& messages) {
-    for (const auto& message : messages) publish(name, message);
   }
 
   void epoch(std::int64_t k) {
@@ -614,17 +610,10 @@ class Node {
     }
     const sim::Ros2Epoch& m = messages_;
     stamp_ns_ = stamp_ns;
-    publish("fix", m.fix);
-    if (m.velocity) publish("velocity", *m.velocity);
-    publish("time_reference", m.time_reference);
-    publish("nmea", m.nmea);
-    publish("rtcm", m.rtcm);
-    publish("gnss/measurements", m.measurements);
-    publish("gnss/ephemeris", m.ephemerides);
-    publish("gnss/glonass_ephemeris", m.glonass_ephemerides);
-    publish("observations", m.observations);
-    publish("sky", m.sky);
-    publish("rays", m.rays);
+    (void)sim::visit_messages(m, [&](std::string_view topic, const auto& message) -> Status {
+      publish(topic, message);  // failures are logged there: the node goes on
+      return Ok{};
+    });
     latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
 
     if (receiver_->rinex_open()) {

@@ -97,34 +97,12 @@ class McapSink final : public EpochSink {
 
   Status write(const Item& item) {
     const auto& topic_ids = receivers_[item.receiver].topic_ids;
-    const Ros2Epoch& m = item.messages;
-    auto put = [&](std::string_view topic, const auto& message) -> Status {
+    return visit_messages(item.messages, [&](std::string_view topic, const auto& message) -> Status {
       const auto id = topic_ids.find(topic);
       if (id == topic_ids.end()) return Ok{};  // a topic this bag leaves out
       ros2::serialize_into(message, buffer_);
       return bag_->write(id->second, item.stamp_ns, buffer_);
-    };
-    if (auto st = put("fix", m.fix); !st) return st;
-    if (m.velocity) {
-      if (auto st = put("velocity", *m.velocity); !st) return st;
-    }
-    if (auto st = put("time_reference", m.time_reference); !st) return st;
-    for (const auto& sentence : m.nmea) {
-      if (auto st = put("nmea", sentence); !st) return st;
-    }
-    for (const auto& frame : m.rtcm) {
-      if (auto st = put("rtcm", frame); !st) return st;
-    }
-    if (auto st = put("gnss/measurements", m.measurements); !st) return st;
-    for (const auto& eph : m.ephemerides) {
-      if (auto st = put("gnss/ephemeris", eph); !st) return st;
-    }
-    for (const auto& eph : m.glonass_ephemerides) {
-      if (auto st = put("gnss/glonass_ephemeris", eph); !st) return st;
-    }
-    if (auto st = put("observations", m.observations); !st) return st;
-    if (auto st = put("sky", m.sky); !st) return st;
-    return put("rays", m.rays);
+    });
   }
 
  public:

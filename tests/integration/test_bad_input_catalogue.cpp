@@ -471,21 +471,8 @@ TEST_F(BadInputCatalogue, ServePortAbove65535IsRefused) {
            "port must be a number from 0 to 65535");
 }
 
-// A free UDP port of the loopback (closed again: a short race with other programs, fine in tests).
-int free_udp_port() {
-  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
-  socklen_t length = sizeof address;
-  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
-  close(fd);
-  return ntohs(address.sin_port);
-}
-
 TEST_F(BadInputCatalogue, ServeSurvivesHostilePosesAndStopsWithinASecond) {
-  const int port = free_udp_port();
+  const int port = test::free_loopback_port(SOCK_DGRAM);
   test::Background server(skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") +
                               " --rate-hz 10 --nmea-tcp 127.0.0.1:0 --pose-udp 127.0.0.1:" + std::to_string(port),
                           dir_ / "log");

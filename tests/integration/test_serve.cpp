@@ -49,18 +49,6 @@ std::string wait_for_line(const std::filesystem::path& log, const std::string& p
   return {};
 }
 
-int free_tcp_port() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
-  socklen_t length = sizeof address;
-  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
-  close(fd);
-  return ntohs(address.sin_port);
-}
-
 class Serve : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -86,7 +74,7 @@ TEST_F(Serve, GpsdReportsThreeDimensionalFixesAtTheStation) {
   Background server(serve_command("--nmea-tcp 127.0.0.1:0 --rate-hz 2 --duration-s 120"), dir_ / "serve.log");
   const std::string port = wait_for_line(dir_ / "serve.log", "skytrace serve: NMEA on tcp port ");
   ASSERT_FALSE(port.empty()) << read_file(dir_ / "serve.log");
-  const int control_port = free_tcp_port();
+  const int control_port = test::free_loopback_port(SOCK_STREAM);
   Background gpsd("/usr/sbin/gpsd -N -n -S " + std::to_string(control_port) + " tcp://127.0.0.1:" + port,
                   dir_ / "gpsd.log");
   test::ProcessResult pipe;
@@ -241,7 +229,7 @@ TEST(ServeRtk, RoverFixesFromABaseStreamOverTcp) {
   }
   const auto dir = test::make_temp_dir("serve_rtk_" + std::to_string(getpid()));
   const std::string skytrace = test::shell_quote(test::skytrace_executable().string());
-  const int base_port = free_tcp_port();
+  const int base_port = test::free_loopback_port(SOCK_STREAM);
   // The rover first: it waits for the base.
   Background rover(skytrace + " serve " + test::shell_quote(contract.string()) + " --receiver ROVR --rate-hz 2" +
                        " --duration-s 40 --nmea-tcp 127.0.0.1:0 --rtk-base-tcp 127.0.0.1:" + std::to_string(base_port),

@@ -1,6 +1,9 @@
 #include "process.hpp"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -127,6 +130,18 @@ std::filesystem::path skytrace_executable() { return binary_dir() / "bin" / "sky
 
 bool program_available(const std::string& name) {
   return run_command("command -v " + shell_quote(name) + " >/dev/null").exit_code == 0;
+}
+
+int free_loopback_port(int socket_type) {
+  const int fd = socket(AF_INET, socket_type, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address);
+  socklen_t length = sizeof address;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  close(fd);
+  return ntohs(address.sin_port);
 }
 
 }  // namespace skytrace::test

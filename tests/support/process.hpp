@@ -29,6 +29,9 @@ MeasuredProcess run_measured(const std::string& command_line, double timeout_s);
 std::string shell_quote(const std::string& argument);
 // build/bin/skytrace
 std::filesystem::path skytrace_executable();
+// A free port of the loopback for SOCK_STREAM or SOCK_DGRAM (closed again: a short race with other
+// programs, fine in tests).
+int free_loopback_port(int socket_type);
 // Whether a program is on PATH.
 bool program_available(const std::string& name);
 

@@ -60,6 +60,33 @@ struct Ros2Epoch {
   ros2::MarkerArray rays;
 };
 
+// Hands every message of an epoch to `emit(topic, message)` (topic: the name in
+// ros2_receiver_topics()), in that table's order: one call per NMEA sentence, RTCM frame and new
+// ephemeris, none for an absent velocity. The live node and the bag sink publish through it. Stops
+// at the first error `emit` returns.
+template <typename Emit>
+[[nodiscard]] Status visit_messages(const Ros2Epoch& m, Emit&& emit) {
+  auto all = [&](std::string_view topic, const auto& messages) -> Status {
+    for (const auto& message : messages) {
+      if (auto st = emit(topic, message); !st) return st;
+    }
+    return Ok{};
+  };
+  if (auto st = emit("fix", m.fix); !st) return st;
+  if (m.velocity) {
+    if (auto st = emit("velocity", *m.velocity); !st) return st;
+  }
+  if (auto st = emit("time_reference", m.time_reference); !st) return st;
+  if (auto st = all("nmea", m.nmea); !st) return st;
+  if (auto st = all("rtcm", m.rtcm); !st) return st;
+  if (auto st = emit("gnss/measurements", m.measurements); !st) return st;
+  if (auto st = all("gnss/ephemeris", m.ephemerides); !st) return st;
+  if (auto st = all("gnss/glonass_ephemeris", m.glonass_ephemerides); !st) return st;
+  if (auto st = emit("observations", m.observations); !st) return st;
+  if (auto st = emit("sky", m.sky); !st) return st;
+  return emit("rays", m.rays);
+}
+
 class Ros2EpochBuilder {
  public:
   // `world`: the frame of the rays (the loaded world's or east-north-up at the first position);
