@@ -160,13 +160,9 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
       continue;
     }
     auto atmosphere = stages::atmosphere_terms(settings_.troposphere, settings_.ionosphere.get(), epoch.true_time,
-                                               rx_geodetic, obs.direction);
+                                               rx_geodetic, obs.direction, settings_.troposphere_residual.get());
     if (!atmosphere) return atmosphere.error().with_context(sat.to_string());
     obs.troposphere_m = atmosphere->troposphere_m;
-    if (settings_.troposphere_residual) {
-      obs.troposphere_m += atmosphere::troposphere_residual_m(*settings_.troposphere_residual, epoch.true_time,
-                                                              rx_geodetic, obs.direction);
-    }
     obs.ionosphere_l1_m = atmosphere->ionosphere_l1_m;
 
     pending_.push_back(Pending{epoch.satellites.size(), *record, truth, precise_truth, light_time});

@@ -97,6 +97,14 @@ TEST(StageMeasurementErrors, AtmosphereTerms) {
   const auto none = atmosphere_terms(atmosphere::TroposphereModel::kNone, nullptr, t, site,
                                      AzimuthElevation{0.0, 10.0});
   EXPECT_EQ(none->troposphere_m, 0.0);
+  // A wet residual field adds its mapped value at the receiver.
+  const atmosphere::ResidualField wet(atmosphere::ResidualField::for_gradient_ppm(2.0, 50e3, 1800.0, 4));
+  const auto with_residual = atmosphere_terms(atmosphere::TroposphereModel::kSaastamoinen, nullptr, t, site,
+                                              AzimuthElevation{0.0, 90.0}, &wet);
+  ASSERT_TRUE(with_residual.ok());
+  EXPECT_NEAR(with_residual->troposphere_m - zenith->troposphere_m, wet.value_m(site.latitude_deg, site.longitude_deg, t),
+              1e-3);
+  EXPECT_NE(with_residual->troposphere_m, zenith->troposphere_m);
 }
 
 TEST(StageMeasurementErrors, MultipathOfTheDirectPathAloneIsZero) {

@@ -13,7 +13,8 @@ constexpr double kC = constants::kSpeedOfLight_mps;
 
 Result<AtmosphereTerms> atmosphere_terms(atmosphere::TroposphereModel troposphere,
                                          const atmosphere::IonosphereModel* ionosphere, const GnssTime& true_time,
-                                         const Geodetic& receiver, const AzimuthElevation& direction) {
+                                         const Geodetic& receiver, const AzimuthElevation& direction,
+                                         const atmosphere::ResidualField* troposphere_residual) {
   AtmosphereTerms out;
   if (troposphere == atmosphere::TroposphereModel::kSaastamoinen) {
     out.troposphere_m = atmosphere::saastamoinen_delay_m(receiver, direction.elevation_deg).value_or(0.0);
@@ -21,6 +22,9 @@ Result<AtmosphereTerms> atmosphere_terms(atmosphere::TroposphereModel tropospher
     const double day_of_year = true_time.day_of_year(TimeScale::kGpst);
     const auto delay = atmosphere::unb3m_delay(receiver, direction.elevation_deg, day_of_year);
     out.troposphere_m = delay ? delay->slant_m() : 0.0;
+  }
+  if (troposphere_residual != nullptr) {
+    out.troposphere_m += atmosphere::troposphere_residual_m(*troposphere_residual, true_time, receiver, direction);
   }
   if (ionosphere != nullptr) {
     auto delay = ionosphere->delay_l1_m(true_time, receiver, direction);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "skytrace/atmosphere/ionosphere.hpp"
+#include "skytrace/atmosphere/residual_field.hpp"
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/error.hpp"
 #include "skytrace/core/frames.hpp"
@@ -31,12 +32,14 @@ struct AtmosphereTerms {
 };
 
 // Slant delays for a receiver at `receiver` towards `direction` at the true time (troposphere:
-// none, Saastamoinen or UNB3m; ionosphere: none when nullptr). A model that gives no value (below
-// its validity) counts 0; an error of the ionosphere model (outside an IONEX map) is returned.
+// none, Saastamoinen or UNB3m, plus the wet residual field when given; ionosphere: none when
+// nullptr, its residual field riding on the model). A model that gives no value (below its
+// validity) counts 0; an error of the ionosphere model (outside an IONEX map) is returned.
 [[nodiscard]] Result<AtmosphereTerms> atmosphere_terms(atmosphere::TroposphereModel troposphere,
                                                        const atmosphere::IonosphereModel* ionosphere,
                                                        const GnssTime& true_time, const Geodetic& receiver,
-                                                       const AzimuthElevation& direction);
+                                                       const AzimuthElevation& direction,
+                                                       const atmosphere::ResidualField* troposphere_residual = nullptr);
 
 // The ionospheric code delay on a carrier from the delay on L1: (1575.42 MHz / f)^2. The carrier
 // phase is advanced by the same amount (observables.hpp).
