@@ -329,7 +329,7 @@ Status Ros2EpochBuilder::build_into(Ros2Epoch& out, const receiver::EpochObserva
     s.last_record_check = epoch.receiver_time;
     const RecordsInUse records = records_in_use(s.ephemerides, epoch);
     if (s.rtcm) {
-      auto bytes = s.rtcm->epoch(to_rtcm_epoch(epoch), records.kepler, records.glonass);
+      auto bytes = rtcm3_epoch_bytes(*s.rtcm, epoch, records);
       if (!bytes) return bytes.error();
       for (auto& frame : split_rtcm3_frames(*bytes)) out.rtcm.push_back(ros2::RtcmMessage{header, std::move(frame)});
     }

@@ -276,8 +276,7 @@ class Rtcm3Encoder final : public StreamEncoder {
   Rtcm3Encoder(const orbits::BroadcastEphemerides& ephemerides, const io::RtcmStation& station)
       : ephemerides_(ephemerides), stream_(io::Rtcm3StreamSettings{}, station) {}
   Result<std::string> encode(const SinkEpoch& e) override {
-    const RecordsInUse records = records_in_use(ephemerides_, *e.observations);
-    auto bytes = stream_.epoch(to_rtcm_epoch(*e.observations), records.kepler, records.glonass);
+    auto bytes = rtcm3_epoch_bytes(stream_, *e.observations, records_in_use(ephemerides_, *e.observations));
     if (!bytes) return bytes.error();
     return std::string(reinterpret_cast<const char*>(bytes->data()), bytes->size());
   }

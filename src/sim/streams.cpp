@@ -72,6 +72,11 @@ RecordsInUse records_in_use(const orbits::BroadcastEphemerides& ephemerides,
   return out;
 }
 
+Result<std::vector<std::uint8_t>> rtcm3_epoch_bytes(io::Rtcm3Stream& stream, const receiver::EpochObservations& epoch,
+                                                    const RecordsInUse& records) {
+  return stream.epoch(to_rtcm_epoch(epoch), records.kepler, records.glonass);
+}
+
 positioning::SolverSettings default_solver_settings(const ReceiverSettings& receiver,
                                                     const orbits::BroadcastEphemerides& ephemerides) {
   positioning::SolverSettings settings;

@@ -38,6 +38,12 @@ struct RecordsInUse {
 [[nodiscard]] RecordsInUse records_in_use(const orbits::BroadcastEphemerides& ephemerides,
                                           const receiver::EpochObservations& epoch);
 
+// One epoch of a receiver's RTCM 3 stream: MSM7 of its tracked signals and the ephemeris messages of
+// `records` (the records in use at the epoch) as the stream schedules them.
+[[nodiscard]] Result<std::vector<std::uint8_t>> rtcm3_epoch_bytes(io::Rtcm3Stream& stream,
+                                                                  const receiver::EpochObservations& epoch,
+                                                                  const RecordsInUse& records);
+
 // The navigation engine's settings for a receiver of a scenario: its elevation mask (at least 5
 // degrees), Klobuchar when the navigation data has GPS coefficients, Saastamoinen.
 [[nodiscard]] positioning::SolverSettings default_solver_settings(const ReceiverSettings& receiver,
