@@ -17,6 +17,7 @@
 #include <set>
 
 #include "skytrace/sim/live.hpp"
+#include "skytrace/sim/live_outputs.hpp"
 #include "skytrace/sim/scenario.hpp"
 
 namespace skytrace::gz {
@@ -59,8 +60,8 @@ class Throttle {
   std::map<std::string, std::chrono::steady_clock::time_point> last_;
 };
 
-nlohmann::json observations_json(const sim::LiveEpoch& epoch, double sim_time_s) {
-  const WeekTow wt = epoch.observations.receiver_time.to_week_tow(TimeScale::kGpst);
+nlohmann::json observations_json(const sim::SinkEpoch& epoch, double sim_time_s) {
+  const WeekTow wt = epoch.observations->receiver_time.to_week_tow(TimeScale::kGpst);
   nlohmann::json j;
   j["sim_time_s"] = sim_time_s;
   j["gps_week"] = wt.week;
@@ -78,7 +79,7 @@ nlohmann::json observations_json(const sim::LiveEpoch& epoch, double sim_time_s)
                 {"vdop", f.vdop}};
   }
   nlohmann::json satellites = nlohmann::json::array();
-  for (const auto& sat : epoch.observations.satellites) {
+  for (const auto& sat : epoch.observations->satellites) {
     if (sat.status == receiver::SatelliteStatus::kNoEphemeris || sat.direction.elevation_deg < 0.0) continue;
     nlohmann::json s = {{"id", sat.satellite.to_string()},
                         {"status", std::string(receiver::to_string(sat.status))},
@@ -107,6 +108,27 @@ class Bridge {
  public:
   Bridge(const BridgeOptions& options, std::unique_ptr<sim::LiveSession> session, const GnssTime& start)
       : options_(options), session_(std::move(session)), start_(start) {}
+
+  // The outputs, each a sink of the receiver's epochs: the bridge's topics, then the files asked for.
+  Status open_outputs() {
+    auto outputs = sim::LiveOutputs::open(*session_, options_.file_outputs, 1.0 / options_.rate_hz);
+    if (!outputs) return outputs.error();
+    outputs_ = std::move(*outputs);
+    outputs_->add_publisher(std::make_unique<sim::CallbackSink>([this](const sim::SinkEpoch& e) {
+      publish(e);
+      return Status(Ok{});
+    }));
+    return Ok{};
+  }
+
+  // Completes the files; the first error is returned (every one is logged).
+  Status finish_outputs() {
+    const auto finished = outputs_->finish();
+    for (const auto& written : finished.written) spdlog::info("skytrace gz: written: {}", written);
+    for (const auto& error : finished.errors) spdlog::error("skytrace gz: {}", error);
+    if (!finished.errors.empty()) return make_error(ErrorCode::kOutput, finished.errors.front());
+    return Ok{};
+  }
 
   Status connect() {
     navsat_pub_ = node_.Advertise<im::NavSat>(navsat_topic(options_));
@@ -226,11 +248,19 @@ class Bridge {
       }
       return;
     }
-    const sim::LiveEpoch& e = *result;
+    sim_time_s_of_epoch_ = sim_time_s;
+    for (const auto& note : outputs_->add(*result)) {
+      if (throttle_.allow("outputs", std::chrono::seconds(10))) spdlog::warn("skytrace gz: {}", note);
+    }
+  }
+
+  // The bridge's topics of one epoch (its publisher in the receiver's outputs).
+  void publish(const sim::SinkEpoch& e) {
+    const double sim_time_s = sim_time_s_of_epoch_;
     if (e.pose_stale && throttle_.allow("stale")) {
       spdlog::warn("no pose of '{}' for {:.1f} s: the receiver is held where it was", options_.model, options_.pose_timeout_s);
     }
-    if (e.fix && e.fix->type != positioning::FixType::kNone) {
+    if (e.fix != nullptr && e.fix->type != positioning::FixType::kNone) {
       im::NavSat navsat;
       set_time(*navsat.mutable_header()->mutable_stamp(), sim_time_s);
       navsat.set_frame_id(options_.link.empty() ? options_.model : options_.model + "::" + options_.link);
@@ -256,6 +286,8 @@ class Bridge {
   ignition::transport::Node node_;
   ignition::transport::Node::Publisher navsat_pub_;
   ignition::transport::Node::Publisher observations_pub_;
+  std::unique_ptr<sim::LiveOutputs> outputs_;
+  double sim_time_s_of_epoch_ = 0.0;  // the simulation time of the epoch being published
   std::mutex mutex_;
   std::condition_variable cv_;
   std::optional<double> sim_time_s_;
@@ -299,6 +331,7 @@ Status run_bridge(const BridgeOptions& options, const std::atomic<bool>& stop) {
   if (!session) return session.error();
   for (const auto& warning : (*session)->resources().warnings) spdlog::warn("skytrace gz: {}", warning);
   Bridge bridge(options, std::move(*session), start);
+  if (auto st = bridge.open_outputs(); !st) return st;
   if (auto st = bridge.connect(); !st) return st;
   if (!options.quiet) {
     spdlog::info("skytrace gz: world '{}', model '{}'{}; poses from {}, time from {}; NavSat on {}", options.world_name,
@@ -306,7 +339,7 @@ Status run_bridge(const BridgeOptions& options, const std::atomic<bool>& stop) {
                  clock_topic(options), navsat_topic(options));
   }
   bridge.run(stop);
-  return Ok{};
+  return bridge.finish_outputs();
 }
 
 }  // namespace skytrace::gz

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "skytrace/core/error.hpp"
 
@@ -21,6 +23,8 @@ struct BridgeOptions {
   std::optional<std::string> start_time;  // GPST ISO 8601 of simulation time zero; default the scenario's start
   double pose_timeout_s = 1.0;
   bool quiet = false;
+  // Files written as the receiver runs (sim::live_file_table: "rinex_out", "nmea_out", ...) and their paths.
+  std::vector<std::pair<std::string, std::string>> file_outputs;
 };
 
 // Topics of the bridge (documented in docs/gazebo.md).

@@ -6,8 +6,8 @@
 
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
-#include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/sim/live.hpp"
+#include "skytrace/sim/live_outputs.hpp"
 #include "skytrace/sim/scenario.hpp"
 
 namespace skytrace::live {
@@ -43,8 +43,8 @@ struct Receiver::Impl {
   std::unique_ptr<sim::LiveSession> session;
   GnssTime start;
   std::optional<sim::LiveEpoch> last;
-  io::RinexObsWriter rinex;
-  std::optional<GnssTime> last_written;
+  double last_time_s = 0.0;
+  std::unique_ptr<sim::LiveOutputs> outputs;
 };
 
 Receiver::Receiver(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -106,17 +106,18 @@ bool Receiver::step(double time_s, std::string& error) {
     return false;
   }
   impl_->last = std::move(*result);
+  impl_->last_time_s = time_s;
   return true;
 }
 
 const sim::LiveSession& Receiver::session() const { return *impl_->session; }
 const sim::LiveEpoch* Receiver::last_epoch() const { return impl_->last ? &*impl_->last : nullptr; }
 
-bool Receiver::step(double time_s, EpochView& out, std::string& error) {
-  const GnssTime tag = impl_->start + time_s;
-  if (!step(time_s, error)) return false;
-  const sim::LiveEpoch& e = *impl_->last;
-  const LocalFrame& world = impl_->session->world_frame();
+namespace {
+// The view of a live epoch at `time_s` after the start time `start`.
+void fill_view(const sim::LiveSession& session, const GnssTime& start, double time_s, const sim::LiveEpoch& e, EpochView& out) {
+  const GnssTime tag = start + time_s;
+  const LocalFrame& world = session.world_frame();
   const Eigen::Matrix3d to_world = world.ecef_to_local_rotation();
   const Eigen::Vector3d antenna_ecef = e.observations.receiver.position_m;
 
@@ -190,34 +191,52 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
     }
     out.satellites.push_back(std::move(s));
   }
+}
+}  // namespace
+
+bool Receiver::step(double time_s, EpochView& out, std::string& error) {
+  if (!step(time_s, error)) return false;
+  fill_view(*impl_->session, impl_->start, time_s, *impl_->last, out);
   return true;
 }
 
-std::string Receiver::open_rinex(const std::string& path, double interval_s) {
-  io::ObservationHeader header = impl_->session->observation_header();
-  header.interval_s = interval_s;
-  auto st = impl_->rinex.open(path, header);
-  return st ? std::string() : st.error().message;
+std::vector<std::pair<std::string, std::string>> Receiver::file_parameters() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& kind : sim::live_file_table()) out.emplace_back(kind.parameter, kind.description);
+  return out;
 }
 
-bool Receiver::rinex_open() const { return impl_->rinex.is_open(); }
-
-std::string Receiver::write_rinex_epoch() {
-  if (!impl_->rinex.is_open() || !impl_->last) return {};
-  const GnssTime tag = impl_->last->observations.receiver_time;
-  if (impl_->last_written && !(*impl_->last_written < tag)) {
-    return fmt::format("epoch {} is not after the last written one; left out of the file", tag.to_iso8601(TimeScale::kGpst));
-  }
-  auto st = impl_->rinex.write_epoch(impl_->session->rinex_records().record(impl_->last->observations));
-  if (!st) return st.error().message;
-  impl_->last_written = tag;
+std::string Receiver::open_outputs(const std::vector<std::pair<std::string, std::string>>& parameter_paths, double interval_s) {
+  if (impl_->outputs) return "the outputs are already open";
+  auto outputs = sim::LiveOutputs::open(*impl_->session, parameter_paths, interval_s);
+  if (!outputs) return outputs.error().message;
+  impl_->outputs = std::move(*outputs);
   return {};
 }
 
-std::string Receiver::finish_rinex() {
-  if (!impl_->rinex.is_open()) return {};
-  auto st = impl_->rinex.finish();
-  return st ? std::string() : st.error().message;
+void Receiver::add_publisher(std::function<void(const EpochView&)> publish) {
+  // One view per epoch, reused: the ROS 1 node converts it into its messages.
+  auto view = std::make_shared<EpochView>();
+  Impl* impl = impl_.get();
+  impl_->outputs->add_publisher(std::make_unique<sim::CallbackSink>([impl, view, publish = std::move(publish)](const sim::SinkEpoch&) -> Status {
+    fill_view(*impl->session, impl->start, impl->last_time_s, *impl->last, *view);
+    publish(*view);
+    return Ok{};
+  }));
+}
+
+void Receiver::add_publisher(std::unique_ptr<sim::EpochSink> publisher) { impl_->outputs->add_publisher(std::move(publisher)); }
+
+bool Receiver::step_outputs(double time_s, std::string& error, std::vector<std::string>& notes) {
+  if (!step(time_s, error)) return false;
+  if (impl_->outputs) notes = impl_->outputs->add(*impl_->last);
+  return true;
+}
+
+Receiver::FinishedOutputs Receiver::finish_outputs() {
+  if (!impl_->outputs) return {};
+  auto finished = impl_->outputs->finish();
+  return FinishedOutputs{std::move(finished.written), std::move(finished.errors)};
 }
 
 Vec3 Receiver::world_from_geodetic(double latitude_deg, double longitude_deg, double height_m) const {

@@ -5,14 +5,17 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace skytrace::sim {
 class LiveSession;
 struct LiveEpoch;
+class EpochSink;
 }  // namespace skytrace::sim
 
 namespace skytrace::live {
@@ -112,12 +115,26 @@ class Receiver {
   [[nodiscard]] const sim::LiveSession& session() const;
   [[nodiscard]] const sim::LiveEpoch* last_epoch() const;
 
-  // RINEX observations written as the receiver runs (epochs that do not advance are left out).
-  [[nodiscard]] std::string open_rinex(const std::string& path, double interval_s);
-  [[nodiscard]] bool rinex_open() const;
-  // Writes the last stepped epoch; returns an error message, empty when written.
-  [[nodiscard]] std::string write_rinex_epoch();
-  [[nodiscard]] std::string finish_rinex();
+  // Outputs of the receiver, every one a sink of its epochs (sim::LiveOutputs): the publishers
+  // added below, and the files named by parameters (file_parameters(): name and description,
+  // e.g. "rinex_out"; empty paths are left out). Opened once, before the first step; returns an
+  // error message naming the parameter, empty when opened.
+  [[nodiscard]] static std::vector<std::pair<std::string, std::string>> file_parameters();
+  [[nodiscard]] std::string open_outputs(const std::vector<std::pair<std::string, std::string>>& parameter_paths,
+                                         double interval_s);
+  // A publisher of C++17 code (the ROS 1 node): called with the view of every epoch. After open_outputs().
+  void add_publisher(std::function<void(const EpochView&)> publish);
+  // A publisher of C++20 code (the ROS 2 node). After open_outputs().
+  void add_publisher(std::unique_ptr<sim::EpochSink> publisher);
+  // Steps and hands the epoch to the outputs; `notes` receives what did not stop the receiver
+  // (an epoch left out of the files, a file given up after a write error).
+  [[nodiscard]] bool step_outputs(double time_s, std::string& error, std::vector<std::string>& notes);
+  struct FinishedOutputs {
+    std::vector<std::string> written;  // "rinex_out /path/obs.rnx"
+    std::vector<std::string> errors;
+  };
+  // Completes the files and moves them into place.
+  [[nodiscard]] FinishedOutputs finish_outputs();
 
   // Coordinates in the world frame (the Gazebo world's, or east-north-up at the first marker).
   [[nodiscard]] Vec3 world_from_geodetic(double latitude_deg, double longitude_deg, double height_m) const;

@@ -63,7 +63,8 @@ struct Config {
   double pose_timeout_s = 1.0;
   double ray_length_m = 100.0;
   std::vector<std::string> moving_models;  // tf frames of movable world models
-  std::string rinex_out;
+  // The files of live::Receiver::file_parameters() ("rinex_out", "nmea_out", ...) and their paths.
+  std::vector<std::pair<std::string, std::string>> file_outputs;
   std::string latency_report;
 };
 
@@ -106,7 +107,11 @@ std::optional<std::string> read_config(const ros::NodeHandle& pnh, Config& c) {
     c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
   }
   pnh.param("moving_models", c.moving_models, c.moving_models);
-  pnh.param<std::string>("rinex_out", c.rinex_out, c.rinex_out);
+  for (const auto& [parameter, description] : live::Receiver::file_parameters()) {
+    std::string path;
+    pnh.param<std::string>(parameter, path, path);
+    c.file_outputs.emplace_back(parameter, path);
+  }
   pnh.param<std::string>("latency_report", c.latency_report, c.latency_report);
   return std::nullopt;
 }
@@ -135,12 +140,13 @@ class Node {
     }
   }
 
-  [[nodiscard]] bool open_rinex() {
-    if (config_.rinex_out.empty()) return true;
-    if (auto problem = receiver_->open_rinex(config_.rinex_out, period_s_); !problem.empty()) {
-      ROS_FATAL("~rinex_out %s: %s", config_.rinex_out.c_str(), problem.c_str());
+  // The outputs, each a sink of the receiver's epochs: this node's topics, then the files asked for.
+  [[nodiscard]] bool open_outputs() {
+    if (auto problem = receiver_->open_outputs(config_.file_outputs, period_s_); !problem.empty()) {
+      ROS_FATAL("%s", problem.c_str());
       return false;
     }
+    receiver_->add_publisher([this](const live::EpochView& e) { publish(e); });
     return true;
   }
 
@@ -174,13 +180,9 @@ class Node {
   }
 
   void finish() {
-    if (receiver_->rinex_open()) {
-      if (auto problem = receiver_->finish_rinex(); !problem.empty()) {
-        ROS_ERROR("~rinex_out %s: %s", config_.rinex_out.c_str(), problem.c_str());
-      } else {
-        ROS_INFO("RINEX observations written to %s", config_.rinex_out.c_str());
-      }
-    }
+    const auto finished = receiver_->finish_outputs();
+    for (const auto& error : finished.errors) ROS_ERROR("%s", error.c_str());
+    for (const auto& written : finished.written) ROS_INFO("written: %s", written.c_str());
     report_latency();
   }
 
@@ -287,11 +289,18 @@ class Node {
     if (tf_buffer_) update_from_tf(stamp);
     const auto started = std::chrono::steady_clock::now();
     std::string problem;
-    if (!receiver_->step(time_s, epoch_, problem)) {
+    std::vector<std::string> notes;
+    if (!receiver_->step_outputs(time_s, problem, notes)) {
       ROS_ERROR_THROTTLE(10.0, "epoch %.3f s after the start time: %s", time_s, problem.c_str());
       return;
     }
-    const live::EpochView& e = epoch_;
+    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    for (const auto& note : notes) ROS_WARN_THROTTLE(10.0, "%s", note.c_str());
+  }
+
+  // The node's topics of one epoch (its publisher in the receiver's outputs).
+  void publish(const live::EpochView& e) {
+    const ros::Time stamp = origin_ + ros::Duration(e.time_s);
     if (e.restarted) ROS_WARN("receiver restarted at %s GPST (time went back)", e.time_iso.c_str());
     if (e.pose_stale) {
       ROS_WARN_THROTTLE(5.0, "antenna pose is stale (none for %.1f s): the receiver is held where it was", config_.pose_timeout_s);
@@ -313,13 +322,6 @@ class Node {
     }
     sky_pub_.publish(to_sky(e, world_header));
     rays_pub_.publish(to_rays(e, world_header, config_.ray_length_m));
-    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
-
-    if (receiver_->rinex_open()) {
-      if (auto written = receiver_->write_rinex_epoch(); !written.empty()) {
-        ROS_WARN_THROTTLE(10.0, "~rinex_out %s: %s", config_.rinex_out.c_str(), written.c_str());
-      }
-    }
   }
 
   void report_latency() {
@@ -340,7 +342,6 @@ class Node {
   ros::NodeHandle pnh_;
   double period_s_ = 1.0;
   ros::Time origin_;  // the ROS time of the start time: zero under sim time, else the node's start
-  live::EpochView epoch_;  // reused from epoch to epoch
   std::optional<std::int64_t> last_k_;
   ros::Publisher fix_pub_, velocity_pub_, observations_pub_, nmea_pub_, sky_pub_, rays_pub_;
   ros::Subscriber pose_sub_;
@@ -372,7 +373,7 @@ int run(int argc, char** argv) {
   }
   for (const auto& warning : receiver->warnings()) ROS_WARN("skytrace: %s", warning.c_str());
   Node node(config, std::move(receiver));
-  if (!node.open_rinex()) return kExitOutput;
+  if (!node.open_outputs()) return kExitOutput;
   ROS_INFO("skytrace: scenario %s, %.3g Hz, antenna pose from %s", config.scenario.c_str(), config.rate_hz,
            config.pose_source == PoseSource::kScenario ? "the scenario"
            : config.pose_source == PoseSource::kTf     ? "tf"

@@ -33,6 +33,7 @@
 #include "skytrace/receiver/profile.hpp"
 #include "skytrace/ros2/messages.hpp"
 #include "skytrace/sim/live.hpp"
+#include "skytrace/sim/live_outputs.hpp"
 #include "skytrace/sim/ros2_topics.hpp"
 #include "skytrace/sim/streams.hpp"
 #include "tf_buffer.hpp"
@@ -59,7 +60,8 @@ constexpr const char* kUsage = R"(usage: skytrace_ros2_node [--ros-args] [--para
 A simulated GNSS receiver on ROS 2 (DDS, no ROS 2 install needed). Parameters (docs/ros2.md):
   scenario (required), pose_source (scenario|tf|odometry|pose), world_frame, antenna_frame,
   frame_id, pose_topic, odom_topic, antenna_offset_m, rate_hz, start_time, start_time_scale,
-  pose_timeout_s, ray_length_m, moving_models, rinex_out, bag_out, bag_compression (lz4|zstd|none),
+  pose_timeout_s, ray_length_m, moving_models, rinex_out, nmea_out, fix_csv_out, rtcm_out, bag_out,
+  bag_compression (lz4|zstd|none),
   latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm.
 Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS,
   CYCLONEDDS_URI.
@@ -83,7 +85,8 @@ struct Config {
   double pose_timeout_s = 1.0;
   double ray_length_m = 100.0;
   std::vector<std::string> moving_models;  // tf frames of movable world models
-  std::string rinex_out;
+  // The files of live::Receiver::file_parameters() ("rinex_out", "nmea_out", ...) and their paths.
+  std::vector<std::pair<std::string, std::string>> file_outputs;
   std::string bag_out;                 // a rosbag2 folder of the published topics, written at the end
   std::string bag_compression = "lz4";
   std::string latency_report;
@@ -148,7 +151,11 @@ Result<Config> read_config(const Parameters& p) {
     c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
   }
   SKYTRACE_READ(p.get_strings("moving_models"), c.moving_models);
-  SKYTRACE_READ(p.get_string("rinex_out", c.rinex_out), c.rinex_out);
+  for (const auto& [parameter, description] : live::Receiver::file_parameters()) {
+    std::string path;
+    SKYTRACE_READ(p.get_string(parameter, path), path);
+    c.file_outputs.emplace_back(parameter, path);
+  }
   SKYTRACE_READ(p.get_string("bag_out", c.bag_out), c.bag_out);
   SKYTRACE_READ(p.get_string("bag_compression", c.bag_compression), c.bag_compression);
   if (c.bag_compression != "lz4" && c.bag_compression != "zstd" && c.bag_compression != "none") {
@@ -271,12 +278,17 @@ class Node {
     return announce();
   }
 
-  [[nodiscard]] bool open_rinex() {
-    if (config_.rinex_out.empty()) return true;
-    if (auto problem = receiver_->open_rinex(config_.rinex_out, period_s_); !problem.empty()) {
-      log_.fatal("parameter rinex_out {}: {}", config_.rinex_out, problem);
+  // The outputs, each a sink of the receiver's epochs: this node's topics (and the bag of them),
+  // then the files asked for.
+  [[nodiscard]] bool open_outputs() {
+    if (auto problem = receiver_->open_outputs(config_.file_outputs, period_s_); !problem.empty()) {
+      log_.fatal("{}", problem);
       return false;
     }
+    receiver_->add_publisher(std::make_unique<sim::CallbackSink>([this](const sim::SinkEpoch& e) {
+      publish_epoch(e);
+      return Status(Ok{});
+    }));
     return true;
   }
 
@@ -364,13 +376,9 @@ class Node {
         }
       }
     }
-    if (receiver_->rinex_open()) {
-      if (auto problem = receiver_->finish_rinex(); !problem.empty()) {
-        log_.error("parameter rinex_out {}: {}", config_.rinex_out, problem);
-      } else {
-        log_.info("RINEX observations written to {}", config_.rinex_out);
-      }
-    }
+    const auto finished = receiver_->finish_outputs();
+    for (const auto& error : finished.errors) log_.error("{}", error);
+    for (const auto& written : finished.written) log_.info("written: {}", written);
     report_latency();
   }
 
@@ -588,39 +596,36 @@ class Node {
     const std::int64_t stamp_ns = origin_ns_ + static_cast<std::int64_t>(std::llround(time_s * 1e9));
     if (tf_.reader) update_from_tf(stamp_ns);
     const auto started = std::chrono::steady_clock::now();
+    stamp_ns_ = stamp_ns;
     std::string problem;
-    if (!receiver_->step(time_s, problem)) {
+    std::vector<std::string> notes;
+    if (!receiver_->step_outputs(time_s, problem, notes)) {
       log_.throttled(LogLevel::kError, 10.0, "step", fmt::format("epoch {:.3f} s after the start time: {}", time_s, problem));
       return;
     }
-    const sim::LiveEpoch& e = *receiver_->last_epoch();
+    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    for (const auto& note : notes) log_.throttled(LogLevel::kWarn, 10.0, "outputs", note);
+  }
+
+  // The node's topics of one epoch, stamped stamp_ns_ (its publisher in the receiver's outputs).
+  void publish_epoch(const sim::SinkEpoch& e) {
+    const double time_s = 1e-9 * static_cast<double>(stamp_ns_ - origin_ns_);
     if (e.restarted) {
-      log_.warn("receiver restarted at {} GPST (time went back)", e.observations.receiver_time.to_iso8601(TimeScale::kGpst));
+      log_.warn("receiver restarted at {} GPST (time went back)", e.observations->receiver_time.to_iso8601(TimeScale::kGpst));
       builder_->reset();
     }
     if (e.pose_stale) {
       log_.throttled(LogLevel::kWarn, 5.0, "stale",
                      fmt::format("antenna pose is stale (none for {:.1f} s): the receiver is held where it was", config_.pose_timeout_s));
     }
-    if (auto st = builder_->build_into(messages_, e.observations, e.fix ? &*e.fix : nullptr, from_ns(stamp_ns), e.restarted,
-                                       e.pose_stale);
-        !st) {
+    if (auto st = builder_->build_into(messages_, *e.observations, e.fix, from_ns(stamp_ns_), e.restarted, e.pose_stale); !st) {
       log_.throttled(LogLevel::kError, 10.0, "build", fmt::format("epoch {:.3f} s: {}", time_s, st.error().message));
       return;
     }
-    const sim::Ros2Epoch& m = messages_;
-    stamp_ns_ = stamp_ns;
-    (void)sim::visit_messages(m, [&](std::string_view topic, const auto& message) -> Status {
+    (void)sim::visit_messages(messages_, [&](std::string_view topic, const auto& message) -> Status {
       publish(topic, message);  // failures are logged there: the node goes on
       return Ok{};
     });
-    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
-
-    if (receiver_->rinex_open()) {
-      if (auto written = receiver_->write_rinex_epoch(); !written.empty()) {
-        log_.throttled(LogLevel::kWarn, 10.0, "rinex", fmt::format("parameter rinex_out {}: {}", config_.rinex_out, written));
-      }
-    }
   }
 
   void report_latency() {
@@ -712,7 +717,7 @@ int run(int argc, char** argv) {
     log.fatal("{} (from parameter scenario)", st.error().message);
     return kExitInput;
   }
-  if (!node.open_rinex()) return kExitOutput;
+  if (!node.open_outputs()) return kExitOutput;
   if (auto st = node.open(*discovery); !st) {
     log.fatal("{}", st.error().message);
     return st.error().code == ErrorCode::kInvalidArgument ? kExitUsage : kExitNetwork;

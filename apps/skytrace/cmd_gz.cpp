@@ -1,6 +1,7 @@
 // `skytrace gz --scenario FILE --world-name NAME --model ROBOT [--link LINK]`: a simulated GNSS
 // receiver on a robot of a running Gazebo (docs/gazebo.md). The ignition code lives in
 // apps/gz (skytrace_gz_bridge), linked when the build found Gazebo transport.
+#include <algorithm>
 #include <atomic>
 #include <unistd.h>
 
@@ -8,8 +9,11 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "commands.hpp"
+#include "skytrace/sim/live_outputs.hpp"
 
 #if SKYTRACE_HAVE_GZ
 #include "gz_bridge.hpp"
@@ -27,6 +31,7 @@ struct GzArgs {
   std::string start_time;
   double pose_timeout_s = 1.0;
   bool quiet = false;
+  std::vector<std::pair<std::string, std::string>> file_outputs;  // parameter, path
 };
 
 std::atomic<bool> g_stop{false};
@@ -47,6 +52,7 @@ int run_gz(const GzArgs& args) {
   if (!args.start_time.empty()) options.start_time = args.start_time;
   options.pose_timeout_s = args.pose_timeout_s;
   options.quiet = args.quiet;
+  options.file_outputs = args.file_outputs;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   auto st = gz::run_bridge(options, g_stop);
@@ -78,6 +84,16 @@ void register_gz_command(CLI::App& app, int& exit_code) {
                   "A pose older than this is stale: the receiver is held where it was")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "No start-up message");
+  // The files a live receiver writes as it runs, one option per kind: --rinex-out, --nmea-out, ...
+  const auto& files = sim::live_file_table();
+  args->file_outputs.resize(files.size());
+  for (size_t i = 0; i < files.size(); ++i) {
+    std::string option = std::string("--") + files[i].parameter;
+    std::replace(option.begin(), option.end(), '_', '-');
+    args->file_outputs[i].first = files[i].parameter;
+    cmd->add_option(option, args->file_outputs[i].second,
+                    std::string("Write ") + files[i].description + " to this file (moved into place when the bridge stops)");
+  }
   cmd->footer(
       "Subscribes to /world/NAME/pose/info (ignition.msgs.Pose_V) and /world/NAME/clock "
       "(ignition.msgs.Clock); publishes ignition.msgs.NavSat on /world/NAME/model/ROBOT/skytrace/navsat and "

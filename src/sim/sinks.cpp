@@ -379,6 +379,8 @@ Result<std::unique_ptr<EpochSink>> make_file_sink(const RunContext& c, const cha
 
 }  // namespace
 
+Result<std::unique_ptr<EpochSink>> make_rinex_obs_sink(const RunContext& context) { return RinexObsSink::make(context); }
+
 std::unique_ptr<StreamEncoder> make_nmea_encoder() { return std::make_unique<NmeaEncoder>(); }
 std::unique_ptr<StreamEncoder> make_fix_csv_encoder() { return std::make_unique<FixCsvEncoder>(); }
 std::unique_ptr<StreamEncoder> make_rtcm3_encoder(const orbits::BroadcastEphemerides& ephemerides,

@@ -3,9 +3,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 #include "skytrace/core/frames.hpp"
+#include "skytrace/core/text_file.hpp"
+#include "skytrace/io/rinex_obs.hpp"
+#include "skytrace/io/rtcm3.hpp"
 #include "skytrace/sim/live.hpp"
+#include "skytrace/sim/live_outputs.hpp"
 #include "test_support.hpp"
 
 namespace skytrace {
@@ -129,6 +135,99 @@ TEST_F(LiveSessionTest, UnknownReceiverIndexIsAnError) {
   auto session = sim::LiveSession::create(scenario_, options);
   ASSERT_FALSE(session.ok());
   EXPECT_NE(session.error().message.find("receiver 3"), std::string::npos) << session.error().message;
+}
+
+
+// The files a node's parameters ask for: the sinks `skytrace run` uses, moved into place when the
+// node stops, nothing before; a reset's epochs are left out of them.
+TEST_F(LiveSessionTest, OutputFilesAreSinksOfTheEpochsAndAppearOnlyWhenFinished) {
+  auto session = sim::LiveSession::create(scenario_);
+  ASSERT_TRUE(session.ok()) << session.error().message;
+  const auto dir = test::make_temp_dir("live_outputs");
+  const std::vector<std::pair<std::string, std::string>> paths = {{"rinex_out", (dir / "live.obs").string()},
+                                                                  {"nmea_out", (dir / "live.nmea").string()},
+                                                                  {"fix_csv_out", ""},
+                                                                  {"rtcm_out", (dir / "live.rtcm3").string()}};
+  auto outputs = sim::LiveOutputs::open(**session, paths, 30.0);
+  ASSERT_TRUE(outputs.ok()) << outputs.error().message;
+  int published = 0;
+  (*outputs)->add_publisher(std::make_unique<sim::CallbackSink>([&](const sim::SinkEpoch& e) {
+    ++published;
+    EXPECT_NE(e.fix, nullptr);
+    return Status(Ok{});
+  }));
+  std::vector<size_t> tracked;
+  for (const int k : {0, 1, 2, 3, 1}) {  // the last one goes back: published, not written
+    auto epoch = (*session)->step(scenario_.time.start + 30.0 * k);
+    ASSERT_TRUE(epoch.ok()) << epoch.error().message;
+    const auto notes = (*outputs)->add(*epoch);
+    if (tracked.size() < 4) {
+      EXPECT_TRUE(notes.empty()) << notes.front();
+      size_t n = 0;
+      for (const auto& sat : epoch->observations.satellites) n += sat.signals.empty() ? 0 : 1;
+      tracked.push_back(n);
+    } else {
+      ASSERT_EQ(notes.size(), 1u);
+      EXPECT_NE(notes.front().find("left out of the files"), std::string::npos) << notes.front();
+    }
+  }
+  EXPECT_EQ(published, 5);
+  // Nothing at the targets before the end, and only the hidden folders beside them.
+  EXPECT_FALSE(std::filesystem::exists(dir / "live.obs"));
+  auto finished = (*outputs)->finish();
+  EXPECT_TRUE(finished.errors.empty()) << finished.errors.front();
+  EXPECT_EQ(finished.written.size(), 3u);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 3);
+
+  auto rinex = io::read_rinex_obs(dir / "live.obs");
+  ASSERT_TRUE(rinex.ok()) << rinex.error().message;
+  ASSERT_EQ(rinex->epochs.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(rinex->epochs[i].satellites.size(), tracked[i]) << i;
+  ASSERT_TRUE(rinex->header.interval_s.has_value());
+  EXPECT_DOUBLE_EQ(*rinex->header.interval_s, 30.0);
+
+  auto nmea = read_text_file(dir / "live.nmea");
+  ASSERT_TRUE(nmea.ok());
+  size_t gga = 0;
+  for (size_t at = nmea->find("GGA,"); at != std::string::npos; at = nmea->find("GGA,", at + 1)) ++gga;
+  EXPECT_EQ(gga, 4u);
+
+  std::ifstream rtcm_file(dir / "live.rtcm3", std::ios::binary);
+  const std::vector<std::uint8_t> rtcm((std::istreambuf_iterator<char>(rtcm_file)), std::istreambuf_iterator<char>());
+  io::Rtcm3Decoder decoder(scenario_.time.start);
+  decoder.feed(rtcm);
+  decoder.finish();
+  EXPECT_EQ(decoder.take_epochs().size(), 4u);
+  EXPECT_TRUE(decoder.station().has_value());
+}
+
+TEST_F(LiveSessionTest, OutputFilesThatCannotBeWrittenNameTheirParameterAndLeaveNothing) {
+  auto session = sim::LiveSession::create(scenario_);
+  ASSERT_TRUE(session.ok()) << session.error().message;
+  const auto dir = test::make_temp_dir("live_outputs_bad");
+  auto missing = sim::LiveOutputs::open(**session, {{"rinex_out", (dir / "no/such/folder/obs.rnx").string()}}, 1.0);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().message.find("parameter rinex_out"), std::string::npos) << missing.error().message;
+  auto unknown = sim::LiveOutputs::open(**session, {{"obs_out", "x"}}, 1.0);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().message.find("obs_out"), std::string::npos);
+
+  // A device that is always full: the file fails when it is put in place, and nothing stays behind.
+  auto full = sim::LiveOutputs::open(**session, {{"nmea_out", "/dev/full"}, {"rinex_out", (dir / "ok.obs").string()}}, 30.0);
+  ASSERT_TRUE(full.ok()) << full.error().message;
+  for (int k = 0; k < 3; ++k) {
+    auto epoch = (*session)->step(scenario_.time.start + 30.0 * k);
+    ASSERT_TRUE(epoch.ok());
+    (void)(*full)->add(*epoch);
+  }
+  auto finished = (*full)->finish();
+  ASSERT_EQ(finished.errors.size(), 1u);
+  EXPECT_NE(finished.errors.front().find("nmea_out /dev/full"), std::string::npos) << finished.errors.front();
+  ASSERT_EQ(finished.written.size(), 1u);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 1);
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::temp_directory_path())) {
+    EXPECT_EQ(entry.path().filename().string().find("full.partial"), std::string::npos) << entry.path();
+  }
 }
 
 }  // namespace

@@ -56,6 +56,10 @@ struct SinkEpoch {
   // The receiver's fix at this epoch (an RTK rover's with its base's corrections); nullptr when
   // no sink of the run asked for fixes.
   const positioning::PositionFix* fix = nullptr;
+  // Live receivers only (a run never has them): the time went back and tracking restarted; the
+  // external pose had timed out.
+  bool restarted = false;
+  bool pose_stale = false;
 };
 
 class EpochSink {
@@ -78,6 +82,9 @@ struct SinkKind {
 // The sinks the scenario's output keys ask for, in table order.
 [[nodiscard]] Result<std::vector<std::unique_ptr<EpochSink>>> make_run_sinks(const RunContext& context);
 [[nodiscard]] bool run_needs_fixes(const RunContext& context);
+
+// obs.rnx (or obs_NAME.rnx per receiver) in the staging folder: RINEX 3 observations.
+[[nodiscard]] Result<std::unique_ptr<EpochSink>> make_rinex_obs_sink(const RunContext& context);
 
 // Byte-stream outputs are an encoding (NMEA, RTCM 3, fix CSV) of one receiver's epochs sent to a
 // destination (a file, TCP clients, a pseudo-terminal): StreamSink joins one of each.

@@ -3,6 +3,8 @@
 // observations as JSON, and the `ign topic` tool sees them.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "live_receiver.hpp"
 #include "process.hpp"
 #include "test_support.hpp"
@@ -92,9 +94,11 @@ TEST(GzBridgeTest, PosesMoveTheReceiverAndNavSatComesBack) {
   ASSERT_TRUE(node.Subscribe(prefix + "/model/rover/skytrace/observations", on_observations));
 
   test::ChildProcess bridge;
-  const auto log = test::make_temp_dir("gz_bridge") / "bridge.log";
+  const auto dir = test::make_temp_dir("gz_bridge");
+  const auto log = dir / "bridge.log";
   ASSERT_TRUE(bridge.start({test::skytrace_executable().string(), "gz", "--scenario", contract_scenario().string(),
-                            "--world-name", world, "--model", "rover", "--link", "gnss", "--rate-hz", "5"},
+                            "--world-name", world, "--model", "rover", "--link", "gnss", "--rate-hz", "5",
+                            "--nmea-out", (dir / "rover.nmea").string()},
                            env, log));
 
   // Gazebo's part: the clock and the world's poses 20 times a second. The rover's origin is at
@@ -178,8 +182,14 @@ TEST(GzBridgeTest, PosesMoveTheReceiverAndNavSatComesBack) {
     EXPECT_NE(echoed.output.find("latitude_deg"), std::string::npos) << echoed.output;
   }
   EXPECT_TRUE(bridge.running()) << bridge.log_text();
+  EXPECT_FALSE(std::filesystem::exists(dir / "rover.nmea"));
   const int status = bridge.stop();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << bridge.log_text();
+  // The NMEA file of the receiver's fixes appears when the bridge stops.
+  std::ifstream nmea(dir / "rover.nmea");
+  int gga = 0;
+  for (std::string line; std::getline(nmea, line);) gga += line.find("GGA,") != std::string::npos ? 1 : 0;
+  EXPECT_GE(gga, 1) << bridge.log_text();
 }
 
 #else

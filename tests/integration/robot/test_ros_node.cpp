@@ -15,6 +15,7 @@
 #include <sys/prctl.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <set>
@@ -141,7 +142,10 @@ TEST_F(RosNodeTest, PublishesAFixAtTheStationAndEveryTrackedSatellite) {
   auto fix_sub = nh.subscribe<sensor_msgs::NavSatFix>("/skytrace/fix", 10, [&](const auto& m) { fixes.push_back(*m); });
   auto obs_sub = nh.subscribe<skytrace_msgs::Observations>("/skytrace/observations", 10,
                                                           [&](const auto& m) { observations.push_back(*m); });
-  start_node({"_pose_source:=scenario", "_rate_hz:=2"}, "node_scenario");
+  const auto files = test::make_temp_dir("ros_node_files");
+  start_node({"_pose_source:=scenario", "_rate_hz:=2", "_rinex_out:=" + (files / "node.obs").string(),
+              "_nmea_out:=" + (files / "node.nmea").string()},
+             "node_scenario");
   spin_until([&] { return !fixes.empty() && !observations.empty(); }, "no fix and observations from the node");
 
   const sensor_msgs::NavSatFix& fix = fixes.front();
@@ -195,6 +199,20 @@ TEST_F(RosNodeTest, PublishesAFixAtTheStationAndEveryTrackedSatellite) {
   EXPECT_EQ(published_satellites, tracked);
   EXPECT_EQ(published.observations.size(), signals);
   EXPECT_GE(tracked.size(), 20U);  // GPS, Galileo, GLONASS, BeiDou and QZSS over Esbjerg
+
+  // The files the parameters asked for appear when the node stops, with every epoch in both.
+  EXPECT_FALSE(std::filesystem::exists(files / "node.obs"));
+  const int status = node_.stop();
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << node_.log_text();
+  const auto count_lines = [](const std::filesystem::path& path, const std::string& start) {
+    std::ifstream in(path);
+    int n = 0;
+    for (std::string line; std::getline(in, line);) n += line.rfind(start, 0) == 0 ? 1 : 0;
+    return n;
+  };
+  const int epochs = count_lines(files / "node.obs", "> ");
+  EXPECT_GE(epochs, 1) << node_.log_text();
+  EXPECT_EQ(count_lines(files / "node.nmea", "$GNGGA") + count_lines(files / "node.nmea", "$GPGGA"), epochs);
 }
 
 TEST_F(RosNodeTest, PoseTopicMovesTheFixAndBadPosesAreIgnored) {

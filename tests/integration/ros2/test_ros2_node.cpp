@@ -652,7 +652,9 @@ TEST_F(Ros2NodeTest, NodeRecordsABagThatFoxgloveReads) {
   if (!std::filesystem::exists(client / "node_modules" / "@mcap" / "core")) GTEST_SKIP() << "npm packages not installed";
   const auto bag = dir_ / "recorded";
   Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), Qos::sensor_data());
-  start_node({"-p", "rate_hz:=10", "-p", "bag_out:=" + bag.string()});
+  // The files of the node's outputs beside the bag: the same epochs.
+  start_node({"-p", "rate_hz:=10", "-p", "bag_out:=" + bag.string(), "-p", "rinex_out:=" + (dir_ / "node.obs").string(),
+              "-p", "nmea_out:=" + (dir_ / "node.nmea").string()});
   expect_samples(fix, 10, "fixes");
   // Recording: only a hidden folder so far.
   EXPECT_FALSE(std::filesystem::exists(bag));
@@ -676,6 +678,15 @@ TEST_F(Ros2NodeTest, NodeRecordsABagThatFoxgloveReads) {
   EXPECT_GE(counts[namespace_ + "/fix"], static_cast<int>(fix.samples().size()) - 1) << checked.output.substr(0, 2000);
   EXPECT_GE(counts[namespace_ + "/gnss/ephemeris"], 1);
   EXPECT_EQ(counts[namespace_ + "/observations"], counts[namespace_ + "/fix"]);
+  const auto count_lines = [](const std::filesystem::path& path, const std::string& start) {
+    std::ifstream in(path);
+    int n = 0;
+    for (std::string line; std::getline(in, line);) n += line.rfind(start, 0) == 0 ? 1 : 0;
+    return n;
+  };
+  // Every epoch is in the RINEX file; every fix of the open sky gives a GGA sentence.
+  EXPECT_EQ(count_lines(dir_ / "node.obs", "> "), counts[namespace_ + "/observations"]) << log_text();
+  EXPECT_EQ(count_lines(dir_ / "node.nmea", "$GNGGA") + count_lines(dir_ / "node.nmea", "$GPGGA"), counts[namespace_ + "/fix"]);
 }
 
 TEST_F(Ros2NodeTest, BagThatCannotBeWrittenLeavesNothingAndTheNodeGoesOn) {
