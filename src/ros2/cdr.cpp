@@ -24,24 +24,6 @@ void CdrWriter::align(size_t alignment) {
   buffer_.insert(buffer_.end(), padding, 0);
 }
 
-template <typename T>
-void CdrWriter::write_primitive(T value) {
-  static_assert(std::endian::native == std::endian::little, "CdrWriter writes little-endian CDR on little-endian hosts");
-  // Padding and value in one resize: the padding is zero-filled by resize.
-  const size_t offset = buffer_.size() - 4;
-  const size_t start = buffer_.size() + (sizeof(T) - offset % sizeof(T)) % sizeof(T);
-  buffer_.resize(start + sizeof(T));
-  std::memcpy(buffer_.data() + start, &value, sizeof(T));
-}
-
-template void CdrWriter::write_primitive<std::uint16_t>(std::uint16_t);
-template void CdrWriter::write_primitive<std::int16_t>(std::int16_t);
-template void CdrWriter::write_primitive<std::uint32_t>(std::uint32_t);
-template void CdrWriter::write_primitive<std::int32_t>(std::int32_t);
-template void CdrWriter::write_primitive<std::uint64_t>(std::uint64_t);
-template void CdrWriter::write_primitive<std::int64_t>(std::int64_t);
-template void CdrWriter::write_primitive<float>(float);
-template void CdrWriter::write_primitive<double>(double);
 
 void CdrWriter::write_string(std::string_view text) {
   write_u32(static_cast<std::uint32_t>(text.size() + 1));

@@ -6,7 +6,9 @@
 #pragma once
 
 #include <cstddef>
+#include <bit>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 #include <string_view>
@@ -46,8 +48,17 @@ class CdrWriter {
   [[nodiscard]] std::vector<std::uint8_t> take() { return std::move(buffer_); }
 
  private:
+  // Inline: a message is mostly primitives, and a call per double costs more than the copy.
   template <typename T>
-  void write_primitive(T value);
+  void write_primitive(T value) {
+    static_assert(std::endian::native == std::endian::little, "CdrWriter writes little-endian CDR on little-endian hosts");
+    // Aligned to the value's size counted after the 4-byte encapsulation header; the padding is
+    // zero-filled by resize.
+    const size_t offset = buffer_.size() - 4;
+    const size_t start = buffer_.size() + (sizeof(T) - offset % sizeof(T)) % sizeof(T);
+    buffer_.resize(start + sizeof(T));
+    std::memcpy(buffer_.data() + start, &value, sizeof(T));
+  }
   void align(size_t alignment);
   std::vector<std::uint8_t> buffer_;
 };
