@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   using namespace skytrace::cli;
   CLI::App app{"skytrace: simulates what a GNSS receiver records, from real ephemerides and a 3D world"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "skytrace 0.1.0");
+  app.set_version_flag("--version", std::string("skytrace ") + kProgramVersion);
   int exit_code = kExitOk;
   skytrace::install_cancellation_handlers();  // serve and gz install their own stop handlers over these
   register_run_command(app, exit_code);

@@ -221,6 +221,25 @@ std::string read_tcp(int port, double seconds) {
 // Live RTK between two virtual receivers: one serve streams the base's RTCM 3 (the contract pair's
 // BASE), another (its ROVR) takes it with --rtk-base-tcp, connecting again while the base is not
 // up yet: its NMEA reports GGA quality 4 (RTK fixed) at the rover's position.
+// GGA sentences with quality 4 (RTK fixed) at the rover of the RTK pair, each checked against the
+// rover's position.
+size_t rtk_fixed_gga_at_the_rover(const std::string& nmea) {
+  size_t fixed = 0;
+  std::istringstream lines(nmea);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("GGA,") == std::string::npos) continue;
+    std::vector<std::string> f;
+    for (std::stringstream s(line); std::getline(s, line, ',');) f.push_back(line);
+    if (f.size() < 10 || f[6] != "4") continue;
+    ++fixed;
+    // 55.4935 N, 8.4880 E, 75 m: ddmm.mmmmmmm to within a few centimetres.
+    EXPECT_NEAR(std::stod(f[2].substr(2)) / 60.0 + std::stod(f[2].substr(0, 2)), 55.4935, 1e-6) << line;
+    EXPECT_NEAR(std::stod(f[4].substr(3)) / 60.0 + std::stod(f[4].substr(0, 3)), 8.4880, 2e-6) << line;
+    EXPECT_NEAR(std::stod(f[9]), 75.0, 0.1) << line;
+  }
+  return fixed;
+}
+
 TEST(ServeRtk, RoverFixesFromABaseStreamOverTcp) {
   const auto contract = test::shared_data_dir().parent_path() / "contract" / "rtk-pair.yaml";
   if (!std::filesystem::exists(contract) ||
@@ -241,20 +260,52 @@ TEST(ServeRtk, RoverFixesFromABaseStreamOverTcp) {
                   dir / "base.log");
   ASSERT_FALSE(wait_for_line(dir / "rover.log", "skytrace serve: RTK corrections from ").empty()) << read_file(dir / "rover.log");
   const std::string nmea = read_tcp(std::stoi(rover_port), 15.0);
-  size_t fixed = 0;
-  std::istringstream lines(nmea);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.find("GGA,") == std::string::npos) continue;
-    std::vector<std::string> f;
-    for (std::stringstream s(line); std::getline(s, line, ',');) f.push_back(line);
-    if (f.size() < 10 || f[6] != "4") continue;
-    ++fixed;
-    // 55.4935 N, 8.4880 E, 75 m: ddmm.mmmmmmm to within a few centimetres.
-    EXPECT_NEAR(std::stod(f[2].substr(2)) / 60.0 + std::stod(f[2].substr(0, 2)), 55.4935, 1e-6) << line;
-    EXPECT_NEAR(std::stod(f[4].substr(3)) / 60.0 + std::stod(f[4].substr(0, 3)), 8.4880, 2e-6) << line;
-    EXPECT_NEAR(std::stod(f[9]), 75.0, 0.1) << line;
+  EXPECT_GT(rtk_fixed_gga_at_the_rover(nmea), 5u) << nmea.substr(0, 2000) << "\n" << read_file(dir / "rover.log");
+}
+
+// The same through an NTRIP caster (RTKLIB's str2str as the caster, user and password required),
+// and what a rover says when the caster refuses it.
+TEST(ServeRtk, RoverFixesFromAnNtripCasterAndRefusalsSayWhy) {
+  const auto contract = test::shared_data_dir().parent_path() / "contract" / "rtk-pair.yaml";
+  if (!std::filesystem::exists(contract) ||
+      !std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx")) {
+    GTEST_SKIP() << "contract scenario or ESBC data absent (set SKYTRACE_SHARED_DATA)";
   }
-  EXPECT_GT(fixed, 5u) << nmea.substr(0, 2000) << "\n" << read_file(dir / "rover.log");
+  if (!test::program_available("str2str")) GTEST_SKIP() << "str2str not installed (rtklib)";
+  const auto dir = test::make_temp_dir("serve_ntrip_" + std::to_string(getpid()));
+  const std::string skytrace = test::shell_quote(test::skytrace_executable().string());
+  const int base_port = test::free_loopback_port(SOCK_STREAM);
+  const int caster_port = test::free_loopback_port(SOCK_STREAM);
+  Background base(skytrace + " serve " + test::shell_quote(contract.string()) + " --receiver BASE --rate-hz 2" +
+                      " --duration-s 45 --rtcm-tcp 127.0.0.1:" + std::to_string(base_port),
+                  dir / "base.log");
+  ASSERT_FALSE(wait_for_line(dir / "base.log", "skytrace serve: RTCM 3 on tcp port ").empty()) << read_file(dir / "base.log");
+  Background caster("str2str -in tcpcli://127.0.0.1:" + std::to_string(base_port) + " -out ntripc://rover:s3cret@:" +
+                        std::to_string(caster_port) + "/ESBC",
+                    dir / "caster.log");
+  const std::string caster_url = "127.0.0.1:" + std::to_string(caster_port);
+  const auto rover_command = [&](const std::string& url, double duration_s) {
+    return skytrace + " serve " + test::shell_quote(contract.string()) + " --receiver ROVR --rate-hz 2 --duration-s " +
+           std::to_string(duration_s) + " --nmea-tcp 127.0.0.1:0 --rtk-base-ntrip " + test::shell_quote(url);
+  };
+  Background rover(rover_command("ntrip://rover:s3cret@" + caster_url + "/ESBC", 35.0), dir / "rover.log");
+  Background wrong_password(rover_command("ntrip://rover:guess@" + caster_url + "/ESBC", 8.0), dir / "wrong.log");
+  Background wrong_mount(rover_command("ntrip://rover:s3cret@" + caster_url + "/NOPE", 8.0), dir / "mount.log");
+  const std::string rover_port = wait_for_line(dir / "rover.log", "skytrace serve: NMEA on tcp port ");
+  ASSERT_FALSE(rover_port.empty()) << read_file(dir / "rover.log");
+  ASSERT_FALSE(wait_for_line(dir / "rover.log", "skytrace serve: RTK corrections from ntrip://rover@").empty())
+      << read_file(dir / "rover.log") << read_file(dir / "caster.log");
+  const std::string nmea = read_tcp(std::stoi(rover_port), 15.0);
+  EXPECT_GT(rtk_fixed_gga_at_the_rover(nmea), 5u) << nmea.substr(0, 2000) << "\n" << read_file(dir / "rover.log");
+
+  ASSERT_FALSE(wait_for_line(dir / "wrong.log", "skytrace serve: stopped after ").empty()) << read_file(dir / "wrong.log");
+  const std::string wrong = read_file(dir / "wrong.log");
+  EXPECT_NE(wrong.find("error: RTK base ntrip://rover@" + caster_url + "/ESBC: the caster closed the connection without answering"),
+            std::string::npos) << wrong;
+  EXPECT_EQ(wrong.find("guess"), std::string::npos) << "the password must not be printed:\n" << wrong;
+  ASSERT_FALSE(wait_for_line(dir / "mount.log", "skytrace serve: stopped after ").empty()) << read_file(dir / "mount.log");
+  const std::string mount = read_file(dir / "mount.log");
+  EXPECT_NE(mount.find("no such mountpoint (it sent its source table); it offers ESBC"), std::string::npos) << mount;
 }
 
 }  // namespace
