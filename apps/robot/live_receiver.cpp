@@ -2,10 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <set>
 
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
+#include "skytrace/io/rtcm3.hpp"
 #include "skytrace/sim/live.hpp"
 #include "skytrace/sim/live_outputs.hpp"
 #include "skytrace/sim/scenario.hpp"
@@ -45,6 +47,8 @@ struct Receiver::Impl {
   std::optional<sim::LiveEpoch> last;
   double last_time_s = 0.0;
   std::unique_ptr<sim::LiveOutputs> outputs;
+  std::optional<io::Rtcm3Decoder> base_decoder;  // RTK: the base's stream
+  io::RtcmMeasurementConverter base_converter;
 };
 
 Receiver::Receiver(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -73,6 +77,17 @@ std::unique_ptr<Receiver> Receiver::create(const ReceiverOptions& options, std::
   }
   sim::LiveOptions live_options;
   live_options.pose_timeout_s = options.pose_timeout_s;
+  if (!options.receiver_name.empty()) {
+    const auto& receivers = scenario->receivers;
+    const auto it = std::find_if(receivers.begin(), receivers.end(), [&](const auto& r) { return r.name == options.receiver_name; });
+    if (it == receivers.end()) {
+      error = fmt::format("receiver '{}': no such receiver in {}", options.receiver_name, options.scenario_path);
+      return nullptr;
+    }
+    live_options.receiver_index = static_cast<size_t>(it - receivers.begin());
+  }
+  live_options.rtk = options.rtk;
+  if (options.rtk) impl->base_decoder.emplace(impl->start);
   auto session = sim::LiveSession::create(*scenario, live_options);
   if (!session) {
     error = session.error().message;
@@ -198,6 +213,21 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
   if (!step(time_s, error)) return false;
   fill_view(*impl_->session, impl_->start, time_s, *impl_->last, out);
   return true;
+}
+
+std::string Receiver::add_base_rtcm3(const std::uint8_t* bytes, size_t size) {
+  if (!impl_->base_decoder) return "RTCM 3 of a base given to a receiver without RTK";
+  impl_->base_decoder->feed(std::span<const std::uint8_t>(bytes, size));
+  std::string note;
+  for (const auto& epoch : impl_->base_decoder->take_epochs()) {
+    const auto& station = impl_->base_decoder->station();
+    if (!station) {
+      note = "base epochs wait for the station's position (RTCM 1005/1006)";
+      continue;
+    }
+    impl_->session->add_base_epoch(positioning::BaseEpoch{impl_->base_converter.convert(epoch), station->arp_ecef_m});
+  }
+  return note;
 }
 
 std::vector<std::pair<std::string, std::string>> Receiver::file_parameters() {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -87,6 +88,9 @@ struct ReceiverOptions {
   std::string start_time;                // ISO 8601; empty: the scenario's start
   std::string start_time_scale = "GPST";
   double pose_timeout_s = 1.0;
+  std::string receiver_name;  // one receiver of a scenario with several; empty: the first
+  // RTK: the fixes come from the RTK engine with the base corrections given to add_base_rtcm3().
+  bool rtk = false;
 };
 
 class Receiver {
@@ -114,6 +118,10 @@ class Receiver {
   // session, and the epoch of the last step (nullptr before the first).
   [[nodiscard]] const sim::LiveSession& session() const;
   [[nodiscard]] const sim::LiveEpoch* last_epoch() const;
+
+  // RTCM 3 bytes of a base station (any framing: messages are found in the bytes), for RTK. Returns
+  // a note when something is wrong with the stream (no 1005/1006 yet), empty otherwise.
+  [[nodiscard]] std::string add_base_rtcm3(const std::uint8_t* bytes, size_t size);
 
   // Outputs of the receiver, every one a sink of its epochs (sim::LiveOutputs): the publishers
   // added below, and the files named by parameters (file_parameters(): name and description,

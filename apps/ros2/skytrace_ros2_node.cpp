@@ -62,7 +62,7 @@ A simulated GNSS receiver on ROS 2 (DDS, no ROS 2 install needed). Parameters (d
   frame_id, pose_topic, odom_topic, antenna_offset_m, rate_hz, start_time, start_time_scale,
   pose_timeout_s, ray_length_m, moving_models, rinex_out, nmea_out, fix_csv_out, rtcm_out, bag_out,
   bag_compression (lz4|zstd|none),
-  latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm.
+  latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm, receiver, rtk_base_topic.
 Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS,
   CYCLONEDDS_URI.
 )";
@@ -90,6 +90,8 @@ struct Config {
   std::string bag_out;                 // a rosbag2 folder of the published topics, written at the end
   std::string bag_compression = "lz4";
   std::string latency_report;
+  std::string receiver;        // one receiver of a scenario with several; empty: the first
+  std::string rtk_base_topic;  // RTK: a base's rtcm_msgs/Message topic; empty: no RTK
   bool use_sim_time = false;
   ros2::RosDistro distro = ros2::RosDistro::kJazzy;
   bool rtcm3 = true;
@@ -163,6 +165,8 @@ Result<Config> read_config(const Parameters& p) {
                  fmt::format("parameter bag_compression '{}': expected lz4, zstd or none", c.bag_compression)};
   }
   SKYTRACE_READ(p.get_string("latency_report", c.latency_report), c.latency_report);
+  SKYTRACE_READ(p.get_string("receiver", c.receiver), c.receiver);
+  SKYTRACE_READ(p.get_string("rtk_base_topic", c.rtk_base_topic), c.rtk_base_topic);
   SKYTRACE_READ(p.get_bool("use_sim_time", c.use_sim_time), c.use_sim_time);
   std::string distro;
   SKYTRACE_READ(p.get_string("ros_distro", "jazzy"), distro);
@@ -269,6 +273,11 @@ class Node {
       if (auto st = subscribe(tf_static_, "/tf_static", ros2::TFMessage::kType, reliable.keep_last(100).transient_local()); !st) {
         return st;
       }
+    }
+    // RTK corrections best effort too: they match the reliable publishers of ntrip_client and of
+    // another skytrace node as well as best-effort ones; a deep history keeps a burst of messages.
+    if (!config_.rtk_base_topic.empty()) {
+      if (auto st = subscribe(rtk_base_, config_.rtk_base_topic, ros2::RtcmMessage::kType, sensor.keep_last(200)); !st) return st;
     }
     if (config_.pose_source == PoseSource::kPose) {
       if (auto st = subscribe(pose_, config_.pose_topic, ros2::PoseStamped::kType, sensor); !st) return st;
@@ -440,6 +449,15 @@ class Node {
   }
 
   void take_inputs() {
+    if (rtk_base_.reader) {
+      for (const auto& bytes : rtk_base_.reader->take()) {
+        auto message = decode<ros2::RtcmMessage>(bytes, rtk_base_.topic);
+        if (!message) continue;
+        if (auto note = receiver_->add_base_rtcm3(message->message.data(), message->message.size()); !note.empty()) {
+          log_.throttled(LogLevel::kWarn, 10.0, "rtk_base", fmt::format("{}: {}", rtk_base_.topic, note));
+        }
+      }
+    }
     if (clock_.reader) {
       for (const auto& bytes : clock_.reader->take()) {
         if (auto clock = decode<ros2::Clock>(bytes, clock_.topic)) sim_now_ns_ = to_ns(clock->clock);
@@ -661,7 +679,7 @@ class Node {
   std::vector<Guid> reader_gids_, writer_gids_;
   std::unique_ptr<DdsWriter> discovery_;
   std::map<std::string, Output, std::less<>> outputs_;  // by topic name of sim::ros2_receiver_topics()
-  Subscription clock_, tf_, tf_static_, pose_;
+  Subscription clock_, tf_, tf_static_, pose_, rtk_base_;
 };
 
 int run(int argc, char** argv) {
@@ -705,6 +723,8 @@ int run(int argc, char** argv) {
   options.start_time = config->start_time;
   options.start_time_scale = config->start_time_scale;
   options.pose_timeout_s = config->pose_timeout_s;
+  options.receiver_name = config->receiver;
+  options.rtk = !config->rtk_base_topic.empty();
   std::string problem;
   auto receiver = live::Receiver::create(options, problem);
   if (!receiver) {

@@ -749,5 +749,48 @@ TEST_F(Ros2NodeTest, BadCommandLinesAndParametersExitWithTheirCodes) {
   EXPECT_NE(r.output.find("ROS_DOMAIN_ID"), std::string::npos) << r.output;
 }
 
+// RTK on ROS 2: a rover node takes its corrections from the rtcm topic of a base node (as it would
+// from ntrip_client), both receivers of the RTK pair; its fix becomes GBAS_FIX at the rover.
+TEST_F(Ros2NodeTest, RoverNodeFixesFromTheRtcmTopicOfABaseNode) {
+  const auto pair = test::shared_data_dir().parent_path() / "contract" / "rtk-pair.yaml";
+  if (!std::filesystem::exists(pair) ||
+      !std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx")) {
+    GTEST_SKIP() << "contract scenario or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  }
+  const std::string base_ns = namespace_ + "_base";
+  const auto base_log = dir_ / "base.log";
+  test::Background base("env ROS_DOMAIN_ID=" + std::to_string(domain_id_) + " ROS_LOCALHOST_ONLY=1 " +
+                            test::shell_quote(node_binary_.string()) + " --ros-args -r __ns:=" + base_ns + " -p " +
+                            test::shell_quote("scenario:=" + pair.string()) + " -p receiver:=BASE -p rate_hz:=2",
+                        base_log);
+  Subscription& fix = peer_->subscribe(topic("fix"), dds_type("sensor_msgs", "NavSatFix"), Qos::sensor_data());
+  start_node({"-p", "scenario:=" + pair.string(), "-p", "receiver:=ROVR", "-p", "rate_hz:=2", "-p",
+              "rtk_base_topic:=" + base_ns + "/rtcm"});
+  // GBAS_FIX (2) once the rover has the base's observations and position.
+  const auto rtk_fixes = [&] {
+    std::vector<wire::NavSatFix> out;
+    for (const auto& sample : fix.samples()) {
+      size_t left = 0;
+      const auto m = wire::decode_navsat_fix(sample, left);
+      if (m.status == 2) out.push_back(m);
+    }
+    return out;
+  };
+  const auto base_log_text = [&] {
+    std::ifstream in(base_log);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  ASSERT_TRUE(wait_until([&] { return rtk_fixes().size() >= 3; }, 40s)) << log_text() << "\nbase:\n" << base_log_text();
+  for (const auto& m : rtk_fixes()) {
+    // The rover of the pair: 55.4935 N, 8.4880 E, 75 m, to centimetres once fixed (metres while float).
+    EXPECT_NEAR(m.latitude, 55.4935, 2e-5);
+    EXPECT_NEAR(m.longitude, 8.4880, 3e-5);
+    EXPECT_NEAR(m.altitude, 75.0, 2.0);
+  }
+  EXPECT_EQ(base.stop(SIGINT), 0) << base_log_text();
+}
+
 }  // namespace
 }  // namespace skytrace
