@@ -16,6 +16,7 @@
 #include <mutex>
 #include <set>
 
+#include "skytrace/core/cancellation.hpp"
 #include "skytrace/sim/live.hpp"
 #include "skytrace/sim/live_outputs.hpp"
 #include "skytrace/sim/scenario.hpp"
@@ -144,10 +145,10 @@ class Bridge {
     return Ok{};
   }
 
-  void run(const std::atomic<bool>& stop) {
+  void run() {
     const double period_s = 1.0 / options_.rate_hz;
     std::optional<std::int64_t> last_k;
-    while (!stop) {
+    while (!cancellation_requested()) {
       double sim_time_s = 0.0;
       std::map<std::string, Eigen::Isometry3d> objects;
       {
@@ -307,7 +308,7 @@ std::string observations_topic(const BridgeOptions& options) {
   return "/world/" + options.world_name + "/model/" + options.model + "/skytrace/observations";
 }
 
-Status run_bridge(const BridgeOptions& options, const std::atomic<bool>& stop) {
+Status run_bridge(const BridgeOptions& options) {
   if (options.world_name.empty() || options.model.empty()) {
     return make_error(ErrorCode::kInvalidArgument, "--world-name and --model must not be empty");
   }
@@ -338,7 +339,8 @@ Status run_bridge(const BridgeOptions& options, const std::atomic<bool>& stop) {
                  options.model, options.link.empty() ? "" : " link '" + options.link + "'", pose_topic(options),
                  clock_topic(options), navsat_topic(options));
   }
-  bridge.run(stop);
+  bridge.run();
+  disarm_stop_watchdog();  // the loop ended in time: no forced exit while the files are finished
   return bridge.finish_outputs();
 }
 

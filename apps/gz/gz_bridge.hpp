@@ -3,7 +3,6 @@
 // ignition headers stay in gz_bridge.cpp.
 #pragma once
 
-#include <atomic>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -33,8 +32,9 @@ struct BridgeOptions {
 [[nodiscard]] std::string navsat_topic(const BridgeOptions& options);        // /world/W/model/M/skytrace/navsat
 [[nodiscard]] std::string observations_topic(const BridgeOptions& options);  // .../skytrace/observations
 
-// Runs until `stop` is set (SIGINT). Errors: the scenario cannot be loaded, a topic cannot be
-// subscribed or advertised.
-[[nodiscard]] Status run_bridge(const BridgeOptions& options, const std::atomic<bool>& stop);
+// Runs until cancellation is requested (core/cancellation: SIGINT, SIGTERM); the files are then
+// finished. Errors: the scenario cannot be loaded, a topic cannot be subscribed or advertised, a
+// file cannot be written.
+[[nodiscard]] Status run_bridge(const BridgeOptions& options);
 
 }  // namespace skytrace::gz

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <set>
 
+#include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
 #include "skytrace/io/rtcm3.hpp"
@@ -40,6 +41,10 @@ SkyStatus to_view(receiver::SatelliteStatus status) {
 }
 
 }  // namespace
+
+void install_stop_handlers() { install_live_stop_handlers(); }
+bool stop_requested() { return cancellation_requested(); }
+void disarm_stop_watchdog() { skytrace::disarm_stop_watchdog(); }
 
 struct Receiver::Impl {
   std::unique_ptr<sim::LiveSession> session;

@@ -83,6 +83,13 @@ struct EpochView {
   std::vector<std::string> nmea;  // the epoch's NMEA sentences, without CR LF
 };
 
+// SIGINT and SIGTERM for a live loop (core/cancellation's install_live_stop_handlers): they ask the
+// loop to stop (stop_requested()), and a watchdog ends the process should the loop not end within a
+// second. disarm_stop_watchdog() once the loop has ended, before the outputs are finished.
+void install_stop_handlers();
+[[nodiscard]] bool stop_requested();
+void disarm_stop_watchdog();
+
 struct ReceiverOptions {
   std::string scenario_path;
   std::string start_time;                // ISO 8601; empty: the scenario's start

@@ -38,14 +38,6 @@ constexpr int kExitUsage = 2;
 constexpr int kExitInput = 3;
 constexpr int kExitOutput = 5;
 
-std::atomic<bool> g_stop{false};
-// Stops the loop; should it not end within a second (a NodeHandle waiting for a master that never
-// comes, a stuck callback), SIGALRM ends the process: SIGTERM always ends the node promptly.
-void on_signal(int /*signal*/) {
-  g_stop = true;
-  alarm(1);
-}
-
 enum class PoseSource { kScenario, kTf, kOdometry, kPose };
 
 struct Config {
@@ -154,7 +146,7 @@ class Node {
     ros::CallbackQueue& queue = *ros::getGlobalCallbackQueue();
     const double wait_s = std::min(0.01, period_s_ / 4.0);
     if (!ros::Time::isSimTime()) origin_ = ros::Time::now();  // node start maps to ~start_time
-    while (ros::ok() && !g_stop) {
+    while (ros::ok() && !live::stop_requested()) {
       queue.callAvailable(ros::WallDuration(wait_s));
       const ros::Time now = ros::Time::now();
       if (now.isZero()) {
@@ -352,8 +344,9 @@ class Node {
 
 int run(int argc, char** argv) {
   ros::init(argc, argv, "skytrace", ros::init_options::NoSigintHandler);
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  // SIGINT and SIGTERM end the loop; should it hang (a NodeHandle waiting for a master that never
+  // comes, a stuck callback), a watchdog ends the process a second later.
+  live::install_stop_handlers();
   ros::NodeHandle pnh("~");
   Config config;
   if (auto problem = read_config(pnh, config)) {
@@ -380,7 +373,7 @@ int run(int argc, char** argv) {
            : config.pose_source == PoseSource::kPose   ? config.pose_topic.c_str()
                                                        : config.odom_topic.c_str());
   node.run();
-  alarm(0);  // the loop ended in time: no forced exit while the files are finished
+  live::disarm_stop_watchdog();  // the loop ended in time: no forced exit while the files are finished
   node.finish();
   ros::shutdown();
   return 0;

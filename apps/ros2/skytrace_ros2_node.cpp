@@ -47,13 +47,6 @@ constexpr int kExitInput = 3;
 constexpr int kExitOutput = 5;
 constexpr int kExitNetwork = 6;
 
-// Stops the loop; should it not end within a second (a step that does not return, DDS stuck),
-// SIGALRM ends the process: SIGINT and SIGTERM always end the node promptly.
-void on_signal(int signal_number) {
-  request_cancellation(signal_number);
-  alarm(1);
-}
-
 constexpr const char* kUsage = R"(usage: skytrace_ros2_node [--ros-args] [--params-file FILE]... [-p NAME:=VALUE]...
                           [-r __ns:=/NAMESPACE] [-r __node:=NAME] [-r FROM:=TO]...
 
@@ -714,10 +707,9 @@ int run(int argc, char** argv) {
     return kExitUsage;
   }
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  // A write beyond the file size limit fails like a full disk (the bag is given up) instead of killing the node.
-  std::signal(SIGXFSZ, SIG_IGN);
+  // SIGINT and SIGTERM end the loop (a watchdog ends the process should it hang); a write beyond the
+  // file size limit fails like a full disk (the bag is given up) instead of killing the node.
+  install_live_stop_handlers();
   live::ReceiverOptions options;
   options.scenario_path = config->scenario;
   options.start_time = config->start_time;
@@ -752,7 +744,7 @@ int run(int argc, char** argv) {
            discovery->domain_id, discovery->localhost_only ? " (localhost only)" : "",
            config->distro == ros2::RosDistro::kHumble ? "Humble" : "Jazzy");
   node.run();
-  alarm(0);  // the loop ended in time: no forced exit while the files are finished
+  disarm_stop_watchdog();  // the loop ended in time: no forced exit while the files are finished
   node.finish();
   return 0;
 }

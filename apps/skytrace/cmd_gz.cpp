@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "skytrace/core/cancellation.hpp"
 #include "skytrace/sim/live_outputs.hpp"
 
 #if SKYTRACE_HAVE_GZ
@@ -34,13 +35,6 @@ struct GzArgs {
   std::vector<std::pair<std::string, std::string>> file_outputs;  // parameter, path
 };
 
-std::atomic<bool> g_stop{false};
-// Stops the bridge; should it not end within a second, SIGALRM ends the process (as serve does).
-void on_signal(int /*signal*/) {
-  g_stop = true;
-  alarm(1);
-}
-
 int run_gz(const GzArgs& args) {
 #if SKYTRACE_HAVE_GZ
   gz::BridgeOptions options;
@@ -53,10 +47,8 @@ int run_gz(const GzArgs& args) {
   options.pose_timeout_s = args.pose_timeout_s;
   options.quiet = args.quiet;
   options.file_outputs = args.file_outputs;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  auto st = gz::run_bridge(options, g_stop);
-  alarm(0);
+  install_live_stop_handlers();
+  auto st = gz::run_bridge(options);
   if (!st) return report_error(st.error());
   return kExitOk;
 #else

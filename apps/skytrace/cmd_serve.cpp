@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
 #include "skytrace/io/ntrip.hpp"
@@ -39,14 +40,6 @@
 
 namespace skytrace::cli {
 namespace {
-
-std::atomic<bool> g_stop{false};
-// Stops the loop; should an epoch hang for whatever reason, SIGALRM ends the process a second later,
-// so that SIGTERM always ends it promptly (alarm is async-signal-safe).
-extern "C" void on_stop_signal(int /*signal*/) {
-  g_stop = true;
-  alarm(1);
-}
 
 // Bounds that keep one misbehaving peer from starving the epochs or growing memory.
 constexpr size_t kMaxTcpClients = 64;
@@ -537,11 +530,7 @@ int serve(const ServeArgs& args) {
     }
   } pose_guard{pose_fd};
 
-  struct sigaction action {};
-  action.sa_handler = on_stop_signal;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  install_live_stop_handlers();
   std::signal(SIGPIPE, SIG_IGN);
 
   using Clock = std::chrono::steady_clock;
@@ -553,7 +542,7 @@ int serve(const ServeArgs& args) {
   std::int64_t late_epochs = 0;
   constexpr std::int64_t kReportedIgnoredPoses = 10;
   std::int64_t ignored_poses = 0;
-  while (!g_stop) {
+  while (!cancellation_requested()) {
     if (args.duration_s > 0.0 && static_cast<double>(k) * period_s > args.duration_s + 1e-9) break;
     const auto deadline = wall_start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(k * period_s));
     // Serve clients and poses until the epoch is due.
@@ -563,7 +552,7 @@ int serve(const ServeArgs& args) {
       if (pose_fd >= 0) fds.push_back({pose_fd, POLLIN, 0});
       if (rtk_base && rtk_base->fd() >= 0) fds.push_back({rtk_base->fd(), POLLIN, 0});
       const auto now = Clock::now();
-      if (now >= deadline || g_stop) break;
+      if (now >= deadline || cancellation_requested()) break;
       const auto wait_ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now).count() + 1;
       const int ready = poll(fds.data(), fds.size(), static_cast<int>(std::min<long long>(wait_ms, 100)));
       if (ready < 0 && errno != EINTR) return report_error(io_error("poll"));
@@ -590,7 +579,7 @@ int serve(const ServeArgs& args) {
         }
       }
     }
-    if (g_stop) break;
+    if (cancellation_requested()) break;
 
     const GnssTime tag = start + static_cast<double>(k) * period_s;
     auto epoch = live.step(tag);
@@ -613,7 +602,7 @@ int serve(const ServeArgs& args) {
       k = static_cast<std::int64_t>(std::floor(behind));
     }
   }
-  alarm(0);  // stopped in time: no forced exit
+  disarm_stop_watchdog();  // stopped in time: no forced exit
   if (late_epochs > 0) std::cerr << "skytrace serve: " << late_epochs << " epochs skipped to keep real time\n";
   if (ignored_poses > 0) std::cerr << "skytrace serve: " << ignored_poses << " pose datagrams ignored\n";
   for (auto& sink : sinks) {

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstring>
+#include <unistd.h>
 #include <string>
 
 namespace skytrace {
@@ -19,16 +20,30 @@ extern "C" void on_cancellation_signal(int signal_number) {
   }
 }
 
-}  // namespace
+extern "C" void on_live_stop_signal(int signal_number) {
+  on_cancellation_signal(signal_number);
+  alarm(1);  // async-signal-safe; the default action of SIGALRM ends the process
+}
 
-void install_cancellation_handlers() {
+void install_handler(void (*handler)(int)) {
   struct sigaction action {};
-  action.sa_handler = on_cancellation_signal;
+  action.sa_handler = handler;
   sigemptyset(&action.sa_mask);
   action.sa_flags = 0;  // no SA_RESTART: blocking calls return EINTR and their loops look at the flag
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &action, nullptr);
   std::signal(SIGXFSZ, SIG_IGN);
 }
+
+}  // namespace
+
+void install_live_stop_handlers() {
+  std::signal(SIGALRM, SIG_DFL);
+  install_handler(on_live_stop_signal);
+}
+
+void disarm_stop_watchdog() { alarm(0); }
+
+void install_cancellation_handlers() { install_handler(on_cancellation_signal); }
 
 bool cancellation_requested() { return g_signal.load(std::memory_order_relaxed) != 0; }
 

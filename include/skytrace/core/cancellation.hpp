@@ -23,6 +23,14 @@ void request_cancellation(int signal_number);
 // Forgets a request (tests only).
 void reset_cancellation();
 
+// For live loops (skytrace serve and gz, the ROS nodes): the handlers above, plus a watchdog: should
+// the loop not end within a second of the signal (a step that does not return, a DDS call or a ROS
+// master that hangs), SIGALRM ends the process, so that SIGINT and SIGTERM always end it promptly.
+// A second signal ends it at once, as above.
+void install_live_stop_handlers();
+// Called once the loop has ended in time, before the outputs are finished (no forced exit then).
+void disarm_stop_watchdog();
+
 // kCancelled naming the signal, for loops that stop.
 [[nodiscard]] Error cancelled_error();
 
