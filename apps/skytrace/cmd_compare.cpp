@@ -11,6 +11,7 @@
 #include "skytrace/io/compare.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
+#include "skytrace/sim/trajectory.hpp"
 
 namespace skytrace::cli {
 namespace {
@@ -23,11 +24,32 @@ struct CompareArgs {
   std::string systems;
   std::string signals;
   std::string json_path;
+  std::string trajectory_path;
+  double epoch_tolerance_ms = 1.0;
 };
 
 int run_compare(const CompareArgs& args) {
   io::CompareOptions options;
   options.min_elevation_deg = args.min_elevation_deg;
+  options.epoch_tolerance_s = args.epoch_tolerance_ms * 1e-3;
+  std::shared_ptr<sim::InterpolatedTrajectory> track;
+  if (!args.trajectory_path.empty()) {
+    sim::TrajectorySetting setting;
+    setting.file = args.trajectory_path;
+    // Rows carry ISO times (GPST): the start only matters for rows in seconds, which need one.
+    auto samples = sim::read_trajectory_csv(setting, GnssTime{}, std::nullopt);
+    if (!samples) return report_error(samples.error().with_context("--trajectory"));
+    auto created = sim::InterpolatedTrajectory::create(std::move(*samples), args.trajectory_path);
+    if (!created) return report_error(created.error().with_context("--trajectory"));
+    track = std::move(*created);
+    options.receiver_position = [track](const GnssTime& t) -> std::optional<Eigen::Vector3d> {
+      const auto& s = track->samples();
+      if (t < s.front().time || s.back().time < t) return std::nullopt;
+      auto k = track->at(t);
+      if (!k) return std::nullopt;
+      return k->position_m;
+    };
+  }
   if (!args.systems.empty()) {
     auto systems = io::parse_system_letters(args.systems);
     if (!systems) return report_error(systems.error().with_context("--systems"));
@@ -84,9 +106,16 @@ void register_compare_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--signals", args->signals,
                   "Signals to compare, e.g. G1C,E1C (default: all common)");
   cmd->add_option("--json", args->json_path, "Also write the numbers as JSON to this file");
+  cmd->add_option("--trajectory", args->trajectory_path,
+                  "A moving receiver's ECEF trajectory (CSV as a scenario's trajectory.file, ISO GPST "
+                  "times): the elevation mask looks from its position at each epoch");
+  cmd->add_option("--epoch-tolerance-ms", args->epoch_tolerance_ms,
+                  "Epochs this close are one epoch; the real side is moved to the simulated time with "
+                  "the Doppler (receivers whose clock is not steered tag epochs ms off the second)")
+      ->capture_default_str();
   cmd->footer(
       "Residuals are real minus simulated after subtracting, per epoch and system, the median over "
-      "the system's satellites (receiver clock, inter-system bias). Epochs are matched to 1 ms.");
+      "the system's satellites (receiver clock, inter-system bias). Epochs are matched to 1 ms unless --epoch-tolerance-ms says otherwise.");
   cmd->callback([args, &exit_code]() { exit_code = run_compare(*args); });
 }
 

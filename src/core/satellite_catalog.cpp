@@ -1,5 +1,6 @@
 #include "skytrace/core/satellite_catalog.hpp"
 
+#include <algorithm>
 #include <array>
 #include <limits>
 
@@ -290,10 +291,18 @@ A gps_availability(B block, int svn, char band, char attribute) {
   }
 }
 
+// GLONASS satellites whose L3OC (3I/3Q/3X) broadcast public sources show over their whole row of
+// the table (docs/satellites.md): SVN 801, GLONASS-K1 No. 11L, L3 on from 2011-04-07 (IAC news
+// "L3 CDMA Signal of Glonass-K"); 802, K1 No. 12L (R09), tracked in the 2020 reference files;
+// 805, K1 No. 15L (R11), and 855, the first GLONASS-M+ (R21), tracked by KMS300DNK on 2022-06-08
+// and (855) NYA100NOR on 2024-05-03. Other K1/K2/M+ payloads are switched on and off or never seen
+// (858 in 2020 but not 2022; 806, 856, 859, 860, 861 not seen): uncertain.
+constexpr std::array<int, 4> kL3ocSvns = {801, 802, 805, 855};
+
 // GLONASS (ICD 5.1 and the CDMA ICDs): FDMA G1 C/A, G1/G2 P on every satellite and G2 C/A from
 // GLONASS-M; the CDMA signals exist on K1, K2 and M+ payloads but are switched on and off (see
-// docs/satellites.md), hence at best uncertain.
-A glonass_availability(B block, char band, char attribute) {
+// docs/satellites.md), hence uncertain except L3OC on the satellites of kL3ocSvns.
+A glonass_availability(B block, int svn, char band, char attribute) {
   switch (band) {
     case '1': return (attribute == 'C' || attribute == 'P') ? A::kYes : A::kNo;
     case '2':
@@ -302,6 +311,10 @@ A glonass_availability(B block, char band, char attribute) {
       return A::kNo;
     case '3':
       if (block == B::kGlonassM) return A::kNo;
+      if ((attribute == 'I' || attribute == 'Q' || attribute == 'X') &&
+          std::find(kL3ocSvns.begin(), kL3ocSvns.end(), svn) != kL3ocSvns.end()) {
+        return A::kYes;
+      }
       return A::kUncertain;
     case '4': case '6':
       return (block == B::kGlonassK1 || block == B::kGlonassK2 || block == B::kUnknown) ? A::kUncertain : A::kNo;
@@ -442,7 +455,7 @@ SignalAvailability signal_availability(const SatelliteId& id, const Signal& sign
   const int svn = r != nullptr ? r->svn : 0;
   switch (id.system) {
     case GnssSystem::kGps: return gps_availability(block, svn, signal.band, signal.attribute);
-    case GnssSystem::kGlonass: return glonass_availability(block, signal.band, signal.attribute);
+    case GnssSystem::kGlonass: return glonass_availability(block, svn, signal.band, signal.attribute);
     case GnssSystem::kGalileo: return galileo_availability(id, svn, signal.band, key);
     case GnssSystem::kBeiDou: return beidou_availability(block, id.number, signal.band, signal.attribute);
     case GnssSystem::kQzss: return qzss_availability(block, signal.band, signal.attribute);

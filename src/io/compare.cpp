@@ -121,13 +121,14 @@ struct EpochPair {
 };
 
 std::vector<EpochPair> match_epochs(const std::vector<const ObservationEpoch*>& real,
-                                    const std::vector<const ObservationEpoch*>& sim) {
+                                    const std::vector<const ObservationEpoch*>& sim,
+                                    double tolerance_s) {
   std::vector<EpochPair> pairs;
   size_t i = 0;
   size_t j = 0;
   while (i < real.size() && j < sim.size()) {
     const double dt_s = real[i]->time - sim[j]->time;
-    if (std::abs(dt_s) <= kEpochMatchTolerance_s) {
+    if (std::abs(dt_s) <= tolerance_s) {
       pairs.push_back({static_cast<std::int64_t>(i), static_cast<std::int64_t>(j)});
       ++i;
       ++j;
@@ -206,12 +207,14 @@ bool append_residuals(const std::vector<double>& differences, std::vector<double
 class ElevationMask {
  public:
   ElevationMask(const orbits::SatelliteStateSource* source, const Eigen::Vector3d& station_ecef_m,
-                double min_elevation_deg, size_t epoch_count)
+                double min_elevation_deg, size_t epoch_count,
+                std::function<std::optional<Eigen::Vector3d>(const GnssTime&)> receiver_position = {})
       : source_(source),
         station_ecef_m_(station_ecef_m),
         station_(ecef_to_geodetic(station_ecef_m)),
         min_elevation_deg_(min_elevation_deg),
-        elevations_deg_(epoch_count) {}
+        elevations_deg_(epoch_count),
+        receiver_position_(std::move(receiver_position)) {}
 
   bool keeps(size_t epoch, const SatelliteId& satellite, const GnssTime& t) {
     if (source_ == nullptr) return true;
@@ -222,8 +225,15 @@ class ElevationMask {
       // The position at the epoch is enough for a mask: the ~0.07 s signal travel time moves the
       // satellite by about 0.001 degrees as seen from the ground.
       if (auto state = source_->state(satellite, t); state) {
-        elevation_deg =
-            azimuth_elevation(station_ecef_m_, station_, state->position_m).elevation_deg;
+        if (receiver_position_) {
+          // A moving receiver: the mask looks from where it is at this epoch.
+          if (auto p = receiver_position_(t)) {
+            elevation_deg = azimuth_elevation(*p, ecef_to_geodetic(*p), state->position_m).elevation_deg;
+          }
+        } else {
+          elevation_deg =
+              azimuth_elevation(station_ecef_m_, station_, state->position_m).elevation_deg;
+        }
       }
       if (std::isnan(elevation_deg)) {
         ++without_position_;
@@ -248,6 +258,7 @@ class ElevationMask {
   Geodetic station_;
   double min_elevation_deg_;
   std::vector<std::unordered_map<SatelliteId, double>> elevations_deg_;
+  std::function<std::optional<Eigen::Vector3d>(const GnssTime&)> receiver_position_;
   size_t below_mask_ = 0;
   size_t without_position_ = 0;
   std::map<GnssSystem, size_t> without_position_by_system_;
@@ -348,6 +359,8 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
     const auto& pair = pairs[k];
     const ObservationEpoch& re = *real.epochs[static_cast<size_t>(pair.real_index)];
     const ObservationEpoch& se = *sim.epochs[static_cast<size_t>(pair.sim_index)];
+    // Real time tag minus simulated (0 for receivers that tag their epochs on the full second).
+    const double tag_offset_s = re.time - se.time;
     real_phase.advance_to(pair.real_index);
     sim_phase.advance_to(pair.sim_index);
     pseudorange_diffs_m.clear();
@@ -361,8 +374,17 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
     for (const auto& sp : pair_satellites(re, se, signal.system)) {
       const std::uint8_t n = sp.satellite.number;
       // Phases are remembered before the mask so a satellite rising through it has a previous one.
+      // Doppler to move the real side to the simulated epoch's time when the tags differ:
+      // phase changes by D * dt cycles, the pseudorange by -wavelength * D * dt.
+      std::optional<double> shift_doppler_hz;
+      if (tag_offset_s != 0.0) {
+        if (sp.sim != nullptr) shift_doppler_hz = number_at(*sp.sim, sc.doppler);
+        if (!shift_doppler_hz && sp.real != nullptr) shift_doppler_hz = number_at(*sp.real, rc.doppler);
+      }
       if (sp.real != nullptr) {
-        if (auto l = number_at(*sp.real, rc.phase)) current_real_cycles[n] = *l;
+        if (auto l = number_at(*sp.real, rc.phase)) {
+          current_real_cycles[n] = *l - (shift_doppler_hz ? *shift_doppler_hz * tag_offset_s : 0.0);
+        }
       }
       if (sp.sim != nullptr) {
         if (auto l = number_at(*sp.sim, sc.phase)) current_sim_cycles[n] = *l;
@@ -377,7 +399,14 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
 
       const auto real_pr = number_at(*sp.real, rc.code);
       const auto sim_pr = number_at(*sp.sim, sc.code);
-      if (real_pr && sim_pr) pseudorange_diffs_m.push_back(*real_pr - *sim_pr);
+      if (real_pr && sim_pr) {
+        double shift_m = 0.0;
+        if (shift_doppler_hz) {
+          const double lambda_m = wavelength_m(sp.satellite);
+          if (!std::isnan(lambda_m)) shift_m = lambda_m * *shift_doppler_hz * tag_offset_s;
+        }
+        pseudorange_diffs_m.push_back(*real_pr + shift_m - *sim_pr);
+      }
 
       const auto real_cn0 = number_at(*sp.real, rc.strength);
       const auto sim_cn0 = number_at(*sp.sim, sc.strength);
@@ -540,6 +569,11 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real,
         ErrorCode::kInvalidArgument,
         fmt::format("minimum elevation {} deg is outside -90..90", options.min_elevation_deg));
   }
+  if (!std::isfinite(options.epoch_tolerance_s) || options.epoch_tolerance_s < 0.0 ||
+      options.epoch_tolerance_s > 0.5) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("epoch tolerance {} s is outside 0..0.5", options.epoch_tolerance_s));
+  }
   FileView real_view{&real, observation_epochs(real)};
   FileView sim_view{&sim, observation_epochs(sim)};
   if (real_view.epochs.empty() || sim_view.epochs.empty()) {
@@ -547,12 +581,13 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real,
                                                   (real_view.epochs.empty() ? "REAL" : "SIM") +
                                                   " has no observation epoch");
   }
-  const auto pairs = match_epochs(real_view.epochs, sim_view.epochs);
+  const auto pairs = match_epochs(real_view.epochs, sim_view.epochs, options.epoch_tolerance_s);
   if (pairs.empty()) {
     return make_error(
         ErrorCode::kOutOfRange,
         fmt::format(
-            "no common epochs (matched to 1 ms): REAL covers {} to {}, SIM covers {} to {} GPST",
+            "no common epochs (matched to {} ms): REAL covers {} to {}, SIM covers {} to {} GPST",
+            options.epoch_tolerance_s * 1e3,
             time_text(real_view.epochs.front()->time), time_text(real_view.epochs.back()->time),
             time_text(sim_view.epochs.front()->time), time_text(sim_view.epochs.back()->time)));
   }
@@ -560,7 +595,7 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real,
   if (!signals) return signals.error();
 
   Eigen::Vector3d station_ecef_m = Eigen::Vector3d::Zero();
-  if (options.satellite_source != nullptr) {
+  if (options.satellite_source != nullptr && !options.receiver_position) {
     const auto& approx = real.header.approx_position_ecef_m;
     if (!approx || Eigen::Vector3d((*approx)[0], (*approx)[1], (*approx)[2]).norm() <
                        kMinimumStationRadius_m) {
@@ -572,7 +607,7 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real,
     station_ecef_m = Eigen::Vector3d((*approx)[0], (*approx)[1], (*approx)[2]);
   }
   ElevationMask mask(options.satellite_source, station_ecef_m, options.min_elevation_deg,
-                     pairs.size());
+                     pairs.size(), options.receiver_position);
 
   ComparisonReport report;
   report.real_epochs = real_view.epochs.size();
@@ -582,6 +617,7 @@ Result<ComparisonReport> compare_observations(const ObservationFile& real,
   report.last_common_epoch = real_view.epochs[static_cast<size_t>(pairs.back().real_index)]->time;
   report.elevation_mask_applied = options.satellite_source != nullptr;
   report.min_elevation_deg = options.min_elevation_deg;
+  report.mask_from_receiver_track = report.elevation_mask_applied && static_cast<bool>(options.receiver_position);
   const auto channels = glonass_channels(real.header, sim.header);
   for (const auto& signal : *signals) {
     report.signals.push_back(compare_signal(signal, real_view, sim_view, pairs, channels, mask));
@@ -661,9 +697,11 @@ std::string format_comparison_table(const ComparisonReport& r) {
     }
     if (!per_system.empty()) per_system += ")";
     fmt::format_to(line,
-                   "# elevation mask: {:.1f} deg seen from REAL's APPROX POSITION XYZ; dropped {} "
+                   "# elevation mask: {:.1f} deg seen from {}; dropped {} "
                    "satellite-epochs below it and {} without an ephemeris{}\n",
-                   r.min_elevation_deg, r.below_mask_satellite_epochs,
+                   r.min_elevation_deg,
+                   r.mask_from_receiver_track ? "the receiver's track" : "REAL's APPROX POSITION XYZ",
+                   r.below_mask_satellite_epochs,
                    r.without_position_satellite_epochs, per_system);
   } else {
     fmt::format_to(line, "# elevation mask: none (no navigation data to compute elevations)\n");
@@ -743,6 +781,7 @@ std::string comparison_to_json(const ComparisonReport& r) {
        r.elevation_mask_applied ? nlohmann::json(r.min_elevation_deg) : nlohmann::json()},
       {"below_mask_satellite_epochs", r.below_mask_satellite_epochs},
       {"without_position_satellite_epochs", r.without_position_satellite_epochs},
+      {"from_receiver_track", r.mask_from_receiver_track},
       {"without_position_by_system", without_position}};
   j["residual_definition"] =
       "real - sim minus the per-epoch median over the system's satellites; abs_p68/abs_p95 are "

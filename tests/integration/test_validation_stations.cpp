@@ -14,6 +14,7 @@
 
 #include <fstream>
 #include <map>
+#include <set>
 
 #include "process.hpp"
 #include "skytrace/io/rinex_obs.hpp"
@@ -48,16 +49,20 @@ class ValidationStations : public ::testing::Test {
   // Runs `scenario` (examples/validation) and compares it with `real`; the JSON rows by signal.
   std::map<std::string, nlohmann::json> run_and_compare(const std::string& scenario, const std::string& real,
                                                         const std::vector<std::string>& navs,
-                                                        const std::string& signals) {
+                                                        const std::string& signals,
+                                                        const std::string& extra = "",
+                                                        std::filesystem::path* out_dir = nullptr) {
     if (!std::filesystem::exists(data_in_scenario() / real)) {
       return {};
     }
     const auto out = run_scenario(scenario);
+    if (out_dir != nullptr) *out_dir = out;
     std::string command = test::shell_quote(test::skytrace_executable().string()) + " compare " +
                           test::shell_quote((data_in_scenario() / real).string()) + " " +
                           test::shell_quote((out / "obs.rnx").string());
     for (const auto& nav : navs) command += " --nav " + test::shell_quote((data_in_scenario() / nav).string());
-    command += " --min-elevation-deg 10 --signals " + signals + " --json " + test::shell_quote((out / "c.json").string());
+    command += " --min-elevation-deg 10" + (signals.empty() ? std::string() : " --signals " + signals) + " " + extra +
+               " --json " + test::shell_quote((out / "c.json").string());
     const auto r = test::run_command(command);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     std::ifstream in(out / "c.json");
@@ -166,6 +171,68 @@ TEST_F(ValidationStations, SlacNetR9WithEsbcConstants) {
   EXPECT_EQ(rows.at("G1C").at("doppler_mps").at("count").get<int>(), 0);
   EXPECT_GT(rows.at("G1C").at("phase_difference_m").at("count").get<int>(), 1000);
   check(rows.at("G1C"), false, Limits{0.95, 0.01});
+}
+
+// Leave one out (docs/validation.md, scripts/validate-leave-one-out): recordings nobody fitted on,
+// every signal both files have, with the open-sky limits for them (overlap >= 95 % both
+// ways, code p68 <= 2.0 m; C/N0 cannot be compared: neither file has signal strengths). What is not
+// met is asserted at its measured size so that it cannot grow unseen.
+void expect_open_sky_limits(const nlohmann::json& row, double code_p68_m = 2.0) {
+  SCOPED_TRACE(row.dump(1));
+  EXPECT_GE(row.at("overlap").at("real_in_sim").get<double>(), 0.95);
+  EXPECT_GE(row.at("overlap").at("sim_in_real").get<double>(), 0.95);
+  EXPECT_LE(row.at("pseudorange_m").at("abs_p68").get<double>(), code_p68_m);
+}
+
+// GEONET 0759, Trimble 5700 + TRM29659.00 (antenna from the header's IGS name), RINEX 2.10, epochs
+// tagged up to 5 ms off the second (matched within 10 ms, moved with the simulated Doppler).
+// Measured: G1C p68 1.13 m, G2W 1.08 m, overlap 100 / 98.4 %.
+TEST_F(ValidationStations, LeaveOneOutGsi0759Trimble5700) {
+  const auto rows = run_and_compare("gsi0759-realistic.yaml", "real/gsi_0759_3040_2005092/07590920.05o",
+                                    {"real/gsi_0759_3040_2005092/07590920.05n"}, "", "--epoch-tolerance-ms 10");
+  if (rows.empty()) GTEST_SKIP() << "GSI data absent (../shared/data beside the checkout)";
+  ASSERT_EQ(rows.size(), 2u);
+  for (const char* signal : {"G1C", "G2W"}) {
+    expect_open_sky_limits(rows.at(signal));
+    EXPECT_GT(rows.at(signal).at("pseudorange_m").at("count").get<int>(), 700) << signal;
+  }
+}
+
+// KMS3 2022-159, PolaRx5 + ASH701945E_M, every signal of the scenario. Measured code p68 over the
+// limit: G5Q 2.86, R1C 2.03, R2C 2.92, R2P 2.76, C5P 2.05 m; the rest meets every limit, R3Q
+// included (GLONASS-K1 R11 and M+ R21 transmit L3OC: the other GLONASS satellites in view, plain M
+// and M+ whose L3 payload is off, do not).
+TEST_F(ValidationStations, LeaveOneOutKms3PolaRx5) {
+  std::filesystem::path out;
+  const auto rows = run_and_compare("kms3-realistic.yaml", "real/kms3_rinex4_2022159/KMS300DNK_R_20221591000_01H_30S_MO.rnx",
+                                    {"real/kms3_rinex4_2022159/KMS300DNK_R_20221591000_01H_MN.rnx"}, "", "", &out);
+  if (rows.empty()) GTEST_SKIP() << "KMS3 data absent (../shared/data beside the checkout)";
+  const std::map<std::string, double> measured = {
+      {"G5Q", 2.9}, {"R1C", 2.1}, {"R2C", 3.0}, {"R2P", 2.8}, {"C5P", 2.1}};
+  for (const char* signal : {"G1C", "G2L", "G2W", "G5Q", "E1C", "E5Q", "E6C", "E7Q", "E8Q", "R1C", "R1P", "R2C",
+                             "R2P", "R3Q", "C2I", "C5P", "C6I", "C7I"}) {
+    ASSERT_TRUE(rows.count(signal)) << signal;
+    const auto it = measured.find(signal);
+    expect_open_sky_limits(rows.at(signal), it == measured.end() ? 2.0 : it->second);
+  }
+  EXPECT_GT(rows.at("R3Q").at("pseudorange_m").at("count").get<int>(), 30);
+  // R3Q in the simulated file: R11 (K1 SVN 805) and R21 (M+ 855), not R03/R10/R13/R20 (plain M).
+  auto sim = io::read_rinex_obs(out / "obs.rnx");
+  ASSERT_TRUE(static_cast<bool>(sim));
+  std::set<int> with_l3;
+  size_t column = 0;
+  const auto& types = sim->header.observation_types.at(GnssSystem::kGlonass);
+  for (; column < types.size() && types[column].code != "C3Q"; ++column) {
+  }
+  ASSERT_LT(column, types.size());
+  for (const auto& epoch : sim->epochs) {
+    for (const auto& s : epoch.satellites) {
+      if (s.satellite.system == GnssSystem::kGlonass && column < s.values.size() && s.values[column].value.has_value()) {
+        with_l3.insert(s.satellite.number);
+      }
+    }
+  }
+  EXPECT_EQ(with_l3, (std::set<int>{11, 21}));
 }
 
 }  // namespace

@@ -415,6 +415,47 @@ TEST_F(Compare, EpochsMatchToOneMillisecond) {
   ASSERT_FALSE(report.ok());
 }
 
+// A moving receiver: without APPROX POSITION XYZ the mask looks from its track, and epochs outside
+// the track count as without position.
+TEST_F(Compare, ElevationMaskFromAMovingReceiversTrack) {
+  const FakeSky sky;
+  auto real = read_rinex_obs(real_);
+  auto sim = read_rinex_obs(sim_);
+  ASSERT_TRUE(real.ok() && sim.ok());
+  real->header.approx_position_ecef_m.reset();
+  CompareOptions options;
+  options.satellite_source = &sky;
+  options.min_elevation_deg = 10.0;
+  const Eigen::Vector3d station(kStationEcef_m[0], kStationEcef_m[1], kStationEcef_m[2]);
+  options.receiver_position = [&](const GnssTime&) -> std::optional<Eigen::Vector3d> { return station; };
+  auto report = compare_observations(*real, *sim, options);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_TRUE(report->mask_from_receiver_track);
+  EXPECT_EQ(report->below_mask_satellite_epochs, 10u);
+  EXPECT_EQ(row(*report, "G1C").real_tracked, 40u);
+  options.receiver_position = [](const GnssTime&) -> std::optional<Eigen::Vector3d> { return std::nullopt; };
+  report = compare_observations(*real, *sim, options);
+  ASSERT_TRUE(report.ok());
+  EXPECT_EQ(row(*report, "G1C").real_tracked, 0u);
+  EXPECT_GT(report->without_position_satellite_epochs, 40u);
+}
+
+// Epochs a few ms apart match within a wider tolerance.
+TEST_F(Compare, EpochToleranceMatchesUnsteeredClocks) {
+  auto real = read_rinex_obs(real_);
+  auto sim = read_rinex_obs(sim_);
+  ASSERT_TRUE(real.ok() && sim.ok());
+  for (auto& e : real->epochs) e.time += 0.004;
+  CompareOptions options;
+  EXPECT_FALSE(compare_observations(*real, *sim, options).ok());
+  options.epoch_tolerance_s = 0.01;
+  auto report = compare_observations(*real, *sim, options);
+  ASSERT_TRUE(report.ok()) << report.error().message;
+  EXPECT_EQ(report->common_epochs, 10u);
+  options.epoch_tolerance_s = 1.0;
+  EXPECT_FALSE(compare_observations(*real, *sim, options).ok());
+}
+
 TEST_F(Compare, ClearErrors) {
   // No common epochs: both spans named.
   const auto later = dir_ / "later.rnx";

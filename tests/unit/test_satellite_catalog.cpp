@@ -179,6 +179,12 @@ TEST(SatelliteCatalog, GlonassCdmaOnlyOnNewerBlocks) {
   EXPECT_TRUE(transmits(sat("R01"), sig("R1C"), t));
   EXPECT_TRUE(transmits(sat("R01"), sig("R2C"), t));
   EXPECT_TRUE(transmits(sat("R01"), sig("R2P"), t));
+  // L3OC is a yes where public recordings show it: R09 (K1 802) and R21 (M+ 855); R12 (M+ 858)
+  // stays uncertain (on in 2020, off in 2022).
+  EXPECT_TRUE(transmits(sat("R09"), sig("R3Q"), t));
+  EXPECT_TRUE(transmits(sat("R21"), sig("R3Q"), t));
+  EXPECT_EQ(signal_availability(sat("R12"), sig("R3Q"), t), SignalAvailability::kUncertain);
+  EXPECT_FALSE(transmits(sat("R01"), sig("R3Q"), t));
   // R26 in 2024: the first GLONASS-K2 (SVN 803, launched 2023-08-07).
   EXPECT_EQ(satellite_info(sat("R26"), gpst_day(2024, 5, 3))->block_id, SatelliteBlock::kGlonassK2);
 }

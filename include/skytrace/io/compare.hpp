@@ -10,11 +10,15 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <limits>
+#include <optional>
 #include <map>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include <Eigen/Core>
 
 #include "skytrace/core/error.hpp"
 #include "skytrace/core/satellite.hpp"
@@ -35,6 +39,16 @@ struct CompareOptions {
   // nullptr: no mask. Satellite-epochs the source has no state for are dropped and counted.
   const orbits::SatelliteStateSource* satellite_source = nullptr;
   double min_elevation_deg = 10.0;
+  // A moving receiver: its ECEF position at a time (std::nullopt outside the track). When set, the
+  // elevation mask looks from the position at each epoch instead of APPROX POSITION XYZ (which a
+  // moving receiver's file leaves empty or sets to one point of the drive). The satellite-epochs of
+  // epochs outside the track count as without position.
+  std::function<std::optional<Eigen::Vector3d>(const GnssTime&)> receiver_position;
+  // Epochs of the two files within this many seconds are one epoch (a receiver whose clock is not
+  // steered time-tags its epochs a few ms off the full second). The real pseudorange and phase are
+  // moved to the simulated epoch's time with the Doppler (the simulated one, else the real one);
+  // without a Doppler on either side they are compared as they are.
+  double epoch_tolerance_s = 1e-3;
 };
 
 // Statistics of residuals; the unit is the one in the name of the member holding them.
@@ -93,6 +107,8 @@ struct ComparisonReport {
   GnssTime last_common_epoch;
   bool elevation_mask_applied = false;
   double min_elevation_deg = 0.0;
+  // The mask looked from the receiver's position at each epoch (CompareOptions::receiver_position).
+  bool mask_from_receiver_track = false;
   // Distinct satellite-epochs (of either file, selected systems) dropped by the mask, and those
   // dropped because the satellite source had no state for them.
   size_t below_mask_satellite_epochs = 0;
