@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "skytrace/core/constants.hpp"
+#include "skytrace/core/decimal_text.hpp"
 #include "skytrace/core/output_file.hpp"
 #include "skytrace/io/fix_csv.hpp"
 #include "skytrace/io/nmea.hpp"
@@ -99,19 +100,23 @@ std::string csv_text(const std::string& text);
 void append_paths(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
   const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
   for (const auto& sat : epoch.satellites) {
+    const std::string sat_name = sat.satellite.to_string();
     for (size_t k = 0; k < sat.paths.size(); ++k) {
       const SignalPath& p = sat.paths[k];
-      const bool second = p.reflections >= 2;
-      fmt::format_to(std::back_inserter(out),
-                     "{},{},{},{},{},{},{:.4f},{:.2f},{:.2f},{:.2f},{:.4f},{:.4f},{:.5f},{:.3f},{:.3f},{:.3f},{},{},{},{},{},{:.3f},{:.2f},{:.2f}\n",
-                     time, receiver_name, sat.satellite.to_string(), k, path_type_name(p.type), p.reflections,
-                     p.excess_delay_m, p.relative_power_db(), power_db(p.rhcp_amplitude), power_db(p.lhcp_amplitude),
-                     sat.path_directions[k].azimuth_deg, sat.path_directions[k].elevation_deg,
-                     sat.path_delay_rates_mps[k], p.point_m.x(), p.point_m.y(), p.point_m.z(),
-                     second ? fmt::format("{:.3f}", p.second_point_m.x()) : "", second ? fmt::format("{:.3f}", p.second_point_m.y()) : "",
-                     second ? fmt::format("{:.3f}", p.second_point_m.z()) : "", csv_text(p.object),
-                     p.type == PathType::kDirect ? "" : world::material_class_name(p.material), p.diffraction_v, p.diffraction_loss_db,
-                     p.vegetation_attenuation_db);
+      CsvRow row(out);
+      row.text(time).text(receiver_name).text(sat_name).integer(static_cast<std::int64_t>(k)).text(path_type_name(p.type));
+      row.integer(p.reflections).fixed(p.excess_delay_m, 4).fixed(p.relative_power_db(), 2);
+      row.fixed(power_db(p.rhcp_amplitude), 2).fixed(power_db(p.lhcp_amplitude), 2);
+      row.fixed(sat.path_directions[k].azimuth_deg, 4).fixed(sat.path_directions[k].elevation_deg, 4);
+      row.fixed(sat.path_delay_rates_mps[k], 5).fixed(p.point_m.x(), 3).fixed(p.point_m.y(), 3).fixed(p.point_m.z(), 3);
+      if (p.reflections >= 2) {
+        row.fixed(p.second_point_m.x(), 3).fixed(p.second_point_m.y(), 3).fixed(p.second_point_m.z(), 3);
+      } else {
+        row.empty(3);
+      }
+      row.text(csv_text(p.object)).text(p.type == PathType::kDirect ? std::string_view() : world::material_class_name(p.material));
+      row.fixed(p.diffraction_v, 3).fixed(p.diffraction_loss_db, 2).fixed(p.vegetation_attenuation_db, 2);
+      row.end();
     }
   }
 }
@@ -131,57 +136,77 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
   const double c = constants::kSpeedOfLight_mps;
   const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
   const auto& rx = epoch.receiver;
-  const std::string rx_clock = fmt::format("{:.4f}", c * epoch.receiver_clock.bias_s);
-  const std::string receiver_part =
-      fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.5f},{:.5f},{:.6f}", rx.position_m.x(), rx.position_m.y(), rx.position_m.z(),
-                  rx.velocity_mps.x(), rx.velocity_mps.y(), rx.velocity_mps.z(), c * epoch.receiver_clock.drift_s_per_s);
-  constexpr const char* kNoGeometry = ",,,,,";          // 6 empty geometry cells
-  constexpr const char* kNoSignalValues = ",,,,,,,";     // 8 empty cells from code noise to C/N0
+  // Cells shared by every row of the epoch, formatted once.
+  std::string rx_clock;
+  append_fixed(rx_clock, c * epoch.receiver_clock.bias_s, 4);
+  std::string receiver_part;
+  CsvRow(receiver_part)
+      .fixed(rx.position_m.x(), 4)
+      .fixed(rx.position_m.y(), 4)
+      .fixed(rx.position_m.z(), 4)
+      .fixed(rx.velocity_mps.x(), 5)
+      .fixed(rx.velocity_mps.y(), 5)
+      .fixed(rx.velocity_mps.z(), 5)
+      .fixed(c * epoch.receiver_clock.drift_s_per_s, 6);
+  constexpr std::string_view kNoGeometry = ",,,,,";  // 6 empty geometry cells
+  constexpr int kSignalValueCells = 8;               // code noise to C/N0
+  std::string geometry, signal_geometry;
   for (const auto& sat : epoch.satellites) {
-    const std::string status(receiver::to_string(sat.status));
+    const std::string_view status = receiver::to_string(sat.status);
     const std::string sat_name = sat.satellite.to_string();
     const bool has_geometry = !(sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris);
     // Geometry cells with a satellite clock: the satellite's, and in a signal's row the clock that
     // signal got (the same one unless the generator gave it another: formatted again only then).
-    auto geometry_with = [&](double satellite_clock_m) {
-      return has_geometry ? fmt::format("{:.4f},{:.4f},{:.4f},{:.5f},{:.4f},{:.4f}", sat.direction.azimuth_deg,
-                                        sat.direction.elevation_deg, sat.range_m, sat.range_rate_mps,
-                                        satellite_clock_m, sat.relativistic_m)
-                          : std::string(kNoGeometry);
+    const auto geometry_with = [&](std::string& cells, double satellite_clock_m) {
+      cells.clear();
+      if (!has_geometry) {
+        cells = kNoGeometry;
+        return;
+      }
+      CsvRow(cells)
+          .fixed(sat.direction.azimuth_deg, 4)
+          .fixed(sat.direction.elevation_deg, 4)
+          .fixed(sat.range_m, 4)
+          .fixed(sat.range_rate_mps, 5)
+          .fixed(satellite_clock_m, 4)
+          .fixed(sat.relativistic_m, 4);
     };
-    const std::string geometry = geometry_with(sat.satellite_clock_m);
+    geometry_with(geometry, sat.satellite_clock_m);
+    const std::string_view path_kind = receiver::to_string(sat.path_kind);
     // A row per signal its navigation record declares unusable (the others may be tracked).
     for (const auto& unhealthy : sat.unhealthy_signals) {
-      fmt::format_to(std::back_inserter(out), "{},{},{},{},unhealthy,{},,,{},{},{},{},{:.2f},{},{},,,,\n", time,
-                     receiver_name, sat_name, unhealthy.signal.to_string(), geometry,
-                     fmt::format("{:.4f}", sat.troposphere_m), rx_clock, kNoSignalValues, receiver_part,
-                     sat.vegetation_attenuation_db, csv_text(unhealthy.reason), receiver::to_string(sat.path_kind));
+      CsvRow row(out);
+      row.text(time).text(receiver_name).text(sat_name).text(unhealthy.signal.to_string()).text("unhealthy").raw(geometry);
+      row.empty(2).fixed(sat.troposphere_m, 4).text(rx_clock).empty(kSignalValueCells).raw(receiver_part);
+      row.fixed(sat.vegetation_attenuation_db, 2).text(csv_text(unhealthy.reason)).text(path_kind).empty(4).end();
     }
     if (sat.signals.empty() && sat.status == receiver::SatelliteStatus::kUnhealthy) continue;  // said above
     if (sat.signals.empty()) {
       // One row for the satellite: why it is not observed, with the geometry when known.
-      const std::string atmosphere = sat.status == receiver::SatelliteStatus::kTracked ||
-                                             sat.status == receiver::SatelliteStatus::kNoSignal ||
-                                             sat.waiting_for_ephemeris
-                                         ? fmt::format("{:.4f},{:.4f}", sat.ionosphere_l1_m, sat.troposphere_m)
-                                         : std::string(",");
-      fmt::format_to(std::back_inserter(out), "{},{},{},,{},{},,{},{},{},{},{:.2f},{},{},,,,\n", time, receiver_name, sat_name,
-                     status, geometry, atmosphere, rx_clock, kNoSignalValues, receiver_part,
-                     sat.vegetation_attenuation_db, csv_text(sat.detail), receiver::to_string(sat.path_kind));
+      CsvRow row(out);
+      row.text(time).text(receiver_name).text(sat_name).empty().text(status).raw(geometry).empty();
+      if (sat.status == receiver::SatelliteStatus::kTracked || sat.status == receiver::SatelliteStatus::kNoSignal ||
+          sat.waiting_for_ephemeris) {
+        row.fixed(sat.ionosphere_l1_m, 4).fixed(sat.troposphere_m, 4);
+      } else {
+        row.empty(2);
+      }
+      row.text(rx_clock).empty(kSignalValueCells).raw(receiver_part);
+      row.fixed(sat.vegetation_attenuation_db, 2).text(csv_text(sat.detail)).text(path_kind).empty(4).end();
       continue;
     }
     for (const auto& m : sat.signals) {
-      fmt::format_to(std::back_inserter(out),
-                     "{},{},{},{},{},{},{:.4f},{:.4f},{:.4f},{},{:.4f},{:.5f},{:.5f},{},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.2f},\n",
-                     time, receiver_name, sat_name, m.signal.to_string(), status,
-                     m.satellite_clock_m == sat.satellite_clock_m ? geometry : geometry_with(m.satellite_clock_m),
-                     m.group_delay_m,
-                     m.ionosphere_code_m, sat.troposphere_m, rx_clock, m.code_noise_m, m.phase_noise_m,
-                     m.doppler_noise_mps, m.ambiguity_cycles, m.pseudorange_m, m.carrier_phase_cycles, m.doppler_hz,
-                     m.cn0_dbhz, receiver_part, sat.vegetation_attenuation_db);
-      out.pop_back();  // the row's newline: the multipath cells follow
-      fmt::format_to(std::back_inserter(out), ",{},{:.4f},{:.4f},{:.2f},{:.4f}\n", receiver::to_string(sat.path_kind),
-                     m.code_multipath_m, m.phase_multipath_m, m.multipath_power_db, m.antenna_phase_centre_m);
+      const bool own_clock = m.satellite_clock_m != sat.satellite_clock_m;
+      if (own_clock) geometry_with(signal_geometry, m.satellite_clock_m);
+      CsvRow row(out);
+      row.text(time).text(receiver_name).text(sat_name).text(m.signal.to_string()).text(status);
+      row.raw(own_clock ? signal_geometry : geometry);
+      row.fixed(m.group_delay_m, 4).fixed(m.ionosphere_code_m, 4).fixed(sat.troposphere_m, 4).text(rx_clock);
+      row.fixed(m.code_noise_m, 4).fixed(m.phase_noise_m, 5).fixed(m.doppler_noise_mps, 5).integer(m.ambiguity_cycles);
+      row.fixed(m.pseudorange_m, 4).fixed(m.carrier_phase_cycles, 4).fixed(m.doppler_hz, 4).fixed(m.cn0_dbhz, 3);
+      row.raw(receiver_part).fixed(sat.vegetation_attenuation_db, 2).empty().text(path_kind);
+      row.fixed(m.code_multipath_m, 4).fixed(m.phase_multipath_m, 4).fixed(m.multipath_power_db, 2);
+      row.fixed(m.antenna_phase_centre_m, 4).end();
     }
   }
 }
