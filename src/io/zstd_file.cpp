@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "skytrace/core/output_file.hpp"
+
 namespace skytrace::io {
 
 struct ZstdFileWriter::Context {
@@ -42,7 +44,7 @@ Result<std::unique_ptr<ZstdFileWriter>> ZstdFileWriter::create(const std::filesy
   if (workers > 0 && !set(ZSTD_c_nbWorkers, workers)) workers = 0;
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (file == nullptr) {
-    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + std::strerror(errno) + ")");
+    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + output_errno_text(errno) + ")");
   }
   return std::unique_ptr<ZstdFileWriter>(new ZstdFileWriter(path, file, std::move(context), workers));
 }
@@ -61,7 +63,7 @@ Status ZstdFileWriter::drain(int end_op, std::string_view bytes) {
     const size_t remaining = ZSTD_compressStream2(context_->cctx, &out, &in, mode);
     if (ZSTD_isError(remaining) != 0U) return error(std::string("zstd: ") + ZSTD_getErrorName(remaining));
     if (out.pos > 0 && std::fwrite(out_.data(), 1, out.pos, file_) != out.pos) {
-      return error(std::string("write failed (") + std::strerror(errno) + ")");
+      return error("write failed (" + output_errno_text(errno) + ")");
     }
     const bool done = mode == ZSTD_e_end ? remaining == 0 : in.pos == in.size;
     if (done) return Ok{};
@@ -82,7 +84,7 @@ Status ZstdFileWriter::close() {
   file_ = nullptr;
   context_.reset();
   if (!st) return st;
-  if (!flushed || !closed) return error(std::string("write failed (") + std::strerror(saved_errno) + ")");
+  if (!flushed || !closed) return error("write failed (" + output_errno_text(saved_errno) + ")");
   return Ok{};
 }
 

@@ -29,7 +29,7 @@ constexpr size_t kFlushBytes = 1u << 20;
 Result<std::unique_ptr<StagedFile>> StagedFile::create(const std::filesystem::path& path) {
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (file == nullptr) {
-    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + std::strerror(errno) + ")");
+    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + output_errno_text(errno) + ")");
   }
   return std::unique_ptr<StagedFile>(new StagedFile(path, file));
 }
@@ -42,7 +42,7 @@ Status StagedFile::flush() {
   if (buffer_.empty()) return Ok{};
   if (file_ == nullptr) return make_error(ErrorCode::kOutput, path_.string() + ": written after it was closed");
   if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
-    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + std::strerror(errno) + ")");
+    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + output_errno_text(errno) + ")");
   }
   buffer_.clear();
   return Ok{};
@@ -63,7 +63,7 @@ Status StagedFile::close() {
   file_ = nullptr;
   if (!st) return st;
   if (!flushed || !closed) {
-    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + std::strerror(saved_errno) + ")");
+    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + output_errno_text(saved_errno) + ")");
   }
   return Ok{};
 }
