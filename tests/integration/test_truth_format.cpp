@@ -62,6 +62,32 @@ TEST_F(TruthFormat, CompressedByDefaultWithThePlainContent) {
   EXPECT_NE(read_bytes(dir_ / "csv" / "summary.json").find("\"truth_format\": \"csv\""), std::string::npos);
 }
 
+// Real readers of the file: the zstd tool (scripts/setup installs it) checks the frame and its
+// checksum and gives the plain bytes; pandas (when Debian's python3-pandas and python3-zstandard are
+// installed) opens it in the documented one line.
+TEST_F(TruthFormat, RealReadersOpenTheCompressedTruth) {
+  if (test::run_command("command -v zstd").exit_code != 0) GTEST_SKIP() << "zstd (the command) not installed: scripts/setup";
+  auto r = run("zst", "");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run("csv", "--truth-format csv");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto zst = dir_ / "zst" / "truth.csv.zst";
+  r = test::run_command("zstd -q -t " + test::shell_quote(zst.string()));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_command("zstd -q -dc " + test::shell_quote(zst.string()) + " > " + test::shell_quote((dir_ / "unpacked.csv").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(read_bytes(dir_ / "unpacked.csv") == read_bytes(dir_ / "csv" / "truth.csv"));
+  if (test::run_command("/usr/bin/python3 -c 'import pandas, zstandard'").exit_code != 0) {
+    GTEST_SKIP() << "pandas or zstandard (python3-pandas, python3-zstandard) not installed: the zstd tool was checked";
+  }
+  r = test::run_command("/usr/bin/python3 -c " +
+                        test::shell_quote("import pandas as pd, sys; a = pd.read_csv(sys.argv[1]); b = pd.read_csv(sys.argv[2]); "
+                                          "print(len(a), len(a.columns), a.equals(b))") +
+                        " " + test::shell_quote(zst.string()) + " " + test::shell_quote((dir_ / "csv" / "truth.csv").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(" 37 True"), std::string::npos) << r.output;
+}
+
 TEST_F(TruthFormat, UnknownFormatIsRefusedNamingTheKey) {
   for (const char* arguments : {"--set output.truth_format=parquet", "--truth-format parquet"}) {
     const auto r = run("bad", arguments);
