@@ -17,12 +17,15 @@ struct RunArgs {
   std::string scenario;
   std::string out_dir;
   bool no_truth = false;
+  std::string truth_format;  // --truth-format: output.truth_format
   bool quiet = false;
   std::vector<std::string> overrides;
 };
 
 int run(const RunArgs& args) {
-  auto scenario = sim::load_scenario(args.scenario, args.overrides);
+  std::vector<std::string> overrides = args.overrides;
+  if (!args.truth_format.empty()) overrides.push_back("output.truth_format=" + args.truth_format);
+  auto scenario = sim::load_scenario(args.scenario, overrides);
   if (!scenario) return report_error(scenario.error());
   sim::RunOptions options;
   options.write_truth = !args.no_truth;
@@ -54,10 +57,13 @@ int run(const RunArgs& args) {
 
 void register_run_command(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<RunArgs>();
-  CLI::App* cmd = app.add_subcommand("run", "Simulate a scenario: writes obs.rnx, nav.rnx, truth.csv and summary.json");
+  CLI::App* cmd = app.add_subcommand("run", "Simulate a scenario: writes obs.rnx, nav.rnx, truth.csv.zst and summary.json");
   cmd->add_option("scenario", args->scenario, "Scenario YAML file (see docs/scenario.md)")->required();
   cmd->add_option("--out", args->out_dir, "Output folder (created if missing)")->required();
-  cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv");
+  cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv.zst (nor paths.csv.zst)");
+  cmd->add_option("--truth-format", args->truth_format,
+                  "csv.zst (default: truth.csv.zst, paths.csv.zst) or csv (plain truth.csv, paths.csv); "
+                  "the same as --set output.truth_format=FORMAT");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
   cmd->add_option("--set", args->overrides,
                   "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable), e.g. --set models.ionosphere=none "

@@ -12,6 +12,12 @@
 #include <system_error>
 
 namespace skytrace {
+std::string output_errno_text(int error_number) {
+  if (error_number == ENOSPC) return "no space left on the device";
+  if (error_number == EFBIG) return "file size limit exceeded";
+  return std::strerror(error_number);
+}
+
 namespace {
 
 constexpr int kMaxSymlinkHops = 40;  // Linux's MAXSYMLINKS
@@ -20,11 +26,7 @@ Error output_error(const std::filesystem::path& path, const std::string& what) {
   return make_error(ErrorCode::kOutput, path.string() + ": " + what);
 }
 
-std::string errno_text(int error_number) {
-  if (error_number == ENOSPC) return "no space left on the device";
-  if (error_number == EFBIG) return "file size limit exceeded";
-  return std::strerror(error_number);
-}
+std::string errno_text(int error_number) { return output_errno_text(error_number); }
 
 // Writes all of `data` to `fd`, retrying after interruptions and short writes.
 bool write_all(int fd, const char* data, size_t size, int& error_number) {

@@ -361,13 +361,14 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   }
 
   if (auto output = root.child("output")) {
-    output->expect_keys({"rinex_version", "fix", "nmea", "rtcm3", "mcap", "mcap_compression"});
+    output->expect_keys({"rinex_version", "fix", "nmea", "rtcm3", "mcap", "mcap_compression", "truth_format"});
     if (auto c = output->child("rinex_version")) s.output.rinex_version = c->as_choice({"3.04", "4.00"});
     if (auto c = output->child("fix")) s.output.fix = c->as_bool();
     if (auto c = output->child("nmea")) s.output.nmea = c->as_bool();
     if (auto c = output->child("rtcm3")) s.output.rtcm3 = c->as_bool();
     if (auto c = output->child("mcap")) s.output.mcap = c->as_bool();
     if (auto c = output->child("mcap_compression")) s.output.mcap_compression = c->as_choice({"zstd", "lz4", "none"});
+    if (auto c = output->child("truth_format")) s.output.truth_format = c->as_choice({"csv.zst", "csv"});
   }
   if (auto c = root.child("seed")) {
     const double seed = c->as_double_in(0.0, 1.8e19);
@@ -575,7 +576,8 @@ std::string scenario_to_json(const Scenario& s) {
                  {"nmea", s.output.nmea},
                  {"rtcm3", s.output.rtcm3},
                  {"mcap", s.output.mcap},
-                 {"mcap_compression", s.output.mcap_compression}};
+                 {"mcap_compression", s.output.mcap_compression},
+                 {"truth_format", s.output.truth_format}};
   j["seed"] = s.seed;
   return j.dump(2);
 }

@@ -14,6 +14,7 @@
 #include "skytrace/io/nmea.hpp"
 #include "skytrace/io/report.hpp"
 #include "skytrace/io/rtcm3.hpp"
+#include "skytrace/io/zstd_file.hpp"
 #include "skytrace/sim/run.hpp"
 #include "skytrace/sim/streams.hpp"
 #include "skytrace/sim/world_setup.hpp"
@@ -29,7 +30,7 @@ constexpr size_t kFlushBytes = 1u << 20;
 Result<std::unique_ptr<StagedFile>> StagedFile::create(const std::filesystem::path& path) {
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (file == nullptr) {
-    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + std::strerror(errno) + ")");
+    return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + output_errno_text(errno) + ")");
   }
   return std::unique_ptr<StagedFile>(new StagedFile(path, file));
 }
@@ -42,7 +43,7 @@ Status StagedFile::flush() {
   if (buffer_.empty()) return Ok{};
   if (file_ == nullptr) return make_error(ErrorCode::kOutput, path_.string() + ": written after it was closed");
   if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
-    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + std::strerror(errno) + ")");
+    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + output_errno_text(errno) + ")");
   }
   buffer_.clear();
   return Ok{};
@@ -63,7 +64,7 @@ Status StagedFile::close() {
   file_ = nullptr;
   if (!st) return st;
   if (!flushed || !closed) {
-    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + std::strerror(saved_errno) + ")");
+    return make_error(ErrorCode::kOutput, path_.string() + ": write failed (" + output_errno_text(saved_errno) + ")");
   }
   return Ok{};
 }
@@ -211,10 +212,22 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
   }
 }
 
+// A table written zstd-compressed (output.truth_format csv.zst): libzstd compresses on a thread of
+// its own, so the run's writer thread only formats the rows (docs/performance.md).
+class CompressedFile final : public ByteStream {
+ public:
+  explicit CompressedFile(std::unique_ptr<io::ZstdFileWriter> writer) : writer_(std::move(writer)) {}
+  Status write(std::string_view bytes) override { return writer_->write(bytes); }
+  Status close() override { return writer_->close(); }
+
+ private:
+  std::unique_ptr<io::ZstdFileWriter> writer_;
+};
+
 // truth.csv: every term of every signal of every receiver (RunOptions::write_truth).
 class TruthSink final : public EpochSink {
  public:
-  explicit TruthSink(std::unique_ptr<StagedFile> file) : file_(std::move(file)) {}
+  explicit TruthSink(std::unique_ptr<ByteStream> file) : file_(std::move(file)) {}
   Status add(const SinkEpoch& e) override {
     text_.clear();
     append_truth(text_, *e.observations, e.receiver->settings->name);
@@ -223,14 +236,14 @@ class TruthSink final : public EpochSink {
   Status finish() override { return file_->close(); }
 
  private:
-  std::unique_ptr<StagedFile> file_;
+  std::unique_ptr<ByteStream> file_;
   std::string text_;
 };
 
 // paths.csv (models.multipath): every path of every satellite-epoch with any path.
 class PathsSink final : public EpochSink {
  public:
-  explicit PathsSink(std::unique_ptr<StagedFile> file) : file_(std::move(file)) {}
+  explicit PathsSink(std::unique_ptr<ByteStream> file) : file_(std::move(file)) {}
   Status add(const SinkEpoch& e) override {
     text_.clear();
     append_paths(text_, *e.observations, e.receiver->settings->name);
@@ -239,7 +252,7 @@ class PathsSink final : public EpochSink {
   Status finish() override { return file_->close(); }
 
  private:
-  std::unique_ptr<StagedFile> file_;
+  std::unique_ptr<ByteStream> file_;
   std::string text_;
 };
 
@@ -394,12 +407,21 @@ class ReportSink final : public EpochSink {
   io::ReportBuilder report_;
 };
 
+// A table of the truth (truth.csv, paths.csv): NAME.zst when output.truth_format is csv.zst, else NAME.
 template <typename Sink>
-Result<std::unique_ptr<EpochSink>> make_file_sink(const RunContext& c, const char* name, const char* header) {
-  auto file = StagedFile::create(c.staging_dir / name);
-  if (!file) return file.error();
-  if (auto st = (*file)->write(header); !st) return st.error();
-  return std::unique_ptr<EpochSink>(std::make_unique<Sink>(std::move(*file)));
+Result<std::unique_ptr<EpochSink>> make_table_sink(const RunContext& c, const char* name, const char* header) {
+  std::unique_ptr<ByteStream> stream;
+  if (c.scenario->output.truth_format == "csv") {
+    auto file = StagedFile::create(c.staging_dir / name);
+    if (!file) return file.error();
+    stream = std::move(*file);
+  } else {
+    auto file = io::ZstdFileWriter::create(c.staging_dir / (std::string(name) + ".zst"));
+    if (!file) return file.error();
+    stream = std::make_unique<CompressedFile>(std::move(*file));
+  }
+  if (auto st = stream->write(header); !st) return st.error();
+  return std::unique_ptr<EpochSink>(std::make_unique<Sink>(std::move(stream)));
 }
 
 }  // namespace
@@ -450,10 +472,10 @@ Status SinkGroup::finish() {
 const std::vector<SinkKind>& run_sink_table() {
   static const std::vector<SinkKind> table = {
       {"obs.rnx", [](const RunContext&) { return true; }, false, &RinexObsSink::make},
-      {"truth.csv", [](const RunContext& c) { return c.write_truth; }, false,
-       [](const RunContext& c) { return make_file_sink<TruthSink>(c, "truth.csv", kTruthHeader); }},
-      {"paths.csv", [](const RunContext& c) { return c.write_truth && c.scenario->models.multipath; }, false,
-       [](const RunContext& c) { return make_file_sink<PathsSink>(c, "paths.csv", kPathsHeader); }},
+      {"truth.csv(.zst)", [](const RunContext& c) { return c.write_truth; }, false,
+       [](const RunContext& c) { return make_table_sink<TruthSink>(c, "truth.csv", kTruthHeader); }},
+      {"paths.csv(.zst)", [](const RunContext& c) { return c.write_truth && c.scenario->models.multipath; }, false,
+       [](const RunContext& c) { return make_table_sink<PathsSink>(c, "paths.csv", kPathsHeader); }},
       {"obs.rtcm3", [](const RunContext& c) { return c.scenario->output.rtcm3; }, false,
        [](const RunContext& c) {
          return per_receiver_files(c, "obs", ".rtcm3", [&](const SinkReceiver& rx) {

@@ -59,7 +59,7 @@ TEST_F(Cli, HelpAndVersion) {
 TEST_F(Cli, GoodScenarioWritesAllOutputs) {
   const auto r = run(write_scenario(dir_, "", ""));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* name : {"obs.rnx", "nav.rnx", "truth.csv", "fix.csv", "summary.json", "report.html", "skyplot.svg"}) {
+  for (const char* name : {"obs.rnx", "nav.rnx", "truth.csv.zst", "fix.csv", "summary.json", "report.html", "skyplot.svg"}) {
     EXPECT_TRUE(std::filesystem::exists(dir_ / "out" / name)) << name;
   }
   // Nothing else (no staging folder) is left behind.

@@ -17,6 +17,7 @@
 
 #include "process.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -56,7 +57,7 @@ struct Table {
 
 Table read_csv(const std::filesystem::path& path) {
   Table t;
-  std::ifstream in(path);
+  std::istringstream in(test::read_zst_text(path));
   std::string line;
   if (!std::getline(in, line)) return t;
   const auto header = split_csv(line);
@@ -82,8 +83,8 @@ TEST(MultipathCanyon, NlosExcessIsTheSingleBounceGeometry) {
                                    " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
 
-  const Table truth = read_csv(out / "truth.csv");
-  const Table paths = read_csv(out / "paths.csv");
+  const Table truth = read_csv(out / "truth.csv.zst");
+  const Table paths = read_csv(out / "paths.csv.zst");
   ASSERT_FALSE(truth.rows.empty());
   ASSERT_FALSE(paths.rows.empty());
   for (const char* name : {"path_type", "code_multipath_m", "phase_multipath_m", "multipath_power_db"}) {

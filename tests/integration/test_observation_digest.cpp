@@ -5,6 +5,8 @@
 // truth.csv. The generator was split into stages (issue #13) with these outputs byte-identical.
 // truth.csv's digests were re-recorded when it gained its last column antenna_pc_m (ANTEX phase
 // centres, issue #13): obs.rnx unchanged, truth.csv the old rows plus that column (0.0000 or empty).
+// The run writes truth.csv.zst (output.truth_format csv.zst, issue #21): the digest is of its
+// decompressed content, the same bytes as the plain truth.csv (tests/integration/test_truth_format).
 //
 // When a model change is intended: check the new outputs (skytrace compare, the report), then
 // record the digests this test prints on failure, and say so in the commit message.
@@ -21,6 +23,7 @@
 
 #include "process.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -65,7 +68,7 @@ Digests run_quickstart(const std::string& name, const std::string& sets) {
   EXPECT_NE(header_end, std::string::npos);
   const std::string records = header_end == std::string::npos ? obs : obs.substr(obs.find('\n', header_end) + 1);
   EXPECT_GT(records.size(), 10000u);
-  return Digests{hex(fnv1a64(records)), hex(fnv1a64(read_bytes(out / "truth.csv")))};
+  return Digests{hex(fnv1a64(records)), hex(fnv1a64(test::read_zst_text(out / "truth.csv.zst")))};
 }
 
 TEST(ObservationDigest, QuickstartMinute) {

@@ -20,6 +20,7 @@
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -127,7 +128,7 @@ TEST_F(OneClockPerSatelliteEsbc, GalileoE1E5aAndE5bKeepOneClockAcrossTheRecordCh
   // truth.csv: E31's signals share one sat_clock_m at every epoch, and the E1 - E5a difference of
   // the clock each code sees (sat_clock - group delay) is constant: (gamma15 - 1) BGD(E1,E5a) of
   // the I/NAV record in force, which does not change for E31 that hour.
-  std::ifstream truth(out / "truth.csv");
+  std::istringstream truth(test::read_zst_text(out / "truth.csv.zst"));
   std::string line;
   std::getline(truth, line);
   std::map<std::string, std::map<std::string, std::pair<double, double>>> rows;  // time -> signal -> (clock, delay)

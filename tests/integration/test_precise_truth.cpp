@@ -19,6 +19,7 @@
 #include "rtklib.hpp"
 #include "skytrace/core/frames.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -101,9 +102,9 @@ std::filesystem::path filtered_clock_file(const std::filesystem::path& source, c
   return target;
 }
 
-// One row of truth.csv per (satellite, signal) of an epoch: the columns by name.
+// One row of truth.csv(.zst) per (satellite, signal) of an epoch: the columns by name.
 std::map<std::string, std::vector<std::string>> truth_rows(const std::filesystem::path& truth, const std::string& epoch) {
-  std::ifstream in(truth);
+  std::istringstream in(test::read_zst_text(truth));
   std::string line;
   std::map<std::string, std::vector<std::string>> rows;
   while (std::getline(in, line)) {
@@ -194,8 +195,8 @@ TEST_F(PreciseCoverageCli, SatellitesTheClockFileLacksOrInterruptsKeepTheBroadca
             0);
   int compared = 0;
   for (const char* epoch : {"2020-06-25T00:00:00", "2020-06-25T00:25:00", "2020-06-25T01:00:00"}) {
-    const auto p = truth_rows(precise / "truth.csv", epoch);
-    const auto b = truth_rows(broadcast / "truth.csv", epoch);
+    const auto p = truth_rows(precise / "truth.csv.zst", epoch);
+    const auto b = truth_rows(broadcast / "truth.csv.zst", epoch);
     for (const char* key : {"G05 G1C", "G07 G1C"}) {
       if (p.count(key) == 0) continue;
       ASSERT_EQ(b.count(key), 1u) << key;

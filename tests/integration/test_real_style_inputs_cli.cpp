@@ -16,6 +16,7 @@
 #include "process.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -27,7 +28,9 @@ std::string skytrace_cmd() { return test::shell_quote(test::skytrace_executable(
 std::string q(const std::filesystem::path& p) { return test::shell_quote(p.string()); }
 
 std::vector<std::string> read_lines(const std::filesystem::path& path) {
-  std::ifstream in(path);
+  std::ifstream file(path);
+  std::istringstream unpacked(path.extension() == ".zst" ? test::read_zst_text(path) : std::string());
+  std::istream& in = path.extension() == ".zst" ? static_cast<std::istream&>(unpacked) : file;
   std::vector<std::string> lines;
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   return lines;
@@ -272,7 +275,7 @@ TEST_F(RealStyleInputs, UnhealthyQzssSignalIsLeftOutAndTheOthersKept) {
   }
   EXPECT_GT(with_l5, 0u);
   EXPECT_EQ(with_l1, 0u);
-  const auto truth = read_lines(dir_ / "out" / "truth.csv");
+  const auto truth = read_lines(dir_ / "out" / "truth.csv.zst");
   size_t unhealthy_rows = 0;
   for (const auto& line : truth) {
     if (line.find(",J1C,unhealthy,") != std::string::npos) {

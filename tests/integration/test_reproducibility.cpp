@@ -44,7 +44,7 @@ class Reproducibility : public ::testing::Test {
 TEST_F(Reproducibility, SameScenarioAndSeedGiveIdenticalBytes) {
   const auto a = run("a");
   const auto b = run("b");
-  for (const char* file : {"obs.rnx", "nav.rnx", "truth.csv"}) {
+  for (const char* file : {"obs.rnx", "nav.rnx", "truth.csv.zst"}) {
     const std::string first = read_bytes(a / file);
     ASSERT_GT(first.size(), 1000u) << file;
     EXPECT_TRUE(first == read_bytes(b / file)) << file << " differs between two runs";

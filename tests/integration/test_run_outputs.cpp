@@ -12,6 +12,7 @@
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -50,7 +51,7 @@ TEST_F(RunOutputs, ObservationFileReadsBackToTheTruth) {
 
   // truth.csv: pseudorange and phase per (time, satellite, signal).
   std::map<std::string, std::pair<double, double>> truth;
-  std::ifstream in(out_ / "truth.csv");
+  std::istringstream in(test::read_zst_text(out_ / "truth.csv.zst"));
   std::string line;
   std::getline(in, line);
   size_t tracked_rows = 0;

@@ -16,6 +16,7 @@
 
 #include "process.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -131,8 +132,8 @@ world:
   constexpr double kEdgeMargin_deg = 0.01;  // truth.csv rounds directions to 1e-4 degrees
   std::map<std::string, std::set<std::string>> statuses;  // satellite -> statuses seen
   size_t blocked = 0, tracked = 0, near_edge = 0;
-  std::ifstream in(out / "truth.csv");
-  ASSERT_TRUE(in) << "truth.csv missing";
+  ASSERT_TRUE(std::filesystem::exists(out / "truth.csv.zst")) << "truth.csv.zst missing";
+  std::istringstream in(test::read_zst_text(out / "truth.csv.zst"));
   std::string line;
   std::getline(in, line);
   std::set<std::string> seen;  // satellite-epochs (one row per signal)

@@ -15,6 +15,7 @@
 #include "process.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "test_support.hpp"
+#include "zst_text.hpp"
 
 namespace skytrace {
 namespace {
@@ -55,7 +56,7 @@ TEST(WorldWall, SatellitesBehindTheWallAreAbsentAndAllOthersPresent) {
   std::map<std::string, std::set<std::string>> expected_present;  // time -> satellites
   std::map<std::string, std::set<std::string>> either;            // time -> satellites near an edge
   size_t blocked = 0, present = 0, near_edge = 0;
-  std::ifstream in(out / "truth.csv");
+  std::istringstream in(test::read_zst_text(out / "truth.csv.zst"));
   std::string line;
   std::getline(in, line);
   while (std::getline(in, line)) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 #include "skytrace/core/error.hpp"
@@ -32,6 +33,10 @@ struct OutputTarget {
 // above: renamed over a regular file (copied to a sibling first when they lie on different file
 // systems), or copied into a stream target. `finished` is gone afterwards, also on error.
 [[nodiscard]] Status install_output_file(const std::filesystem::path& finished, const std::filesystem::path& target);
+
+// What a failed write's errno means, as the outputs' errors say it: "no space left on the device",
+// "file size limit exceeded", else strerror.
+[[nodiscard]] std::string output_errno_text(int error_number);
 
 // A name for a temporary sibling of `target` ("obs.rnx" -> "obs.rnx.<role>-<pid>-<random>"),
 // unique for this process.

@@ -32,7 +32,7 @@ struct RunSummary {
   std::vector<std::string> warnings;  // e.g. world models that were skipped
 };
 
-// Runs the scenario and writes obs.rnx, nav.rnx, truth.csv and summary.json into out_dir.
+// Runs the scenario and writes obs.rnx, nav.rnx, truth.csv.zst (output.truth_format) and summary.json into out_dir.
 [[nodiscard]] Result<RunSummary> run_scenario(const Scenario& scenario, const std::filesystem::path& out_dir,
                                               const RunOptions& options = {});
 

@@ -150,6 +150,10 @@ struct OutputSettings {
   // lz4 | zstd | none: LZ4 frames by default, the fastest to write (an hour of ESBC at 1 Hz: bag
   // 36 MB with lz4, 22 MB with zstd at 0.3 s more CPU; scripts/bench-mcap).
   std::string mcap_compression = "lz4";
+  // csv.zst | csv: truth.csv and paths.csv as zstd-compressed CSV (truth.csv.zst, paths.csv.zst:
+  // about 11 % of the plain bytes, read as they are by pandas, polars and DuckDB) or as plain CSV
+  // (docs/adr/0004-truth-format.md).
+  std::string truth_format = "csv.zst";
 };
 
 struct Scenario {

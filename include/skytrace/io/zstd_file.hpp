@@ -1,0 +1,58 @@
+// zstd-compressed files (one standard frame, RFC 8878, with its content checksum) written as they
+// grow: truth.csv.zst and paths.csv.zst of `skytrace run` (docs/adr/0004-truth-format.md). The zstd
+// tool, pandas, polars and DuckDB read them as they are.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "skytrace/core/error.hpp"
+
+namespace skytrace::io {
+
+struct ZstdWriteOptions {
+  // Level 1: the fastest of the standard levels, and on truth.csv also the smallest of 1..3
+  // (docs/performance.md, "truth.csv.zst").
+  int level = 1;
+  // zstd worker threads: 1 compresses on a thread of libzstd's own while write() returns (the
+  // caller only copies its bytes in); 0 compresses on the caller's thread. The decompressed
+  // content is the same either way; the compressed bytes may differ between 0 and >= 1.
+  int workers = 1;
+};
+
+// Errors (ErrorCode::kOutput) name the file; a failed file is left for its caller to remove (the
+// run's staging folder).
+class ZstdFileWriter {
+ public:
+  [[nodiscard]] static Result<std::unique_ptr<ZstdFileWriter>> create(const std::filesystem::path& path,
+                                                                     const ZstdWriteOptions& options = {});
+  ~ZstdFileWriter();
+  ZstdFileWriter(const ZstdFileWriter&) = delete;
+  ZstdFileWriter& operator=(const ZstdFileWriter&) = delete;
+
+  [[nodiscard]] Status write(std::string_view bytes);
+  // Ends the frame and closes the file; later writes fail.
+  [[nodiscard]] Status close();
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+  [[nodiscard]] int workers() const { return workers_; }  // as libzstd accepted them
+
+ private:
+  struct Context;
+  ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context, int workers);
+  [[nodiscard]] Status drain(int end_op, std::string_view bytes);
+  [[nodiscard]] Status error(const std::string& what) const;
+  std::filesystem::path path_;
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<Context> context_;
+  std::string out_;  // one output block of ZSTD_CStreamOutSize()
+  int workers_ = 0;
+};
+
+// The decompressed content of a file of one or more zstd frames (checksums checked).
+[[nodiscard]] Result<std::string> read_zstd_file(const std::filesystem::path& path);
+[[nodiscard]] Result<std::string> zstd_decompress(std::string_view frames);
+
+}  // namespace skytrace::io

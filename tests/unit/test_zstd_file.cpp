@@ -1,0 +1,98 @@
+// io::ZstdFileWriter (truth.csv.zst, paths.csv.zst): one standard zstd frame with its content
+// checksum, the same content whether libzstd's worker or the caller's thread compresses, errors
+// that name the file.
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <fstream>
+#include <sstream>
+
+#include "skytrace/io/zstd_file.hpp"
+#include "test_support.hpp"
+
+namespace skytrace::io {
+namespace {
+
+std::string sample_table(size_t rows) {
+  std::string text = "time_gpst,sat,range_m\n";
+  for (size_t i = 0; i < rows; ++i) {
+    text += "2020-06-25T00:00:" + std::to_string(i % 60) + ".000000,G" + std::to_string(i % 32 + 1) + "," +
+            std::to_string(20000000.0 + 1234.5678 * static_cast<double>(i)) + "\n";
+  }
+  return text;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(ZstdFile, RoundTripInPiecesWithAndWithoutWorkers) {
+  const auto dir = test::make_temp_dir("zstd_file_round_trip");
+  const std::string text = sample_table(200000);  // several MB: several zstd jobs and blocks
+  for (int workers : {0, 1}) {
+    const auto path = dir / ("t" + std::to_string(workers) + ".csv.zst");
+    auto writer = ZstdFileWriter::create(path, ZstdWriteOptions{1, workers});
+    ASSERT_TRUE(writer) << writer.error().message;
+    for (size_t at = 0; at < text.size(); at += 4093) {
+      ASSERT_TRUE((*writer)->write(std::string_view(text).substr(at, 4093)));
+    }
+    ASSERT_TRUE((*writer)->close());
+    EXPECT_FALSE((*writer)->write("late"));
+    const std::string bytes = read_bytes(path);
+    EXPECT_LT(bytes.size(), text.size() / 4) << workers;
+    // A zstd frame (magic 28 B5 2F FD) whose descriptor sets Content_Checksum_flag (bit 2).
+    ASSERT_GT(bytes.size(), 5u);
+    EXPECT_EQ(bytes.substr(0, 4), std::string("\x28\xB5\x2F\xFD", 4));
+    EXPECT_NE(static_cast<unsigned char>(bytes[4]) & 0x04u, 0u);
+    auto back = read_zstd_file(path);
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_TRUE(*back == text) << workers;
+  }
+}
+
+TEST(ZstdFile, EmptyFileIsAFrameOfNothing) {
+  const auto path = test::make_temp_dir("zstd_file_empty") / "e.zst";
+  auto writer = ZstdFileWriter::create(path);
+  ASSERT_TRUE(writer);
+  ASSERT_TRUE((*writer)->close());
+  auto back = read_zstd_file(path);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_EQ(*back, "");
+}
+
+TEST(ZstdFile, TruncatedOrCorruptFramesAreRefused) {
+  const auto dir = test::make_temp_dir("zstd_file_truncated");
+  const auto path = dir / "t.zst";
+  auto writer = ZstdFileWriter::create(path, ZstdWriteOptions{1, 0});
+  ASSERT_TRUE(writer);
+  ASSERT_TRUE((*writer)->write(sample_table(1000)));
+  ASSERT_TRUE((*writer)->close());
+  std::string bytes = read_bytes(path);
+  EXPECT_FALSE(zstd_decompress(std::string_view(bytes).substr(0, bytes.size() - 3)));
+  bytes[bytes.size() - 1] ^= 0x5a;  // the checksum
+  EXPECT_FALSE(zstd_decompress(bytes));
+  EXPECT_FALSE(read_zstd_file(dir / "absent.zst"));
+}
+
+TEST(ZstdFile, FullDiskNamesTheFile) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  auto writer = ZstdFileWriter::create("/dev/full");
+  ASSERT_TRUE(writer) << writer.error().message;
+  Status st = (*writer)->write(sample_table(100000));
+  if (st) st = (*writer)->close();
+  ASSERT_FALSE(st);
+  EXPECT_NE(st.error().message.find("/dev/full: write failed (no space left on the device)"), std::string::npos)
+      << st.error().message;
+}
+
+TEST(ZstdFile, UncreatableFileIsRefused) {
+  auto writer = ZstdFileWriter::create("/proc/skytrace-cannot-be-here/t.zst");
+  ASSERT_FALSE(writer);
+  EXPECT_NE(writer.error().message.find("cannot create"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace skytrace::io
