@@ -20,15 +20,21 @@ struct RunArgs {
   std::string truth_format;  // --truth-format: output.truth_format
   bool quiet = false;
   std::vector<std::string> overrides;
+  std::optional<int> threads;  // --threads; default: one per hardware thread
 };
 
 int run(const RunArgs& args) {
+  if (args.threads && (*args.threads < 1 || *args.threads > 1024)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--threads {}: expected 1 to 1024 (default: one per hardware thread)", *args.threads)));
+  }
   std::vector<std::string> overrides = args.overrides;
   if (!args.truth_format.empty()) overrides.push_back("output.truth_format=" + args.truth_format);
   auto scenario = sim::load_scenario(args.scenario, overrides);
   if (!scenario) return report_error(scenario.error());
   sim::RunOptions options;
   options.write_truth = !args.no_truth;
+  options.threads = args.threads.value_or(0);
   const bool terminal = isatty(fileno(stderr)) != 0 && !args.quiet;
   if (terminal) {
     options.progress = [last_percent = -1](std::int64_t done, std::int64_t total) mutable {
@@ -65,6 +71,8 @@ void register_run_command(CLI::App& app, int& exit_code) {
                   "csv.zst (default: truth.csv.zst, paths.csv.zst) or csv (plain truth.csv, paths.csv); "
                   "the same as --set output.truth_format=FORMAT");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
+  cmd->add_option("--threads", args->threads,
+                  "Threads to use, 1-1024 (default: one per hardware thread); the outputs are the same for any number");
   cmd->add_option("--set", args->overrides,
                   "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable), e.g. --set models.ionosphere=none "
                   "--set ephemeris.precise_orbits=[]");

@@ -326,6 +326,16 @@ struct McapWriter::State {
     chunk_message_index.clear();
     chunk_has_messages = false;
     ++statistics.chunk_count;
+    if (!options.worker_thread) {
+      Status written = write_chunk(job);
+      chunk = std::move(job.records);  // keeps its capacity for the next chunk
+      chunk.clear();
+      if (!written.ok()) {
+        std::lock_guard lock(mutex);
+        if (!failure) failure = written.error();
+      }
+      return written;
+    }
     std::unique_lock lock(mutex);
     chunk.clear();
     if (!spare_chunks.empty()) {

@@ -46,6 +46,11 @@ class McapSink final : public EpochSink {
     item.receiver = e.receiver_index;
     item.stamp_ns = static_cast<std::uint64_t>(stamp.nanoseconds());
     if (auto st = rx.builder->build_into(item.messages, *e.observations, e.fix, stamp); !st) return st;
+    if (!threaded_) {
+      Status written = write(item);
+      spare_.push_back(std::move(item.messages));
+      return written;
+    }
     if (!writer_.joinable()) writer_ = std::thread([this] { write_loop(); });
     std::unique_lock lock(mutex_);
     changed_.wait(lock, [&] { return queue_.size() < kQueuedEpochs || error_; });
@@ -111,6 +116,8 @@ class McapSink final : public EpochSink {
     io::Rosbag2Options options;
     options.mcap.compression = c.scenario->output.mcap_compression == "none" ? "" : c.scenario->output.mcap_compression;
     options.file_stem = "bag";  // not the staging folder's name
+    options.mcap.worker_thread = c.threads >= 2;
+    sink->threaded_ = c.threads >= 2;
     auto bag = io::Rosbag2Writer::open(c.staging_dir / "bag", options);
     if (!bag) return bag.error();
     sink->bag_ = std::move(*bag);
@@ -155,6 +162,7 @@ class McapSink final : public EpochSink {
   std::vector<Ros2Epoch> spare_;  // written epochs' messages, for reuse
   std::optional<Error> error_;
   bool stopping_ = false;
+  bool threaded_ = true;  // serialises and writes on a thread of its own
   std::vector<Receiver> receivers_;
 };
 

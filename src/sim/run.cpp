@@ -141,6 +141,8 @@ class StagingDir {
   int lock_fd_ = -1;
 };
 
+constexpr int kMaxThreads = 1024;
+
 // Every receiver's epoch of one instant, with its fix when the run computes fixes.
 struct QueuedEpoch {
   std::int64_t index = 0;
@@ -164,11 +166,11 @@ class EpochQueue {
     not_empty_.notify_one();
     return true;
   }
-  // nullopt once the producer has closed the queue and it is empty.
+  // nullopt once the producer has closed the queue and it is empty, or once it is cancelled.
   std::optional<EpochBatch> pop() {
     std::unique_lock lock(mutex_);
-    not_empty_.wait(lock, [&] { return !full_.empty() || closed_; });
-    if (full_.empty()) return std::nullopt;
+    not_empty_.wait(lock, [&] { return !full_.empty() || closed_ || cancelled_; });
+    if (full_.empty() || cancelled_) return std::nullopt;
     EpochBatch batch = std::move(full_.front());
     full_.pop_front();
     not_full_.notify_one();
@@ -195,6 +197,7 @@ class EpochQueue {
     std::lock_guard lock(mutex_);
     cancelled_ = true;
     not_full_.notify_all();
+    not_empty_.notify_all();
   }
   bool cancelled() {
     std::lock_guard lock(mutex_);
@@ -267,6 +270,11 @@ orbits::NavigationData used_navigation(const orbits::NavigationData& all, const 
 
 Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& out_dir, const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
+  if (options.threads < 0 || options.threads > kMaxThreads) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("threads {}: expected 1 to {} (0: one per hardware thread)", options.threads, kMaxThreads));
+  }
+  const int threads = options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   auto resources = prepare_resources(s);
   if (!resources) return resources.error();
   const std::optional<LoadedWorld>& world = resources->world;
@@ -296,6 +304,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   context.resources = &*resources;
   context.staging_dir = staging->file("");
   context.write_truth = options.write_truth;
+  context.threads = threads;
   context.summary = &summary;
   for (const ReceiverRun& rx : receivers) {
     context.receivers.push_back(SinkReceiver{rx.settings, rx.marker_m, &rx.header, rx.kinematics,
@@ -418,7 +427,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     return move_models_to(*resources->world, epoch_tag(k));
   };
   // Every receiver's observations at epoch k.
-  auto observe_instant = [&](std::int64_t k, QueuedEpoch& out) -> Status {
+  auto observe_only = [&](std::int64_t k, QueuedEpoch& out) -> Status {
     if (auto st = move_models(k); !st) return st;
     out.index = k;
     out.receivers.clear();
@@ -427,56 +436,91 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       if (!epoch) return epoch.error();
       out.receivers.push_back(std::move(*epoch));
     }
+    return Ok{};
+  };
+  auto observe_instant = [&](std::int64_t k, QueuedEpoch& out) -> Status {
+    if (auto st = observe_only(k, out); !st) return st;
     return solve_instant(out);
   };
+  const bool computes_fixes = std::any_of(receivers.begin(), receivers.end(), [](const ReceiverRun& rx) { return rx.fixes != nullptr; });
 
-  if (!options.write_truth) {
-    // Without truth.csv, writing costs a fraction of computing: one thread does both (measured
-    // faster than handing epochs between threads, docs/performance.md).
+  if (!options.write_truth || threads == 1) {
+    // Without truth, writing costs a fraction of computing: one thread does both (measured faster
+    // than handing epochs between threads, docs/performance.md); so does a run given one thread.
     QueuedEpoch instant;
     for (std::int64_t k = 0; k < epoch_count; ++k) {
       if (auto st = observe_instant(k, instant); !st) return st.error();
       if (auto st = write_instant(instant); !st) return st.error();
     }
   } else {
-    // With truth.csv, formatting costs as much as computing: a worker computes the epochs (the
-    // generators keep state from epoch to epoch, so they stay on one thread) while this thread
-    // formats and writes them.
+    // With truth, formatting costs as much as computing: the epochs are computed on threads of
+    // their own while this thread formats and writes them, in a pipeline of stages, each keeping
+    // its order (the generators and the fix engines keep state from epoch to epoch): the
+    // observations, then (when a sink wants them) the fixes, then the writing. The stages share the
+    // cores; three of them on two cores measured faster than two (docs/performance.md).
     constexpr size_t kBatchEpochs = 64;
-    EpochQueue queue(8);
-    std::optional<Error> producer_error;
+    EpochQueue observed(8), solved(8);
+    const bool fix_stage = computes_fixes;
+    EpochQueue& to_writer = fix_stage ? solved : observed;
+    std::optional<Error> producer_error, fixer_error;
     std::thread producer([&] {
       EpochBatch batch;
       size_t receiver_epochs = 0;
-      for (std::int64_t k = 0; k < epoch_count && !queue.cancelled() && !cancellation_requested(); ++k) {
-        if (auto st = observe_instant(k, batch.emplace_back()); !st) {
+      for (std::int64_t k = 0; k < epoch_count && !observed.cancelled() && !cancellation_requested(); ++k) {
+        QueuedEpoch& item = batch.emplace_back();
+        if (auto st = fix_stage ? observe_only(k, item) : observe_instant(k, item); !st) {
           producer_error = st.error();
-          queue.close();
+          observed.close();
           return;
         }
         receiver_epochs += receivers.size();
         if (receiver_epochs >= kBatchEpochs) {
-          if (!queue.push(std::move(batch))) return;
+          if (!observed.push(std::move(batch))) return;
           batch = EpochBatch();
           receiver_epochs = 0;
-          queue.release_spent();
+          observed.release_spent();
         }
       }
-      if (!batch.empty()) queue.push(std::move(batch));
-      queue.close();
+      if (!batch.empty()) observed.push(std::move(batch));
+      observed.close();
     });
+    std::thread fixer;
+    if (fix_stage) {
+      fixer = std::thread([&] {
+        while (auto batch = observed.pop()) {
+          for (QueuedEpoch& item : *batch) {
+            if (auto st = solve_instant(item); !st) {
+              fixer_error = st.error();
+              observed.cancel();
+              solved.close();
+              return;
+            }
+          }
+          if (!solved.push(std::move(*batch))) {
+            observed.cancel();
+            return;
+          }
+        }
+        solved.close();
+      });
+    }
     Status consumed = Ok{};
-    while (auto batch = queue.pop()) {
+    while (auto batch = to_writer.pop()) {
       for (const QueuedEpoch& item : *batch) {
         consumed = write_instant(item);
         if (!consumed) break;
       }
       if (!consumed) break;
-      queue.give_back(std::move(*batch));
+      observed.give_back(std::move(*batch));  // freed by the producer, which allocated it
     }
-    if (!consumed) queue.cancel();
+    if (!consumed) {
+      to_writer.cancel();
+      observed.cancel();
+    }
+    if (fixer.joinable()) fixer.join();
     producer.join();
     if (producer_error) return *producer_error;
+    if (fixer_error) return *fixer_error;
     if (!consumed) return consumed.error();
   }
   for (auto& sink : *sinks) {

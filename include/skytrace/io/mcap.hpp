@@ -30,6 +30,9 @@ struct McapOptions {
   size_t chunk_size_bytes = size_t{1} << 20;  // a chunk is written once its records reach this size
   std::string profile = "ros2";
   std::string library;  // Header's library field; empty: "skytrace <version>"
+  // Chunks compressed and written on a thread of the writer's own while the caller fills the next
+  // one; false: on the caller's thread (a run limited to one thread). The file is the same.
+  bool worker_thread = true;
 };
 
 // What has been written so far (Statistics record contents).

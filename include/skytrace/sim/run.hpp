@@ -18,6 +18,11 @@ namespace skytrace::sim {
 
 struct RunOptions {
   bool write_truth = true;
+  // Threads the run may use (1-1024); 0: one per hardware thread. 1 computes and writes on the
+  // calling thread; from 2 on, the epochs are computed on a thread of their own while the calling
+  // thread formats and writes them, and a bag serialises and compresses on threads of its own. The
+  // outputs are the same bytes for any number.
+  int threads = 0;
   // Called after each epoch with (epochs done, epochs total); the CLI draws a progress bar.
   std::function<void(std::int64_t, std::int64_t)> progress;
 };

@@ -44,6 +44,7 @@ struct RunContext {
   std::filesystem::path staging_dir;  // files written here are moved into --out when the run succeeds
   std::vector<SinkReceiver> receivers;
   bool write_truth = true;
+  int threads = 1;  // threads the run may use: a sink starts threads of its own only from 2 on
   const RunSummary* summary = nullptr;  // the run's counts, complete when finish() is called
 };
 
