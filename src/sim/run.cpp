@@ -444,17 +444,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   };
   const bool computes_fixes = std::any_of(receivers.begin(), receivers.end(), [](const ReceiverRun& rx) { return rx.fixes != nullptr; });
 
-  if (!options.write_truth || threads == 1) {
-    // Without truth, writing costs a fraction of computing: one thread does both (measured faster
-    // than handing epochs between threads, docs/performance.md); so does a run given one thread.
+  if (threads == 1 || (!options.write_truth && !computes_fixes)) {
+    // One thread computes and writes: a run given one thread, and one without truth or fixes, where
+    // writing costs a fraction of computing (measured faster than handing epochs between threads,
+    // docs/performance.md).
     QueuedEpoch instant;
     for (std::int64_t k = 0; k < epoch_count; ++k) {
       if (auto st = observe_instant(k, instant); !st) return st.error();
       if (auto st = write_instant(instant); !st) return st.error();
     }
   } else {
-    // With truth, formatting costs as much as computing: the epochs are computed on threads of
-    // their own while this thread formats and writes them, in a pipeline of stages, each keeping
+    // With truth or fixes, the epochs are computed on threads of their own while this thread formats
+    // and writes them, in a pipeline of stages, each keeping
     // its order (the generators and the fix engines keep state from epoch to epoch): the
     // observations, then (when a sink wants them) the fixes, then the writing. The stages share the
     // cores; three of them on two cores measured faster than two (docs/performance.md).
