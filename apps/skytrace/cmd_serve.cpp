@@ -31,9 +31,9 @@
 #include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
-#include "skytrace/io/ntrip.hpp"
 #include "skytrace/io/rtcm3.hpp"
 #include "skytrace/sim/live.hpp"
+#include "skytrace/sim/rtk_base_link.hpp"
 #include "skytrace/sim/scenario.hpp"
 #include "skytrace/sim/sinks.hpp"
 #include "skytrace/sim/streams.hpp"
@@ -287,163 +287,6 @@ class PtyStream final : public sim::ByteStream {
   std::unique_ptr<PseudoTerminal> pty_;
 };
 
-// A base station's RTCM 3 stream, decoded into base epochs for live RTK: over plain TCP (skytrace
-// serve --rtcm-tcp, str2str) or from an NTRIP caster's mountpoint (io/ntrip), which is sent the
-// rover's GGA every 10 s as VRS casters need. Connects again while the base is away (every second;
-// every 10 s after a caster said no, as casters limit logins); what arrives between frames is
-// skipped by the decoder.
-class RtcmBaseClient {
- public:
-  // `source`: HOST:PORT, or an ntrip:// URL.
-  static Result<std::unique_ptr<RtcmBaseClient>> create(const std::string& source, GnssTime reference) {
-    std::unique_ptr<RtcmBaseClient> client(new RtcmBaseClient(reference));
-    if (source.rfind("ntrip://", 0) == 0) {
-      auto endpoint = io::parse_ntrip_url(source);
-      if (!endpoint) return endpoint.error();
-      client->ntrip_ = *endpoint;
-      client->host_ = endpoint->host;
-      client->port_ = endpoint->port;
-      client->display_ = io::ntrip_url_for_display(*endpoint);
-    } else {
-      const size_t colon = source.rfind(':');
-      if (colon == std::string::npos || colon == 0 || colon + 1 == source.size()) {
-        return make_error(ErrorCode::kInvalidArgument, "--rtk-base-tcp '" + source + "': expected HOST:PORT");
-      }
-      client->host_ = source.substr(0, colon);
-      client->port_ = source.substr(colon + 1);
-      client->display_ = source;
-    }
-    return client;
-  }
-  ~RtcmBaseClient() {
-    if (fd_ >= 0) close(fd_);
-  }
-  [[nodiscard]] int fd() const { return fd_; }
-  // Connects when not connected; reads what is there; hands complete epochs with the base's
-  // position (1005/1006) to the session.
-  void service(sim::LiveSession& live) {
-    using Clock = std::chrono::steady_clock;
-    if (fd_ < 0) {
-      if (Clock::now() < next_attempt_) return;
-      next_attempt_ = Clock::now() + std::chrono::seconds(1);
-      connect_now();
-      return;
-    }
-    std::uint8_t buffer[8192];
-    for (int reads = 0; reads < 64; ++reads) {
-      const ssize_t n = recv(fd_, buffer, sizeof buffer, MSG_DONTWAIT);
-      if (n > 0) {
-        std::string_view bytes(reinterpret_cast<const char*>(buffer), static_cast<size_t>(n));
-        std::string stream;
-        if (ntrip_) {
-          stream = response_.feed(bytes);
-          bytes = stream;
-          if (response_.state() == io::NtripResponse::State::kStreaming && !streaming_announced_) {
-            streaming_announced_ = true;
-            std::cout << "skytrace serve: RTK corrections from " << display_ << std::endl;
-          }
-        }
-        decoder_.feed(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
-        continue;
-      }
-      if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
-        if (ntrip_) response_.connection_closed();
-        if (ntrip_ && response_.state() == io::NtripResponse::State::kRefused) {
-          refused();
-        } else {
-          std::cerr << "skytrace serve: warning: RTK base " << display_ << " closed the connection\n";
-        }
-        close(fd_);
-        fd_ = -1;
-      }
-      break;
-    }
-    // A refusal without a source table to wait for ends the connection now.
-    if (fd_ >= 0 && ntrip_ && response_.state() == io::NtripResponse::State::kRefused && response_.offered_mountpoints().empty()) {
-      refused();
-      close(fd_);
-      fd_ = -1;
-    }
-    for (const auto& epoch : decoder_.take_epochs()) {
-      if (!decoder_.station()) {
-        if (!warned_position_) std::cerr << "skytrace serve: warning: RTK base " << display_ << ": no 1005/1006 yet, epochs wait\n";
-        warned_position_ = true;
-        continue;
-      }
-      live.add_base_epoch(positioning::BaseEpoch{converter_.convert(epoch), decoder_.station()->arp_ecef_m});
-    }
-  }
-  // NTRIP: the rover's position for the caster (a VRS is computed near it), at most every 10 s.
-  void send_position(const std::string& gga) {
-    using Clock = std::chrono::steady_clock;
-    if (!ntrip_ || fd_ < 0 || gga.empty() || response_.state() != io::NtripResponse::State::kStreaming) return;
-    if (Clock::now() < next_gga_) return;
-    next_gga_ = Clock::now() + std::chrono::seconds(10);
-    (void)send(fd_, gga.data(), gga.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
-  }
-
- private:
-  explicit RtcmBaseClient(GnssTime reference) : decoder_(reference) {}
-
-  void refused() {
-    std::string why = response_.error();
-    const auto& offered = response_.offered_mountpoints();
-    if (!offered.empty()) {
-      why += "; it offers ";
-      for (size_t i = 0; i < offered.size() && i < 20; ++i) why += (i > 0 ? ", " : "") + offered[i];
-      if (offered.size() > 20) why += fmt::format(" and {} more", offered.size() - 20);
-    }
-    if (why != last_refusal_) std::cerr << "skytrace serve: error: RTK base " << display_ << ": " << why << " (trying again every 10 s)\n";
-    last_refusal_ = why;
-    next_attempt_ = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-  }
-
-  void connect_now() {
-    addrinfo hints{};
-    hints.ai_family = AF_UNSPEC;
-    hints.ai_socktype = SOCK_STREAM;
-    addrinfo* found = nullptr;
-    if (const int rc = getaddrinfo(host_.c_str(), port_.c_str(), &hints, &found); rc != 0) {
-      if (!warned_connect_) std::cerr << "skytrace serve: warning: RTK base " << display_ << ": " << gai_strerror(rc) << " (trying again every second)\n";
-      warned_connect_ = true;
-      return;
-    }
-    std::unique_ptr<addrinfo, decltype(&freeaddrinfo)> guard(found, freeaddrinfo);
-    const int fd = socket(found->ai_family, found->ai_socktype | SOCK_CLOEXEC, found->ai_protocol);
-    if (fd < 0) return;
-    if (connect(fd, found->ai_addr, found->ai_addrlen) != 0) {
-      close(fd);
-      if (!warned_connect_) std::cerr << "skytrace serve: warning: RTK base " << display_ << ": " << std::strerror(errno) << " (trying again every second)\n";
-      warned_connect_ = true;
-      return;
-    }
-    fd_ = fd;
-    if (ntrip_) {
-      response_ = io::NtripResponse{};
-      streaming_announced_ = false;
-      next_gga_ = {};
-      const std::string request = io::ntrip_request(*ntrip_, std::string("skytrace/") + kProgramVersion);
-      if (send(fd_, request.data(), request.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(request.size())) {
-        std::cerr << "skytrace serve: warning: RTK base " << display_ << ": cannot send the request (" << std::strerror(errno) << ")\n";
-        close(fd_);
-        fd_ = -1;
-      }
-      return;
-    }
-    std::cout << "skytrace serve: RTK corrections from " << display_ << std::endl;
-  }
-  std::string host_, port_, display_;
-  std::optional<io::NtripEndpoint> ntrip_;
-  io::NtripResponse response_;
-  bool streaming_announced_ = false;
-  std::string last_refusal_;
-  int fd_ = -1;
-  io::Rtcm3Decoder decoder_;
-  io::RtcmMeasurementConverter converter_;
-  std::chrono::steady_clock::time_point next_attempt_{}, next_gga_{};
-  bool warned_connect_ = false, warned_position_ = false;
-};
-
 int serve(const ServeArgs& args) {
   if (!(args.rate_hz > 0.0 && args.rate_hz <= 100.0)) {
     return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--rate-hz {}: expected 0 < R <= 100", args.rate_hz)));
@@ -474,11 +317,20 @@ int serve(const ServeArgs& args) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "--rtk-base-ntrip '" + args.rtk_base_ntrip +
                                                                     "': expected ntrip://[USER[:PASSWORD]@]HOST[:PORT]/MOUNTPOINT"));
   }
-  std::unique_ptr<RtcmBaseClient> rtk_base;
+  std::unique_ptr<sim::RtkBaseLink> rtk_base;
   if (!rtk_source.empty()) {
-    auto client = RtcmBaseClient::create(rtk_source, scenario->time.start);
-    if (!client) return report_error(client.error());
-    rtk_base = std::move(*client);
+    auto link = sim::RtkBaseLink::create(rtk_source, scenario->time.start, kProgramVersion,
+                                         [](sim::RtkBaseLink::Note kind, const std::string& text) {
+                                           if (kind == sim::RtkBaseLink::Note::kInfo) {
+                                             std::cout << "skytrace serve: " << text << std::endl;
+                                           } else {
+                                             std::cerr << "skytrace serve: "
+                                                       << (kind == sim::RtkBaseLink::Note::kError ? "error: " : "warning: ")
+                                                       << text << "\n";
+                                           }
+                                         });
+    if (!link) return report_error(link.error());
+    rtk_base = std::move(*link);
   }
   live_options.rtk = rtk_base != nullptr;
   auto session = sim::LiveSession::create(*scenario, live_options);
@@ -588,11 +440,7 @@ int serve(const ServeArgs& args) {
     for (auto& sink : sinks) {
       if (auto st = sink->add(sink_epoch); !st) return report_error(st.error());
     }
-    if (rtk_base && epoch->fix && epoch->fix->type != positioning::FixType::kNone) {
-      for (const auto& sentence : io::nmea_epoch(*epoch->fix)) {
-        if (sentence.find("GGA,") != std::string::npos) rtk_base->send_position(sentence);
-      }
-    }
+    if (rtk_base && epoch->fix) rtk_base->send_position(*epoch->fix);
     ++k;
     // Behind the wall clock by more than an epoch (a slow world, a suspended process): skip ahead
     // so that epochs keep their wall-clock times instead of bunching up.
