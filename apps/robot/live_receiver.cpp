@@ -11,6 +11,7 @@
 #include "skytrace/io/rtcm3.hpp"
 #include "skytrace/sim/live.hpp"
 #include "skytrace/sim/live_outputs.hpp"
+#include "skytrace/sim/rtk_base_link.hpp"
 #include "skytrace/sim/scenario.hpp"
 
 namespace skytrace::live {
@@ -52,7 +53,8 @@ struct Receiver::Impl {
   std::optional<sim::LiveEpoch> last;
   double last_time_s = 0.0;
   std::unique_ptr<sim::LiveOutputs> outputs;
-  std::optional<io::Rtcm3Decoder> base_decoder;  // RTK: the base's stream
+  std::optional<io::Rtcm3Decoder> base_decoder;  // RTK: the base's stream given as bytes
+  std::unique_ptr<sim::RtkBaseLink> base_link;    // RTK: the base's stream read from the network
   io::RtcmMeasurementConverter base_converter;
 };
 
@@ -91,8 +93,19 @@ std::unique_ptr<Receiver> Receiver::create(const ReceiverOptions& options, std::
     }
     live_options.receiver_index = static_cast<size_t>(it - receivers.begin());
   }
-  live_options.rtk = options.rtk;
-  if (options.rtk) impl->base_decoder.emplace(impl->start);
+  live_options.rtk = options.rtk || !options.rtk_base.empty();
+  if (live_options.rtk) impl->base_decoder.emplace(impl->start);
+  if (!options.rtk_base.empty()) {
+    auto log = options.log;
+    auto link = sim::RtkBaseLink::create(options.rtk_base, impl->start, "0.1.0", [log](sim::RtkBaseLink::Note kind, const std::string& text) {
+      if (log) log(kind == sim::RtkBaseLink::Note::kInfo ? 0 : kind == sim::RtkBaseLink::Note::kWarning ? 1 : 2, text);
+    });
+    if (!link) {
+      error = link.error().message;
+      return nullptr;
+    }
+    impl->base_link = std::move(*link);
+  }
   auto session = sim::LiveSession::create(*scenario, live_options);
   if (!session) {
     error = session.error().message;
@@ -120,6 +133,7 @@ std::string Receiver::set_object_pose(const std::string& name, const Vec3& posit
 }
 
 bool Receiver::step(double time_s, std::string& error) {
+  if (impl_->base_link) impl_->base_link->service(*impl_->session);
   auto result = impl_->session->step(impl_->start + time_s);
   if (!result) {
     error = result.error().message;
@@ -127,6 +141,7 @@ bool Receiver::step(double time_s, std::string& error) {
   }
   impl_->last = std::move(*result);
   impl_->last_time_s = time_s;
+  if (impl_->base_link && impl_->last->fix) impl_->base_link->send_position(*impl_->last->fix);
   return true;
 }
 
@@ -155,6 +170,9 @@ void fill_view(const sim::LiveSession& session, const GnssTime& start, double ti
   if (e.fix) {
     const positioning::PositionFix& f = *e.fix;
     out.fix.type = positioning::is_3d(f.type) ? 3 : f.type == positioning::FixType::kFix2D ? 2 : 0;
+    out.fix.solution = std::string(positioning::to_string(f.type));
+    out.fix.differential = f.type == positioning::FixType::kDgnss || f.type == positioning::FixType::kRtkFloat ||
+                           f.type == positioning::FixType::kRtkFixed;
     out.fix.message = f.message;
     out.fix.latitude_deg = f.position.latitude_deg;
     out.fix.longitude_deg = f.position.longitude_deg;

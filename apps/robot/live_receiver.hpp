@@ -58,6 +58,10 @@ struct SatelliteView {
 
 struct FixView {
   int type = 0;  // 0 none, 2 2D, 3 3D
+  // The solution: "none", "2d", "3d", "dgnss", "rtk_float", "rtk_fixed" (fix.csv's fix column).
+  std::string solution = "none";
+  // Differential or RTK: corrections of a base in the solution (NavSatFix STATUS_GBAS_FIX).
+  bool differential = false;
   std::string message;
   double latitude_deg = 0.0;
   double longitude_deg = 0.0;
@@ -96,8 +100,14 @@ struct ReceiverOptions {
   std::string start_time_scale = "GPST";
   double pose_timeout_s = 1.0;
   std::string receiver_name;  // one receiver of a scenario with several; empty: the first
-  // RTK: the fixes come from the RTK engine with the base corrections given to add_base_rtcm3().
+  // RTK: the fixes come from the RTK engine with the base corrections given to add_base_rtcm3()
+  // or read from `rtk_base`.
   bool rtk = false;
+  // RTK from a base's RTCM 3 stream: HOST:PORT or ntrip://[USER[:PASSWORD]@]HOST[:PORT]/MOUNTPOINT
+  // (sim::RtkBaseLink), read before every step; sets rtk.
+  std::string rtk_base;
+  // Where the link's messages go (connected, refused, ...): level 0 info, 1 warning, 2 error.
+  std::function<void(int, const std::string&)> log;
 };
 
 class Receiver {

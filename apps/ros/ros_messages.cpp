@@ -62,7 +62,9 @@ sensor_msgs::NavSatFix to_navsat_fix(const live::FixView& fix, const std_msgs::H
     msg.position_covariance_type = sensor_msgs::NavSatFix::COVARIANCE_TYPE_UNKNOWN;
     return msg;
   }
-  msg.status.status = sensor_msgs::NavSatStatus::STATUS_FIX;
+  // GBAS_FIX: corrections of a base station in the solution (DGNSS, RTK float or fixed), as ROS
+  // GNSS drivers report RTK.
+  msg.status.status = fix.differential ? sensor_msgs::NavSatStatus::STATUS_GBAS_FIX : sensor_msgs::NavSatStatus::STATUS_FIX;
   for (char system : fix.systems_used) msg.status.service |= navsat_service(system);
   msg.latitude = fix.latitude_deg;
   msg.longitude = fix.longitude_deg;

@@ -58,6 +58,8 @@ struct Config {
   // The files of live::Receiver::file_parameters() ("rinex_out", "nmea_out", ...) and their paths.
   std::vector<std::pair<std::string, std::string>> file_outputs;
   std::string latency_report;
+  std::string receiver;  // one receiver of a scenario with several; empty: the first
+  std::string rtk_base;  // RTK: HOST:PORT or ntrip://... of a base's RTCM 3 stream
 };
 
 // Reads and checks the private parameters; an error names the parameter and what was expected.
@@ -105,6 +107,8 @@ std::optional<std::string> read_config(const ros::NodeHandle& pnh, Config& c) {
     c.file_outputs.emplace_back(parameter, path);
   }
   pnh.param<std::string>("latency_report", c.latency_report, c.latency_report);
+  pnh.param<std::string>("receiver", c.receiver, c.receiver);
+  pnh.param<std::string>("rtk_base", c.rtk_base, c.rtk_base);
   return std::nullopt;
 }
 
@@ -358,10 +362,21 @@ int run(int argc, char** argv) {
   options.start_time = config.start_time;
   options.start_time_scale = config.start_time_scale;
   options.pose_timeout_s = config.pose_timeout_s;
+  options.receiver_name = config.receiver;
+  options.rtk_base = config.rtk_base;
+  options.log = [](int level, const std::string& text) {
+    if (level == 0) {
+      ROS_INFO("skytrace: %s", text.c_str());
+    } else if (level == 1) {
+      ROS_WARN("skytrace: %s", text.c_str());
+    } else {
+      ROS_ERROR("skytrace: %s", text.c_str());
+    }
+  };
   std::string problem;
   auto receiver = live::Receiver::create(options, problem);
   if (!receiver) {
-    ROS_FATAL("%s (from ~scenario, ~start_time, ~start_time_scale)", problem.c_str());
+    ROS_FATAL("%s (from ~scenario, ~start_time, ~start_time_scale, ~receiver, ~rtk_base)", problem.c_str());
     return kExitInput;
   }
   for (const auto& warning : receiver->warnings()) ROS_WARN("skytrace: %s", warning.c_str());

@@ -55,7 +55,8 @@ A simulated GNSS receiver on ROS 2 (DDS, no ROS 2 install needed). Parameters (d
   frame_id, pose_topic, odom_topic, antenna_offset_m, rate_hz, start_time, start_time_scale,
   pose_timeout_s, ray_length_m, moving_models, rinex_out, nmea_out, fix_csv_out, rtcm_out, bag_out,
   bag_compression (lz4|zstd|none),
-  latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm, receiver, rtk_base_topic.
+  latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm, receiver, rtk_base_topic,
+  rtk_base.
 Environment: ROS_DOMAIN_ID, ROS_LOCALHOST_ONLY, ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS,
   CYCLONEDDS_URI.
 )";
@@ -85,6 +86,7 @@ struct Config {
   std::string latency_report;
   std::string receiver;        // one receiver of a scenario with several; empty: the first
   std::string rtk_base_topic;  // RTK: a base's rtcm_msgs/Message topic; empty: no RTK
+  std::string rtk_base;        // RTK: HOST:PORT or ntrip://... of a base's RTCM 3 stream
   bool use_sim_time = false;
   ros2::RosDistro distro = ros2::RosDistro::kJazzy;
   bool rtcm3 = true;
@@ -160,6 +162,10 @@ Result<Config> read_config(const Parameters& p) {
   SKYTRACE_READ(p.get_string("latency_report", c.latency_report), c.latency_report);
   SKYTRACE_READ(p.get_string("receiver", c.receiver), c.receiver);
   SKYTRACE_READ(p.get_string("rtk_base_topic", c.rtk_base_topic), c.rtk_base_topic);
+  SKYTRACE_READ(p.get_string("rtk_base", c.rtk_base), c.rtk_base);
+  if (!c.rtk_base.empty() && !c.rtk_base_topic.empty()) {
+    return Error{ErrorCode::kInvalidArgument, "parameters rtk_base and rtk_base_topic: give one of them"};
+  }
   SKYTRACE_READ(p.get_bool("use_sim_time", c.use_sim_time), c.use_sim_time);
   std::string distro;
   SKYTRACE_READ(p.get_string("ros_distro", "jazzy"), distro);
@@ -717,6 +723,16 @@ int run(int argc, char** argv) {
   options.pose_timeout_s = config->pose_timeout_s;
   options.receiver_name = config->receiver;
   options.rtk = !config->rtk_base_topic.empty();
+  options.rtk_base = config->rtk_base;
+  options.log = [&log](int level, const std::string& text) {
+    if (level == 0) {
+      log.info("skytrace: {}", text);
+    } else if (level == 1) {
+      log.warn("skytrace: {}", text);
+    } else {
+      log.error("skytrace: {}", text);
+    }
+  };
   std::string problem;
   auto receiver = live::Receiver::create(options, problem);
   if (!receiver) {

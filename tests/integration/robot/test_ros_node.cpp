@@ -270,5 +270,33 @@ TEST(RosNodeTest, PoseTopicMovesTheFixAndBadPosesAreIgnored) {
 
 #endif
 
+// RTK on ROS 1: the node of the pair's rover takes the base's RTCM 3 stream from `skytrace serve`
+// over TCP (~rtk_base) and publishes GBAS_FIX at the rover.
+TEST_F(RosNodeTest, RoverNodeFixesFromABaseStreamOverTcp) {
+  const auto pair = test::shared_data_dir().parent_path() / "contract" / "rtk-pair.yaml";
+  if (!std::filesystem::exists(pair)) GTEST_SKIP() << "contract rtk-pair.yaml absent";
+  const auto dir = test::make_temp_dir("ros_node_rtk");
+  const int base_port = test::free_tcp_port();
+  test::ChildProcess base;
+  ASSERT_TRUE(base.start({test::skytrace_executable().string(), "serve", pair.string(), "--receiver", "BASE", "--rate-hz", "2",
+                          "--duration-s", "60", "--rtcm-tcp", "127.0.0.1:" + std::to_string(base_port)},
+                         {}, dir / "base.log"));
+  ros::NodeHandle nh;
+  std::vector<sensor_msgs::NavSatFix> rtk;
+  auto fix_sub = nh.subscribe<sensor_msgs::NavSatFix>("/skytrace/fix", 10, [&](const auto& m) {
+    if (m->status.status == sensor_msgs::NavSatStatus::STATUS_GBAS_FIX) rtk.push_back(*m);
+  });
+  std::vector<std::string> args = {(test::binary_dir() / "bin" / "skytrace_ros_node").string(), "_scenario:=" + pair.string(),
+                                   "_receiver:=ROVR", "_rate_hz:=2", "_rtk_base:=127.0.0.1:" + std::to_string(base_port)};
+  ASSERT_TRUE(node_.start(args, RosMaster::instance().environment(), RosMaster::instance().home() / "node_rtk.log"));
+  spin_until([&] { return rtk.size() >= 3; }, "no GBAS_FIX from the rover node");
+  for (const auto& m : rtk) {
+    // The rover of the pair: 55.4935 N, 8.4880 E, 75 m (metres while float, centimetres once fixed).
+    EXPECT_NEAR(m.latitude, 55.4935, 2e-5);
+    EXPECT_NEAR(m.longitude, 8.4880, 3e-5);
+    EXPECT_NEAR(m.altitude, 75.0, 2.0);
+  }
+}
+
 }  // namespace
 }  // namespace skytrace
