@@ -69,7 +69,10 @@ Result<std::unique_ptr<LiveOutputs>> LiveOutputs::open(const LiveSession& sessio
   rx.marker_m = session.marker_ecef_m();
   rx.header = out->header_.get();
 
-  for (const auto& [parameter, path] : paths) {
+  for (const auto& entry : paths) {
+    // Named copies, not structured bindings: clang 14 (the fuzz build) cannot capture those.
+    const std::string& parameter = entry.first;
+    const std::string& path = entry.second;
     const auto& table = live_file_table();
     const auto kind = std::find_if(table.begin(), table.end(), [&](const LiveFileKind& k) { return parameter == k.parameter; });
     if (kind == table.end()) {
