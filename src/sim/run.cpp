@@ -455,10 +455,10 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     }
   } else {
     // With truth or fixes, the epochs are computed on threads of their own while this thread formats
-    // and writes them, in a pipeline of stages, each keeping
-    // its order (the generators and the fix engines keep state from epoch to epoch): the
-    // observations, then (when a sink wants them) the fixes, then the writing. The stages share the
-    // cores; three of them on two cores measured faster than two (docs/performance.md).
+    // and writes them: a pipeline of stages, each keeping its order (the generators and the fix
+    // engines keep state from epoch to epoch): the observations, then (when a sink wants them) the
+    // fixes, then the writing. The stages share the cores; three of them on two cores measured
+    // faster than two (docs/performance.md).
     constexpr size_t kBatchEpochs = 64;
     EpochQueue observed(8), solved(8);
     const bool fix_stage = computes_fixes;
