@@ -120,7 +120,7 @@ std::string ntrip_request(const NtripEndpoint& e, std::string_view user_agent) {
 std::string NtripResponse::feed(std::string_view bytes) {
   if (state_ == State::kStreaming) return chunked_ ? take_chunked(bytes) : std::string(bytes);
   if (state_ == State::kRefused) {
-    if (!source_table_) return {};
+    if (!source_table_ || table_complete_) return {};
     if (header_.size() + bytes.size() <= kMaxSourceTableBytes) header_.append(bytes);
   } else {
     header_.append(bytes);
@@ -181,6 +181,8 @@ std::string NtripResponse::feed(std::string_view bytes) {
     if (starts_with_nocase(line, "STR;")) {
       const std::string_view fields = line.substr(4);
       offered_.emplace_back(fields.substr(0, fields.find(';')));
+    } else if (starts_with_nocase(line, "ENDSOURCETABLE")) {
+      table_complete_ = true;
     }
     header_.erase(0, end + 1);
   }

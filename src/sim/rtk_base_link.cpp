@@ -80,8 +80,9 @@ void RtkBaseLink::service(LiveSession& session) {
     }
     break;
   }
-  // A refusal without a source table to wait for ends the connection now.
-  if (fd_ >= 0 && ntrip_ && response_.state() == io::NtripResponse::State::kRefused && response_.offered_mountpoints().empty()) {
+  // A refusal ends the connection now, once a source table that came with it is complete (or the
+  // caster closes the connection, above).
+  if (fd_ >= 0 && ntrip_ && response_.state() == io::NtripResponse::State::kRefused && !response_.reading_source_table()) {
     refused();
     disconnect();
   }

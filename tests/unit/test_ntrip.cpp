@@ -90,7 +90,12 @@ TEST(NtripResponse, SourceTableMeansNoSuchMountpointAndListsWhatIsOffered) {
       "STR;BASE2;Esbjerg;RTCM 3.3;1006(10);2;GPS;SNIP;DNK;55.49;8.49;0;0;sNTRIP;none;B;N;0;\r\nENDSOURCETABLE\r\n";
   for (const size_t piece : {1, 13, 4096}) {
     NtripResponse r;
-    EXPECT_EQ(feed_in_pieces(r, table, piece), "");
+    // The status line alone: refused, and the offered mountpoints still to come.
+    (void)r.feed(table.substr(0, 20));
+    EXPECT_EQ(r.state(), NtripResponse::State::kRefused);
+    EXPECT_TRUE(r.reading_source_table());
+    EXPECT_EQ(feed_in_pieces(r, table.substr(20), piece), "");
+    EXPECT_FALSE(r.reading_source_table());
     EXPECT_EQ(r.state(), NtripResponse::State::kRefused);
     EXPECT_NE(r.error().find("no such mountpoint"), std::string::npos) << r.error();
     EXPECT_EQ(r.offered_mountpoints(), (std::vector<std::string>{"BASE1", "BASE2"})) << piece;

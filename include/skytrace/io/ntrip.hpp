@@ -51,6 +51,9 @@ class NtripResponse {
   [[nodiscard]] const std::string& error() const { return error_; }
   // The mountpoints of a source table the caster sent instead of the stream.
   [[nodiscard]] const std::vector<std::string>& offered_mountpoints() const { return offered_; }
+  // Refused with a source table whose end (ENDSOURCETABLE) has not come yet: the mountpoints it
+  // offers are still arriving.
+  [[nodiscard]] bool reading_source_table() const { return source_table_ && !table_complete_; }
 
  private:
   std::string take_chunked(std::string_view bytes);
@@ -61,6 +64,7 @@ class NtripResponse {
   State state_ = State::kHeader;
   std::string header_;  // bytes of the header read so far (and of a source table)
   bool source_table_ = false;
+  bool table_complete_ = false;
   bool chunked_ = false;
   // Chunked transfer: the size line being read, and the bytes left of the current chunk (+ CRLF).
   std::string chunk_line_;
