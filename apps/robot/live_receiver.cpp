@@ -2,13 +2,11 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <set>
 
 #include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
-#include "skytrace/io/rtcm3.hpp"
 #include "skytrace/sim/live.hpp"
 #include "skytrace/sim/live_outputs.hpp"
 #include "skytrace/sim/rtk_base_link.hpp"
@@ -53,9 +51,8 @@ struct Receiver::Impl {
   std::optional<sim::LiveEpoch> last;
   double last_time_s = 0.0;
   std::unique_ptr<sim::LiveOutputs> outputs;
-  std::optional<io::Rtcm3Decoder> base_decoder;  // RTK: the base's stream given as bytes
-  std::unique_ptr<sim::RtkBaseLink> base_link;    // RTK: the base's stream read from the network
-  io::RtcmMeasurementConverter base_converter;
+  std::optional<sim::RtcmBaseDecoder> base_decoder;  // RTK: the base's stream given as bytes
+  std::unique_ptr<sim::RtkBaseLink> base_link;       // RTK: the base's stream read from the network
 };
 
 Receiver::Receiver(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -85,19 +82,18 @@ std::unique_ptr<Receiver> Receiver::create(const ReceiverOptions& options, std::
   sim::LiveOptions live_options;
   live_options.pose_timeout_s = options.pose_timeout_s;
   if (!options.receiver_name.empty()) {
-    const auto& receivers = scenario->receivers;
-    const auto it = std::find_if(receivers.begin(), receivers.end(), [&](const auto& r) { return r.name == options.receiver_name; });
-    if (it == receivers.end()) {
-      error = fmt::format("receiver '{}': no such receiver in {}", options.receiver_name, options.scenario_path);
+    auto index = sim::find_receiver(*scenario, options.receiver_name);
+    if (!index) {
+      error = index.error().message;
       return nullptr;
     }
-    live_options.receiver_index = static_cast<size_t>(it - receivers.begin());
+    live_options.receiver_index = *index;
   }
   live_options.rtk = options.rtk || !options.rtk_base.empty();
-  if (live_options.rtk) impl->base_decoder.emplace(impl->start);
+  if (options.rtk) impl->base_decoder.emplace(impl->start);
   if (!options.rtk_base.empty()) {
     auto log = options.log;
-    auto link = sim::RtkBaseLink::create(options.rtk_base, impl->start, "0.1.0", [log](sim::RtkBaseLink::Note kind, const std::string& text) {
+    auto link = sim::RtkBaseLink::create(options.rtk_base, impl->start, [log](sim::RtkBaseLink::Note kind, const std::string& text) {
       if (log) log(kind == sim::RtkBaseLink::Note::kInfo ? 0 : kind == sim::RtkBaseLink::Note::kWarning ? 1 : 2, text);
     });
     if (!link) {
@@ -240,17 +236,10 @@ bool Receiver::step(double time_s, EpochView& out, std::string& error) {
 
 std::string Receiver::add_base_rtcm3(const std::uint8_t* bytes, size_t size) {
   if (!impl_->base_decoder) return "RTCM 3 of a base given to a receiver without RTK";
-  impl_->base_decoder->feed(std::span<const std::uint8_t>(bytes, size));
-  std::string note;
-  for (const auto& epoch : impl_->base_decoder->take_epochs()) {
-    const auto& station = impl_->base_decoder->station();
-    if (!station) {
-      note = "base epochs wait for the station's position (RTCM 1005/1006)";
-      continue;
-    }
-    impl_->session->add_base_epoch(positioning::BaseEpoch{impl_->base_converter.convert(epoch), station->arp_ecef_m});
+  if (!impl_->base_decoder->feed(std::span<const std::uint8_t>(bytes, size), *impl_->session)) {
+    return "base epochs wait for the station's position (RTCM 1005/1006)";
   }
-  return note;
+  return {};
 }
 
 std::vector<std::pair<std::string, std::string>> Receiver::file_parameters() {

@@ -301,13 +301,9 @@ int serve(const ServeArgs& args) {
   if (!scenario) return report_error(scenario.error());
   sim::LiveOptions live_options;
   if (!args.receiver.empty()) {
-    const auto it = std::find_if(scenario->receivers.begin(), scenario->receivers.end(),
-                                 [&](const sim::ReceiverSettings& r) { return r.name == args.receiver; });
-    if (it == scenario->receivers.end()) {
-      return report_error(make_error(ErrorCode::kInvalidArgument, "--receiver " + args.receiver + ": no such receiver in " +
-                                                                      args.scenario));
-    }
-    live_options.receiver_index = static_cast<size_t>(it - scenario->receivers.begin());
+    auto index = sim::find_receiver(*scenario, args.receiver);
+    if (!index) return report_error(index.error().with_context("--receiver"));
+    live_options.receiver_index = *index;
   }
   if (!args.rtk_base_tcp.empty() && !args.rtk_base_ntrip.empty()) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "give one of --rtk-base-tcp and --rtk-base-ntrip"));
@@ -319,7 +315,7 @@ int serve(const ServeArgs& args) {
   }
   std::unique_ptr<sim::RtkBaseLink> rtk_base;
   if (!rtk_source.empty()) {
-    auto link = sim::RtkBaseLink::create(rtk_source, scenario->time.start, kProgramVersion,
+    auto link = sim::RtkBaseLink::create(rtk_source, scenario->time.start,
                                          [](sim::RtkBaseLink::Note kind, const std::string& text) {
                                            if (kind == sim::RtkBaseLink::Note::kInfo) {
                                              std::cout << "skytrace serve: " << text << std::endl;

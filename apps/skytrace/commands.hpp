@@ -8,8 +8,6 @@
 
 namespace skytrace::cli {
 
-// The program's version (--version, the NTRIP user agent).
-inline constexpr const char* kProgramVersion = "0.1.0";
 
 // Documented exit codes (README "Exit codes").
 enum ExitCode : int {

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "skytrace/core/version.hpp"
 #include "skytrace/core/cancellation.hpp"
 
 namespace skytrace::cli {
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
   using namespace skytrace::cli;
   CLI::App app{"skytrace: simulates what a GNSS receiver records, from real ephemerides and a 3D world"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("skytrace ") + kProgramVersion);
+  app.set_version_flag("--version", std::string("skytrace ") + skytrace::version());
   int exit_code = kExitOk;
   skytrace::install_cancellation_handlers();  // serve and gz install their own stop handlers over these
   register_run_command(app, exit_code);

@@ -1,5 +1,7 @@
 #include "skytrace/io/mcap.hpp"
 
+#include "skytrace/core/version.hpp"
+
 #include <fcntl.h>
 #include <lz4frame.h>
 #include <unistd.h>
@@ -20,9 +22,6 @@
 #include <utility>
 #include <vector>
 
-#ifndef SKYTRACE_VERSION_STRING
-#define SKYTRACE_VERSION_STRING "unknown"
-#endif
 
 namespace skytrace::io {
 namespace {
@@ -525,7 +524,7 @@ struct McapWriter::State {
   }
 };
 
-std::string mcap_library_name() { return std::string("skytrace ") + SKYTRACE_VERSION_STRING; }
+std::string mcap_library_name() { return std::string("skytrace ") + version(); }
 
 McapWriter::McapWriter(std::unique_ptr<State> state) : state_(std::move(state)) {}
 McapWriter::~McapWriter() = default;

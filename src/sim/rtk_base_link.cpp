@@ -9,14 +9,27 @@
 #include <cstring>
 #include <span>
 
+#include "skytrace/core/version.hpp"
 #include "skytrace/io/nmea.hpp"
 #include "skytrace/sim/live.hpp"
 
 namespace skytrace::sim {
 
-Result<std::unique_ptr<RtkBaseLink>> RtkBaseLink::create(const std::string& source, GnssTime reference,
-                                                         const std::string& program_version, Notify notify) {
-  std::unique_ptr<RtkBaseLink> link(new RtkBaseLink(reference, "skytrace/" + program_version, std::move(notify)));
+bool RtcmBaseDecoder::feed(std::span<const std::uint8_t> bytes, LiveSession& session) {
+  decoder_.feed(bytes);
+  bool positioned = true;
+  for (const auto& epoch : decoder_.take_epochs()) {
+    if (!decoder_.station()) {
+      positioned = false;
+      continue;
+    }
+    session.add_base_epoch(positioning::BaseEpoch{converter_.convert(epoch), decoder_.station()->arp_ecef_m});
+  }
+  return positioned;
+}
+
+Result<std::unique_ptr<RtkBaseLink>> RtkBaseLink::create(const std::string& source, GnssTime reference, Notify notify) {
+  std::unique_ptr<RtkBaseLink> link(new RtkBaseLink(reference, std::move(notify)));
   if (source.rfind("ntrip://", 0) == 0) {
     auto endpoint = io::parse_ntrip_url(source);
     if (!endpoint) return endpoint.error();
@@ -66,7 +79,10 @@ void RtkBaseLink::service(LiveSession& session) {
           notify_(Note::kInfo, "RTK corrections from " + display_);
         }
       }
-      decoder_.feed(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
+      const bool positioned =
+          decoder_.feed(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), session);
+      if (!positioned && !warned_position_) notify_(Note::kWarning, "RTK base " + display_ + ": no 1005/1006 yet, epochs wait");
+      warned_position_ = warned_position_ || !positioned;
       continue;
     }
     if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
@@ -85,14 +101,6 @@ void RtkBaseLink::service(LiveSession& session) {
   if (fd_ >= 0 && ntrip_ && response_.state() == io::NtripResponse::State::kRefused && !response_.reading_source_table()) {
     refused();
     disconnect();
-  }
-  for (const auto& epoch : decoder_.take_epochs()) {
-    if (!decoder_.station()) {
-      if (!warned_position_) notify_(Note::kWarning, "RTK base " + display_ + ": no 1005/1006 yet, epochs wait");
-      warned_position_ = true;
-      continue;
-    }
-    session.add_base_epoch(positioning::BaseEpoch{converter_.convert(epoch), decoder_.station()->arp_ecef_m});
   }
 }
 
@@ -152,7 +160,7 @@ void RtkBaseLink::connect_now() {
   response_ = io::NtripResponse{};
   streaming_announced_ = false;
   next_gga_ = {};
-  const std::string request = io::ntrip_request(*ntrip_, user_agent_);
+  const std::string request = io::ntrip_request(*ntrip_, std::string("skytrace/") + version());
   if (send(fd_, request.data(), request.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(request.size())) {
     notify_(Note::kWarning, "RTK base " + display_ + ": cannot send the request (" + std::strerror(errno) + ")");
     disconnect();

@@ -22,6 +22,7 @@
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/output_file.hpp"
 #include "skytrace/core/text_file.hpp"
+#include "skytrace/core/version.hpp"
 #include "skytrace/io/rinex_obs.hpp"
 #include "skytrace/orbits/broadcast.hpp"
 #include "skytrace/orbits/nominal.hpp"
@@ -38,7 +39,6 @@
 namespace skytrace::sim {
 namespace {
 
-constexpr const char* kVersion = "skytrace 0.1.0";
 
 constexpr std::string_view kStagingPrefix = ".skytrace-staging-";
 constexpr const char* kStagingLockName = ".lock";
@@ -536,7 +536,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
 
   summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   nlohmann::json j;
-  j["skytrace_version"] = kVersion;
+  j["skytrace_version"] = std::string("skytrace ") + version();
   j["scenario"] = s.name;
   j["epochs"] = summary.epochs;
   j["satellite_epochs"] = summary.satellite_epochs;

@@ -464,6 +464,16 @@ Result<Scenario> parse_scenario(const std::string& text, const std::string& name
   }
 }
 
+Result<size_t> find_receiver(const Scenario& scenario, std::string_view name) {
+  std::string names;
+  for (size_t i = 0; i < scenario.receivers.size(); ++i) {
+    if (scenario.receivers[i].name == name) return i;
+    names += (i > 0 ? ", " : "") + scenario.receivers[i].name;
+  }
+  return make_error(ErrorCode::kInvalidArgument,
+                    "receiver '" + std::string(name) + "': no such receiver in " + scenario.name + " (it has " + names + ")");
+}
+
 Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
   auto text = read_text_file(path);
   if (!text) return text.error();

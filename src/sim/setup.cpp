@@ -10,6 +10,7 @@
 #include <set>
 
 #include "skytrace/atmosphere/ionex.hpp"
+#include "skytrace/core/version.hpp"
 #include "skytrace/orbits/nominal.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "skytrace/receiver/antenna.hpp"
@@ -436,7 +437,7 @@ io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverS
                                               const std::string& antenna_in_use) {
   io::ObservationHeader h;
   h.version = s.output.rinex_version == "4.00" ? 4.00 : 3.04;
-  h.program = "skytrace 0.1.0";
+  h.program = std::string("skytrace ") + version();
   h.run_by = "skytrace";
   h.date = rinex_creation_date(s);
   h.comments.push_back("Simulated by skytrace from scenario " + s.name);
@@ -447,7 +448,7 @@ io::ObservationHeader make_observation_header(const Scenario& s, const ReceiverS
   h.agency = "skytrace";
   h.receiver_number = "1";
   h.receiver_type = rx.receiver_type;
-  h.receiver_version = "0.1.0";
+  h.receiver_version = version();
   h.antenna_number = "1";
   // The scenario's antenna_type says what the header says; else the IGS name of the antenna in use.
   h.antenna_type = rx.antenna_type.empty() ? antenna_in_use : rx.antenna_type;

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "skytrace/core/error.hpp"
@@ -22,6 +23,20 @@ namespace skytrace::sim {
 
 class LiveSession;
 
+// A base's RTCM 3 bytes, in any pieces and framing, decoded into base epochs (with the station's
+// position from 1005/1006) for a session: what RtkBaseLink reads from the network, or a ROS node
+// from an rtcm_msgs topic.
+class RtcmBaseDecoder {
+ public:
+  explicit RtcmBaseDecoder(GnssTime reference) : decoder_(reference) {}
+  // Hands the complete epochs to the session. False while epochs wait for the station's position.
+  bool feed(std::span<const std::uint8_t> bytes, LiveSession& session);
+
+ private:
+  io::Rtcm3Decoder decoder_;
+  io::RtcmMeasurementConverter converter_;
+};
+
 class RtkBaseLink {
  public:
   enum class Note { kInfo, kWarning, kError };
@@ -31,7 +46,7 @@ class RtkBaseLink {
   // `source`: HOST:PORT, or ntrip://[USER[:PASSWORD]@]HOST[:PORT]/MOUNTPOINT. `reference`: an
   // instant near the data (RTCM times of week). Errors name the source (never the password).
   [[nodiscard]] static Result<std::unique_ptr<RtkBaseLink>> create(const std::string& source, GnssTime reference,
-                                                                   const std::string& program_version, Notify notify);
+                                                                   Notify notify);
   ~RtkBaseLink();
   RtkBaseLink(const RtkBaseLink&) = delete;
   RtkBaseLink& operator=(const RtkBaseLink&) = delete;
@@ -45,8 +60,7 @@ class RtkBaseLink {
   void send_position(const positioning::PositionFix& fix);
 
  private:
-  RtkBaseLink(GnssTime reference, std::string user_agent, Notify notify)
-      : decoder_(reference), user_agent_(std::move(user_agent)), notify_(std::move(notify)) {}
+  RtkBaseLink(GnssTime reference, Notify notify) : decoder_(reference), notify_(std::move(notify)) {}
   void refused();
   void connect_now();
   void disconnect();
@@ -54,9 +68,7 @@ class RtkBaseLink {
   std::string host_, port_, display_;
   std::optional<io::NtripEndpoint> ntrip_;
   io::NtripResponse response_;
-  io::Rtcm3Decoder decoder_;
-  io::RtcmMeasurementConverter converter_;
-  std::string user_agent_;
+  RtcmBaseDecoder decoder_;
   Notify notify_;
   int fd_ = -1;
   bool streaming_announced_ = false;

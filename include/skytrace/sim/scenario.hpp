@@ -169,6 +169,10 @@ struct Scenario {
 };
 
 // Reads a scenario file; relative paths inside are resolved against the file's folder.
+// The index of the receiver named `name` (a live receiver serves one of a scenario's receivers);
+// an error naming the receivers there are otherwise.
+[[nodiscard]] Result<size_t> find_receiver(const Scenario& scenario, std::string_view name);
+
 // `overrides` ("models.ionosphere=none", "ephemeris.precise_orbits=[]": a key path and a YAML value)
 // replace or add keys before the scenario is checked.
 [[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path,
