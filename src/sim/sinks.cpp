@@ -212,8 +212,7 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
   }
 }
 
-// A table written zstd-compressed (output.truth_format csv.zst): libzstd compresses on a thread of
-// its own, so the run's writer thread only formats the rows (docs/performance.md).
+// A table written zstd-compressed (output.truth_format csv.zst), compressed as it is written.
 class CompressedFile final : public ByteStream {
  public:
   explicit CompressedFile(std::unique_ptr<io::ZstdFileWriter> writer) : writer_(std::move(writer)) {}
@@ -224,35 +223,23 @@ class CompressedFile final : public ByteStream {
   std::unique_ptr<io::ZstdFileWriter> writer_;
 };
 
-// truth.csv: every term of every signal of every receiver (RunOptions::write_truth).
-class TruthSink final : public EpochSink {
+// A table of the truth, rows per receiver epoch: truth.csv (every term of every signal of every
+// receiver, RunOptions::write_truth) and paths.csv (models.multipath: every path of every
+// satellite-epoch with any).
+class TableSink final : public EpochSink {
  public:
-  explicit TruthSink(std::unique_ptr<ByteStream> file) : file_(std::move(file)) {}
+  using AppendRows = void (*)(std::string&, const receiver::EpochObservations&, const std::string&);
+  TableSink(std::unique_ptr<ByteStream> file, AppendRows append_rows) : file_(std::move(file)), append_rows_(append_rows) {}
   Status add(const SinkEpoch& e) override {
     text_.clear();
-    append_truth(text_, *e.observations, e.receiver->settings->name);
+    append_rows_(text_, *e.observations, e.receiver->settings->name);
     return file_->write(text_);
   }
   Status finish() override { return file_->close(); }
 
  private:
   std::unique_ptr<ByteStream> file_;
-  std::string text_;
-};
-
-// paths.csv (models.multipath): every path of every satellite-epoch with any path.
-class PathsSink final : public EpochSink {
- public:
-  explicit PathsSink(std::unique_ptr<ByteStream> file) : file_(std::move(file)) {}
-  Status add(const SinkEpoch& e) override {
-    text_.clear();
-    append_paths(text_, *e.observations, e.receiver->settings->name);
-    return file_->write(text_);
-  }
-  Status finish() override { return file_->close(); }
-
- private:
-  std::unique_ptr<ByteStream> file_;
+  AppendRows append_rows_;
   std::string text_;
 };
 
@@ -408,8 +395,8 @@ class ReportSink final : public EpochSink {
 };
 
 // A table of the truth (truth.csv, paths.csv): NAME.zst when output.truth_format is csv.zst, else NAME.
-template <typename Sink>
-Result<std::unique_ptr<EpochSink>> make_table_sink(const RunContext& c, const char* name, const char* header) {
+Result<std::unique_ptr<EpochSink>> make_table_sink(const RunContext& c, const char* name, const char* header,
+                                                   TableSink::AppendRows append_rows) {
   std::unique_ptr<ByteStream> stream;
   if (c.scenario->output.truth_format == "csv") {
     auto file = StagedFile::create(c.staging_dir / name);
@@ -421,7 +408,7 @@ Result<std::unique_ptr<EpochSink>> make_table_sink(const RunContext& c, const ch
     stream = std::make_unique<CompressedFile>(std::move(*file));
   }
   if (auto st = stream->write(header); !st) return st.error();
-  return std::unique_ptr<EpochSink>(std::make_unique<Sink>(std::move(stream)));
+  return std::unique_ptr<EpochSink>(std::make_unique<TableSink>(std::move(stream), append_rows));
 }
 
 }  // namespace
@@ -473,9 +460,9 @@ const std::vector<SinkKind>& run_sink_table() {
   static const std::vector<SinkKind> table = {
       {"obs.rnx", [](const RunContext&) { return true; }, false, &RinexObsSink::make},
       {"truth.csv(.zst)", [](const RunContext& c) { return c.write_truth; }, false,
-       [](const RunContext& c) { return make_table_sink<TruthSink>(c, "truth.csv", kTruthHeader); }},
+       [](const RunContext& c) { return make_table_sink(c, "truth.csv", kTruthHeader, &append_truth); }},
       {"paths.csv(.zst)", [](const RunContext& c) { return c.write_truth && c.scenario->models.multipath; }, false,
-       [](const RunContext& c) { return make_table_sink<PathsSink>(c, "paths.csv", kPathsHeader); }},
+       [](const RunContext& c) { return make_table_sink(c, "paths.csv", kPathsHeader, &append_paths); }},
       {"obs.rtcm3", [](const RunContext& c) { return c.scenario->output.rtcm3; }, false,
        [](const RunContext& c) {
          return per_receiver_files(c, "obs", ".rtcm3", [&](const SinkReceiver& rx) {
