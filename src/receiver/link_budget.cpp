@@ -163,14 +163,30 @@ double block_power_offset_db(SatelliteBlock block, const Signal& signal) {
   // GPS L2C (the CM/CL rows and their sum): the ICD's -158.5 dBW for GPS III against the row's
   // -160.0, then what IIF and III deliver beyond the usual margin relative to IIR-M, fitted on
   // ESBC 2020-177 (PolaRx5) and tested on NYA1 2024-124 (NetR9): docs/validation.md.
-  const bool l2c = signal.system == GnssSystem::kGps && signal.band == '2' &&
-                   std::string_view("SLX").find(signal.attribute) != std::string_view::npos;
-  if (!l2c) return 0.0;
-  switch (block) {
-    case SatelliteBlock::kGpsIIF: return 2.9;
-    case SatelliteBlock::kGpsIIIA: return 1.5 + 2.0;
-    default: return 0.0;
+  const bool gps_l2 = signal.system == GnssSystem::kGps && signal.band == '2';
+  if (gps_l2 && std::string_view("SLX").find(signal.attribute) != std::string_view::npos) {
+    switch (block) {
+      case SatelliteBlock::kGpsIIF: return 2.9;
+      case SatelliteBlock::kGpsIIIA: return 1.5 + 2.0;
+      default: return 0.0;
+    }
   }
+  // GPS L2 P(Y): what each block delivers against the row's -161.5 dBW plus the usual margin. IIR-M
+  // and IIF can raise their P(Y) power ("flex power", Steigenberger et al. 2019, GPS Solutions 23:8,
+  // regional and switched by the operator), IIR and III transmit it near the minimum. Fitted on
+  // ESBC 2020-177 (PolaRx5, G2W C/N0 per block after the squaring loss) and tested unchanged on
+  // NYA1 2024-124 and SLAC 2021-118 (NetR9): docs/validation.md.
+  if (gps_l2 && std::string_view("DPWY").find(signal.attribute) != std::string_view::npos) {
+    switch (block) {
+      case SatelliteBlock::kGpsIIRA:
+      case SatelliteBlock::kGpsIIRB: return -4.1;
+      case SatelliteBlock::kGpsIIRM: return 1.4;
+      case SatelliteBlock::kGpsIIF: return 3.4;
+      case SatelliteBlock::kGpsIIIA: return -2.8;
+      default: return 0.0;
+    }
+  }
+  return 0.0;
 }
 
 LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal, const Eigen::Vector3d& satellite_m,

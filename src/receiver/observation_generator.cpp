@@ -66,8 +66,8 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
     data_modulated_[signal] = has_data_modulation(*info);
   }
   settings_.signals = std::move(trackable);
-  // Aided semi-codeless loops follow the satellite's L1 C/A loop: the C/A signal comes first.
-  if (settings_.profile.semicodeless_aiding_bandwidth_hz > 0.0) {
+  // Aided semi-codeless channels follow the satellite's L1 C/A channel: the C/A signal comes first.
+  if (settings_.profile.semicodeless_aiding_bandwidth_hz > 0.0 || settings_.profile.semicodeless_threshold_dbhz) {
     std::stable_partition(settings_.signals.begin(), settings_.signals.end(),
                           [](const Signal& s) { return !is_semicodeless(s); });
   }
@@ -303,12 +303,17 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
   records_used_.clear();
   // The phase error of the satellite's L1 C/A loop at this epoch, which aided loops follow.
   std::optional<double> aiding_phase_noise_m;
+  bool aiding_locked = false;  // the satellite's L1 C/A channel this epoch (candidates list it first)
   for (const stages::Candidate& candidate : candidates_) {
     const Signal& signal = *candidate.signal;
     const double cn0_dbhz = candidate.cn0_dbhz;
     // Stage 4: channel, acquisition, lock.
-    const auto lock = tracking_.lock(profile, sat, signal, cn0_dbhz, tag, last_tag_, channels_used, acquisition);
+    const std::optional<double> aided_threshold_dbhz =
+        aiding_locked && is_semicodeless(signal) ? profile.semicodeless_threshold_dbhz : std::nullopt;
+    const auto lock =
+        tracking_.lock(profile, sat, signal, cn0_dbhz, tag, last_tag_, channels_used, acquisition, aided_threshold_dbhz);
     if (lock == stages::TrackingState::Lock::kNone) continue;
+    if (signal == kAidingSignal) aiding_locked = true;
     // The receiver side: the record a receiver uses for this signal (the message that belongs to
     // it, Galileo E5a: F/NAV), which nav.rnx must carry.
     records_used_.emplace_back(candidate.record.kepler, candidate.record.glonass, candidate.record.sbas);

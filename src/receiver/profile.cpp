@@ -119,7 +119,8 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   tracking.expect_keys({"dll_bandwidth_hz", "pll_bandwidth_hz", "fll_bandwidth_hz", "correlator_spacing_chips",
                         "integration_time_s", "acquisition_threshold_dbhz", "tracking_threshold_dbhz",
                         "acquisition_time_s", "half_cycle_resolution_s", "cn0_resolution_dbhz",
-                        "output_requires_ephemeris", "semicodeless_aiding_bandwidth_hz"});
+                        "output_requires_ephemeris", "semicodeless_aiding_bandwidth_hz",
+                        "semicodeless_threshold_dbhz"});
   p.dll_bandwidth_hz = tracking.required("dll_bandwidth_hz").as_double_in(0.0, 50.0);
   p.pll_bandwidth_hz = tracking.required("pll_bandwidth_hz").as_double_in(0.0, 100.0);
   p.fll_bandwidth_hz = tracking.required("fll_bandwidth_hz").as_double_in(0.0, 50.0);
@@ -138,6 +139,13 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   if (auto c = tracking.child("output_requires_ephemeris")) p.output_requires_ephemeris = c->as_bool();
   if (auto c = tracking.child("semicodeless_aiding_bandwidth_hz")) {
     p.semicodeless_aiding_bandwidth_hz = c->as_double_in(0.0, 100.0);
+  }
+  if (auto c = tracking.child("semicodeless_threshold_dbhz")) {
+    p.semicodeless_threshold_dbhz = c->as_double_in(0.0, 60.0);
+    if (*p.semicodeless_threshold_dbhz > p.tracking_threshold_dbhz) {
+      c->fail("must not exceed tracking.tracking_threshold_dbhz (aided semi-codeless channels hold weaker signals "
+              "than unaided ones)");
+    }
   }
 
   p.oscillator = parse_oscillator(root.required("oscillator"));

@@ -449,7 +449,7 @@ std::string receiver_with_antenna(const std::string& antenna, const std::string&
 TEST_F(BadInputCatalogue, UnknownAntennaListsTheKnownOnes) {
   write_text(dir_ / "s.yaml", nominal_scenario(receiver_with_antenna("no-such-antenna", "[G1C]")));
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3,
-           "s.yaml: receiver.antenna: unknown antenna 'no-such-antenna' .*known: ann-mb, choke-ring-ash701945e");
+           "s.yaml: receiver.antenna: unknown antenna 'no-such-antenna' .*known: ann-mb, choke-ring-ash701073, choke-ring-ash701945e");
   EXPECT_FALSE(fs::exists(dir_ / "out" / "obs.rnx"));
 }
 

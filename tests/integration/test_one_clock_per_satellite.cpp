@@ -166,16 +166,17 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   // aiding key reproduces 1d3c1d5's hash 0x11e6ee0c3fde63f7), then the four L2C columns (L2C power
   // per GPS block, and the refitted G2L loss; 0x06976b7b5220e15c before it), and in session 6 the
   // header's ANT # / TYPE, which now names the antenna profile in use (ASH701945E_M SCIS; the
-  // records unchanged, 0x56b465d10e205e1f before). Update the value only with a deliberate change
-  // of the GPS model.
+  // records unchanged, 0x56b465d10e205e1f before), and in session 8 the G2W columns (L2 P(Y) power
+  // per GPS block and the semi-codeless threshold: more G2W records, 0x8584037ad1e1a088 and 264,615
+  // bytes before). Update the value only with a deliberate change of the GPS model.
   const auto scenario = test::shared_data_dir().parent_path() / "contract" / "esbc-realistic.yaml";
   if (!std::filesystem::exists(scenario)) GTEST_SKIP() << "contract scenario absent";
   const auto out = dir_ / "gps";
   const auto r = run(scenario, out, "--no-truth --set 'receiver.signals=[G1C, G2W, G2L, G5Q]'");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string bytes = read_bytes(out / "obs.rnx");
-  EXPECT_EQ(bytes.size(), 264615u);
-  EXPECT_EQ(fnv1a64(bytes), 0x8584037ad1e1a088ULL);
+  EXPECT_EQ(bytes.size(), 267303u);
+  EXPECT_EQ(fnv1a64(bytes), 0x7ed5f051b41c3ed8ULL);
 }
 
 }  // namespace

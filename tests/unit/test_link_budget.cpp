@@ -101,7 +101,7 @@ TEST(LinkBudget, GpsL2cPowerPerBlock) {
   EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, l2l), 3.5);
   EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, Signal::parse("G2S").value()), 3.5);
   EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, Signal::parse("G2X").value()), 3.5);
-  for (const char* other : {"G1C", "G2W", "G5Q", "J2L", "E5Q"}) {
+  for (const char* other : {"G1C", "G1W", "G5Q", "J2L", "E5Q"}) {
     EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIF, Signal::parse(other).value()), 0.0) << other;
   }
   EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kUnknown, l2l), 0.0);
@@ -115,6 +115,22 @@ TEST(LinkBudget, GpsL2cPowerPerBlock) {
   const Eigen::Vector3d satellite(kGpsOrbit_m, 0.0, 0.0);
   const double base = link_budget(profile, tracked, satellite, receiver, 90.0, 0.0, 0.0).cn0_dbhz();
   EXPECT_NEAR(link_budget(profile, tracked, satellite, receiver, 90.0, 0.0, 0.0, 2.9).cn0_dbhz(), base + 2.9, 1e-12);
+}
+
+// GPS L2 P(Y) per block (fitted on ESBC's G2W): IIR and III below the row's usual margin, the
+// flex-power blocks IIR-M and IIF above it; every P(Y) code of band 2, not L1 P(Y) or L2C.
+TEST(LinkBudget, GpsL2PyPowerPerBlock) {
+  for (const char* code : {"G2W", "G2P", "G2Y", "G2D"}) {
+    const Signal l2w = Signal::parse(code).value();
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIRA, l2w), -4.1) << code;
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIRB, l2w), -4.1) << code;
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIRM, l2w), 1.4) << code;
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIF, l2w), 3.4) << code;
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIIA, l2w), -2.8) << code;
+    EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kUnknown, l2w), 0.0) << code;
+  }
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIF, Signal::parse("G1W").value()), 0.0);
+  EXPECT_DOUBLE_EQ(block_power_offset_db(SatelliteBlock::kGpsIIRM, Signal::parse("G2L").value()), 0.0);
 }
 
 }  // namespace

@@ -106,6 +106,9 @@ TEST(ReceiverProfiles, ErrorsNameFileLineAndField) {
   EXPECT_NE(e.find("channels: expected a whole number"), std::string::npos) << e;
   e = error_of(replaced(kValid, "tracking_threshold_dbhz: 22", "tracking_threshold_dbhz: 35"));
   EXPECT_NE(e.find("tracking.tracking_threshold_dbhz: must not exceed"), std::string::npos) << e;
+  e = error_of(replaced(kValid, "tracking_threshold_dbhz: 22", "tracking_threshold_dbhz: 22\n  semicodeless_threshold_dbhz: 25"));
+  EXPECT_NE(e.find("tracking.semicodeless_threshold_dbhz: must not exceed tracking.tracking_threshold_dbhz"),
+            std::string::npos) << e;
   e = error_of(replaced(kValid, "rhcp_gain_dbic: [-5, 5]", "rhcp_gain_dbic: [-5, 5, 6]"));
   EXPECT_NE(e.find("antenna.rhcp_gain_dbic: expected 2 gains"), std::string::npos) << e;
   e = error_of(replaced(kValid, "elevation_deg: [0, 90]", "elevation_deg: [90, 0]"));
@@ -312,7 +315,7 @@ TEST(AntennaProfiles, MessagesNameFileLineAndField) {
 
 TEST(AntennaProfiles, ShippedAntennasAndEveryProfilesDefaultCoverItsSignals) {
   const auto names = available_antenna_names();
-  for (const char* name : {"choke-ring-ash701945e", "choke-ring-dm", "survey-patch", "ann-mb", "helical", "smartphone",
+  for (const char* name : {"choke-ring-ash701945e", "choke-ring-ash701073", "choke-ring-dm", "survey-patch", "ann-mb", "helical", "smartphone",
                            "generic-geodetic"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
     auto a = load_antenna(name);
@@ -392,6 +395,10 @@ TEST(AntennaProfiles, FoundByNamePathOrIgsName) {
   EXPECT_EQ(other_radome.name, "survey-patch");
   EXPECT_EQ(other_radome.rinex_type, "TRM59800.00     LEIT");
   EXPECT_EQ(load_antenna("TRM59800.80").value().name, "choke-ring-dm");  // radome NONE
+  const AntennaProfile nya1 = load_antenna("ASH701073.1     SNOW").value();
+  EXPECT_EQ(nya1.name, "choke-ring-ash701073");  // the L1/L2 element: ESBC's band responses
+  EXPECT_DOUBLE_EQ(nya1.bands.at("5").response_db, -5.5);
+  EXPECT_DOUBLE_EQ(nya1.bands.at("6").response_db, -2.75);
   TempDir dir;
   const auto scenario_dir = dir.path() / "scenario";
   write(scenario_dir / "profiles" / "antennas" / "mine.yaml", kAntenna);
@@ -403,7 +410,7 @@ TEST(AntennaProfiles, FoundByNamePathOrIgsName) {
   ASSERT_FALSE(unknown);
   const std::string& e = unknown.error().message;
   EXPECT_NE(e.find("unknown antenna 'no-such-antenna'"), std::string::npos) << e;
-  EXPECT_NE(e.find("known: ann-mb, choke-ring-ash701945e, choke-ring-dm, generic-geodetic, helical, mine, "),
+  EXPECT_NE(e.find("known: ann-mb, choke-ring-ash701073, choke-ring-ash701945e, choke-ring-dm, generic-geodetic, helical, mine, "),
             std::string::npos) << e;
   auto missing = load_antenna("ant/none.yaml", scenario_dir);
   ASSERT_FALSE(missing);

@@ -80,7 +80,9 @@ struct LinkBudget {
 // The power a satellite generation delivers relative to its signal's row of the ICD table (dB,
 // added to the received power). GPS L2C: the ICD minimum of GPS III (IS-GPS-200 Table 3-Vb,
 // -158.5 dBW against -160.0 for IIR-M/IIF) and the measured surplus of IIF and III over IIR-M
-// (docs/validation.md, "GPS L2C power per block"). 0 elsewhere.
+// (docs/validation.md, "GPS L2C power per block"); GPS L2 P(Y): per block, IIR and III near the
+// minimum, IIR-M and IIF above it (flex power; docs/validation.md, "GPS L2 P(Y) power per
+// block"). 0 elsewhere.
 [[nodiscard]] double block_power_offset_db(SatelliteBlock block, const Signal& signal);
 
 // The budget of a signal from a satellite at `satellite_m` (ECEF) to a receiver at `receiver_m`

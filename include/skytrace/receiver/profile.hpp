@@ -112,6 +112,10 @@ struct ReceiverProfile {
   // resolved `half_cycle_resolution_s` after acquisition.
   double acquisition_threshold_dbhz = 0.0;
   double tracking_threshold_dbhz = 0.0;
+  // Semi-codeless P(Y) channels (GPS L1W/L2W) take their code and carrier from the satellite's
+  // L1 C/A channel and need no search: while L1 C/A is locked they are acquired and kept down to
+  // this C/N0 (as reported). Unset (nullopt): the acquisition and tracking thresholds above.
+  std::optional<double> semicodeless_threshold_dbhz;
   double acquisition_time_s = 0.0;
   double half_cycle_resolution_s = 0.0;
   double cn0_resolution_dbhz = 0.25;

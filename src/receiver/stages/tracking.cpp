@@ -21,7 +21,8 @@ void TrackingState::lost(const SatelliteId& sat, std::span<const Signal> signals
 
 TrackingState::Lock TrackingState::lock(const ReceiverProfile& profile, const SatelliteId& sat, const Signal& signal,
                                         double cn0_dbhz, const GnssTime& tag, const std::optional<GnssTime>& last_tag,
-                                        int& channels_used, SatelliteAcquisition& satellite) {
+                                        int& channels_used, SatelliteAcquisition& satellite,
+                                        std::optional<double> aided_threshold_dbhz) {
   Arc& arc = arcs_[SignalKey{sat, signal}];
   const bool was_tracked = arc.active && last_tag && arc.last_tag == *last_tag;
   if (profile.channel_count > 0 && channels_used >= profile.channel_count) {
@@ -31,7 +32,7 @@ TrackingState::Lock TrackingState::lock(const ReceiverProfile& profile, const Sa
     return Lock::kNone;
   }
   if (was_tracked) {
-    if (cn0_dbhz < profile.tracking_threshold_dbhz) {
+    if (cn0_dbhz < aided_threshold_dbhz.value_or(profile.tracking_threshold_dbhz)) {
       arc.active = false;
       arc.above_since.reset();
       satellite.not_tracked_because = "below the tracking threshold";
@@ -41,7 +42,7 @@ TrackingState::Lock TrackingState::lock(const ReceiverProfile& profile, const Sa
     return Lock::kContinuing;
   }
   arc.active = false;
-  if (cn0_dbhz < satellite.acquisition_threshold_dbhz) {
+  if (cn0_dbhz < aided_threshold_dbhz.value_or(satellite.acquisition_threshold_dbhz)) {
     arc.above_since.reset();
     satellite.not_tracked_because = "below the acquisition threshold";
     return Lock::kNone;

@@ -63,10 +63,12 @@ class TrackingState {
 
   enum class Lock { kNone, kContinuing, kNewArc };
   // Channel, thresholds and acquisition time of one candidate signal at `tag` (previous epoch
-  // `last_tag`); `channels_used` counts the receiver's busy channels this epoch.
+  // `last_tag`); `channels_used` counts the receiver's busy channels this epoch. An aided channel
+  // (a semi-codeless one whose L1 C/A channel is locked) is acquired and kept down to
+  // `aided_threshold_dbhz` instead of the acquisition and tracking thresholds.
   [[nodiscard]] Lock lock(const ReceiverProfile& profile, const SatelliteId& sat, const Signal& signal, double cn0_dbhz,
                           const GnssTime& tag, const std::optional<GnssTime>& last_tag, int& channels_used,
-                          SatelliteAcquisition& satellite);
+                          SatelliteAcquisition& satellite, std::optional<double> aided_threshold_dbhz = std::nullopt);
 
   struct CarrierArc {
     bool loss_of_lock = false;           // a new arc starts here (acquisition or slip)
