@@ -92,16 +92,21 @@ std::optional<Motion> motion_of(const positioning::PositionFix& fix) {
   return m;
 }
 
-std::string gga(const positioning::PositionFix& fix, const std::string& talker, const UtcStamp& stamp) {
+std::string gga(const positioning::PositionFix& fix, const std::string& talker, const UtcStamp& stamp,
+                const GeoidGrid* geoid) {
   if (!has_fix(fix)) return fmt::format("{}GGA,{},,,,,0,00,,,M,,M,,", talker, stamp.hhmmss);
-  // Without a geoid model the altitude field holds the ellipsoidal height and the separation 0,
-  // so that altitude + separation (what gpsd and nmea_navsat_driver add up) is the exact height.
+  // Altitude above mean sea level and the geoid separation N, as receivers give them (the
+  // ellipsoidal height is altitude + N, what gpsd and nmea_navsat_driver add up). Without a geoid
+  // model: the ellipsoidal height with separation 0, so the sum is still exact.
   // Differential fixes give the age of the corrections (s); the base's station id is not known here.
   const std::string age = fix.relative && gga_quality(fix) != 1 ? fmt::format("{:.1f}", fix.relative->age_s) : "";
-  return fmt::format("{}GGA,{},{},{},{},{:02d},{:.2f},{:.3f},M,0.000,M,{},", talker, stamp.hhmmss,
+  double separation_m = geoid != nullptr ? geoid->undulation_m(fix.position.latitude_deg, fix.position.longitude_deg)
+                                         : 0.0;
+  if (!std::isfinite(separation_m)) separation_m = 0.0;
+  return fmt::format("{}GGA,{},{},{},{},{:02d},{:.2f},{:.3f},M,{:.3f},M,{},", talker, stamp.hhmmss,
                      angle_field(fix.position.latitude_deg, 2, 'N', 'S'),
                      angle_field(fix.position.longitude_deg, 3, 'E', 'W'), gga_quality(fix), fix.satellites_used,
-                     fix.hdop, fix.position.height_m, age);
+                     fix.hdop, fix.position.height_m - separation_m, separation_m, age);
 }
 
 std::string rmc(const positioning::PositionFix& fix, const std::string& talker, const UtcStamp& stamp) {
@@ -349,7 +354,7 @@ std::vector<std::string> nmea_epoch(const positioning::PositionFix& fix, const N
   const UtcStamp stamp = utc_stamp(has_fix(fix) ? fix.time : fix.receiver_time);
   const std::string talker = talker_of_fix(fix);
   std::vector<std::string> sentences;
-  if (settings.gga) sentences.push_back(nmea_sentence(gga(fix, talker, stamp)));
+  if (settings.gga) sentences.push_back(nmea_sentence(gga(fix, talker, stamp, settings.geoid)));
   if (settings.gsa) {
     for (const auto& body : gsa(fix, talker)) sentences.push_back(nmea_sentence(body));
   }

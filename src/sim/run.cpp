@@ -20,6 +20,7 @@
 #include "skytrace/atmosphere/ionex.hpp"
 #include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/constants.hpp"
+#include "skytrace/core/geoid.hpp"
 #include "skytrace/core/output_file.hpp"
 #include "skytrace/core/text_file.hpp"
 #include "skytrace/core/version.hpp"
@@ -562,6 +563,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     j["precise_truth"] = precise;
   }
   j["warnings"] = summary.warnings;
+  // Which heights fix.nmea's GGA gives (above mean sea level with a geoid model, or ellipsoidal).
+  if (s.output.fix && s.output.nmea) j["nmea_heights"] = default_geoid_note();
   j["configuration"] = nlohmann::json::parse(scenario_to_json(s));
   if (auto st = write_file_atomically(staging->file("summary.json"), j.dump(2) + "\n"); !st) return st.error();
 

@@ -232,10 +232,11 @@ size_t rtk_fixed_gga_at_the_rover(const std::string& nmea) {
     for (std::stringstream s(line); std::getline(s, line, ',');) f.push_back(line);
     if (f.size() < 10 || f[6] != "4") continue;
     ++fixed;
-    // 55.4935 N, 8.4880 E, 75 m: ddmm.mmmmmmm to within a few centimetres.
+    // 55.4935 N, 8.4880 E, 75 m: ddmm.mmmmmmm to within a few centimetres; altitude above mean sea
+    // level plus the geoid separation is the ellipsoidal height.
     EXPECT_NEAR(std::stod(f[2].substr(2)) / 60.0 + std::stod(f[2].substr(0, 2)), 55.4935, 1e-6) << line;
     EXPECT_NEAR(std::stod(f[4].substr(3)) / 60.0 + std::stod(f[4].substr(0, 3)), 8.4880, 2e-6) << line;
-    EXPECT_NEAR(std::stod(f[9]), 75.0, 0.1) << line;
+    EXPECT_NEAR(std::stod(f[9]) + std::stod(f[11]), 75.0, 0.1) << line;
   }
   return fixed;
 }

@@ -2,6 +2,7 @@
 // hand-made fixes against text written out by hand (checksums computed separately with Python).
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,13 @@ positioning::PositionFix esbc_like_fix() {
   return fix;
 }
 
+// Heights as a receiver without a geoid model gives them: ellipsoidal, separation 0.
+NmeaSettings ellipsoidal() {
+  NmeaSettings s;
+  s.geoid = nullptr;
+  return s;
+}
+
 TEST(Nmea, ChecksumOfTheTextbookGga) {
   EXPECT_EQ(nmea_checksum("GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,"), "47");
   EXPECT_TRUE(nmea_checksum_valid("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47\r\n"));
@@ -64,7 +72,7 @@ TEST(Nmea, EverySentenceOfAMultiConstellationFix) {
       "$GNZDA,123456.50,25,06,2020,00,00*7B\r\n",
       "$GNGST,123456.50,0.289,2.000,1.000,90.00,1.000,2.000,3.000*42\r\n",
   };
-  const auto sentences = nmea_epoch(esbc_like_fix());
+  const auto sentences = nmea_epoch(esbc_like_fix(), ellipsoidal());
   ASSERT_EQ(sentences.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(sentences[i], expected[i]) << i;
 }
@@ -75,7 +83,7 @@ TEST(Nmea, SingleSystemTalkerAndSouthWestHemisphere) {
   fix.hdop = 1.0;
   fix.satellites_used = 1;
   fix.satellites = {sat("G05", "G1C", 45.4, 30.6, 44.6, true, 0.3)};
-  NmeaSettings only_gga;
+  NmeaSettings only_gga = ellipsoidal();
   only_gga.gsa = only_gga.gsv = only_gga.rmc = only_gga.vtg = only_gga.zda = only_gga.gst = false;
   const auto sentences = nmea_epoch(fix, only_gga);
   ASSERT_EQ(sentences.size(), 1U);
@@ -234,7 +242,7 @@ TEST(Nmea, RtkFixesReportTheirQualityModeAndCorrectionAge) {
   fix.relative->age_s = 1.25;
   auto sentence = [&](std::string_view type) {
     std::string found;
-    for (const auto& s : nmea_epoch(fix)) {
+    for (const auto& s : nmea_epoch(fix, ellipsoidal())) {
       if (s.compare(3, type.size(), type) == 0) found = s;
     }
     return found;
@@ -250,6 +258,29 @@ TEST(Nmea, RtkFixesReportTheirQualityModeAndCorrectionAge) {
   EXPECT_NE(sentence("GGA").find(",E,2,03,"), std::string::npos);
   EXPECT_NE(sentence("VTG").find(",K,D*"), std::string::npos);
   for (const auto& s : nmea_epoch(fix)) EXPECT_TRUE(nmea_checksum_valid(s)) << s;
+}
+
+// GGA with a geoid model: altitude above mean sea level = ellipsoidal height - N, and N in the
+// separation field, so that their sum (what gpsd adds up) is still the ellipsoidal height. The grid
+// is EGM96 from Debian's proj-data (scripts/setup installs it).
+TEST(Nmea, GgaGivesTheAltitudeAboveTheGeoidAndItsSeparation) {
+  auto grid = GeoidGrid::load_gtx("/usr/share/proj/egm96_15.gtx");
+  if (!grid) GTEST_SKIP() << "proj-data's EGM96 grid not installed (scripts/setup)";
+  NmeaSettings with_geoid;
+  with_geoid.geoid = &grid.value();
+  with_geoid.gsa = with_geoid.gsv = with_geoid.rmc = with_geoid.vtg = with_geoid.zda = with_geoid.gst = false;
+  const auto fix = esbc_like_fix();  // 55.46 N 8.46 E, 58.123 m above the ellipsoid
+  const std::string gga = nmea_epoch(fix, with_geoid).at(0);
+  std::vector<std::string> f;
+  for (std::stringstream fields(gga); std::getline(fields, f.emplace_back(), ',');) {}
+  const double n_m = grid.value().undulation_m(fix.position.latitude_deg, fix.position.longitude_deg);
+  EXPECT_GT(n_m, 38.0);  // EGM96 in western Denmark: about 40 m
+  EXPECT_LT(n_m, 43.0);
+  EXPECT_EQ(f[10], "M");
+  EXPECT_NEAR(std::stod(f[11]), n_m, 0.0005) << gga;
+  EXPECT_NEAR(std::stod(f[9]), 58.123 - n_m, 0.0011) << gga;
+  EXPECT_NEAR(std::stod(f[9]) + std::stod(f[11]), 58.123, 0.0011) << gga;
+  EXPECT_TRUE(nmea_checksum_valid(gga)) << gga;
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "skytrace/core/geoid.hpp"
 #include "skytrace/core/satellite.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/positioning/spp.hpp"
@@ -23,6 +24,9 @@ struct NmeaSettings {
   bool vtg = true;
   bool zda = true;
   bool gst = true;
+  // GGA's altitude above mean sea level and geoid separation come from this model (nullptr:
+  // ellipsoidal height, separation 0); the process's default_geoid() unless set.
+  const GeoidGrid* geoid = default_geoid();
 };
 
 // The checksum of a sentence body (the characters between '$' and '*'): two upper-case hex digits.
