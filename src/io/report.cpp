@@ -266,6 +266,9 @@ struct ChartFrame {
   double t1_s = 1.0;
   double y0 = 0.0;
   double y1 = 1.0;
+  // The x axis counts GPST seconds (labels as times), or else plain numbers named x_label.
+  bool time_axis = true;
+  std::string x_label;
   [[nodiscard]] double x_of(double time_s) const { return left + width * (time_s - t0_s) / (t1_s - t0_s); }
   [[nodiscard]] double y_of(double value) const { return top + height * (1.0 - (value - y0) / (y1 - y0)); }
 };
@@ -310,20 +313,22 @@ std::string line_chart(std::string_view id, std::string_view title, std::string_
                                fmt::format("{:g}", std::abs(value) < 1e-9 ? 0.0 : value));
     tick_labels += "\n";
   }
-  // Time axis: round GPST instants.
+  // Time axis: round GPST instants; a numeric axis: round numbers.
   const double span_s = frame.t1_s - frame.t0_s;
-  const double step_s = time_step_s(span_s);
-  for (double time_s = std::ceil(frame.t0_s / step_s) * step_s; time_s <= frame.t1_s + 1e-6; time_s += step_s) {
+  const double step_s = frame.time_axis ? time_step_s(span_s) : nice_step(span_s, 8);
+  for (double time_s = std::ceil(frame.t0_s / step_s) * step_s; time_s <= frame.t1_s + 1e-6 * step_s; time_s += step_s) {
     const double x = frame.x_of(time_s);
     svg += fmt::format(R"(<line x1="{0}" y1="{1}" x2="{0}" y2="{2}"/>)", num(x), num(frame.top), num(frame.top + frame.height));
     svg += "\n";
+    const std::string label = frame.time_axis ? detail::time_axis_label(time_s, step_s, span_s)
+                                              : fmt::format("{:g}", std::abs(time_s) < 1e-9 * step_s ? 0.0 : time_s);
     tick_labels += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">{}</text>)", num(x),
-                               num(frame.top + frame.height + 16.0), escape(detail::time_axis_label(time_s, step_s, span_s)));
+                               num(frame.top + frame.height + 16.0), escape(label));
     tick_labels += "\n";
   }
   svg += "</g>\n<g class=\"tick-labels\" fill=\"#333333\">\n" + tick_labels;
-  svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">time (GPST)</text>)", num(frame.left + frame.width / 2.0),
-                     num(frame.top + frame.height + 36.0));
+  svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">{}</text>)", num(frame.left + frame.width / 2.0),
+                     num(frame.top + frame.height + 36.0), escape(frame.time_axis ? "time (GPST)" : frame.x_label));
   svg += fmt::format("\n<text x=\"14\" y=\"{0}\" text-anchor=\"middle\" transform=\"rotate(-90 14 {0})\">{1}</text>\n",
                      num(frame.top + frame.height / 2.0), escape(y_label));
   svg += "</g>\n<g class=\"series\" fill=\"none\" stroke-linejoin=\"round\">\n";
@@ -498,11 +503,344 @@ namespace {
 // fix.csv's solution types from worst to best: the chart's levels 0-5.
 constexpr std::array<std::string_view, 6> kFixTypes = {"none", "2d", "3d", "dgnss", "rtk_float", "rtk_fixed"};
 constexpr std::array<std::string_view, 6> kFixTypeLabels = {"none", "2D", "3D", "DGNSS", "RTK float", "RTK fixed"};
+// Colours of the solution types on the top view (none is not drawn).
+constexpr std::array<std::string_view, 6> kFixTypeColours = {"#999999", "#d62728", "#ff7f0e", "#9467bd", "#1f77b4",
+                                                             "#2ca02c"};
+constexpr double kErrorBinsPerDecade = 100.0;
+constexpr double kSmallestError_m = 1e-4;
+
+size_t error_bin(double error_m) {
+  if (!(error_m > kSmallestError_m)) return 0;
+  const double bin = std::floor(std::log10(error_m / kSmallestError_m) * kErrorBinsPerDecade);
+  return static_cast<size_t>(std::min(bin, static_cast<double>(ReportBuilder::kErrorBins - 1)));
+}
+
+// The error below which a fraction q of the histogram's epochs lie (the bin's geometric centre).
+double histogram_quantile_m(const std::vector<std::uint32_t>& histogram, double q) {
+  std::uint64_t total = 0;
+  for (const auto n : histogram) total += n;
+  if (total == 0) return std::numeric_limits<double>::quiet_NaN();
+  const double wanted = q * static_cast<double>(total);
+  std::uint64_t below = 0;
+  for (size_t i = 0; i < histogram.size(); ++i) {
+    below += histogram[i];
+    if (static_cast<double>(below) >= wanted) {
+      return kSmallestError_m * std::pow(10.0, (static_cast<double>(i) + 0.5) / kErrorBinsPerDecade);
+    }
+  }
+  return kSmallestError_m * std::pow(10.0, static_cast<double>(histogram.size()) / kErrorBinsPerDecade);
+}
+
+// Metres with three significant digits (0.0123, 1.23, 123); percentiles from the histogram with
+// two, as precise as its bins.
+std::string metres(double value_m) {
+  if (!std::isfinite(value_m)) return "-";
+  return fmt::format("{:.3g}", value_m);
+}
+std::string percentile_metres(const std::vector<std::uint32_t>& histogram, double q) {
+  const double value_m = histogram_quantile_m(histogram, q);
+  if (!std::isfinite(value_m)) return "-";
+  return fmt::format("{:.2g}", value_m);
+}
 constexpr std::array<std::string_view, 8> kReceiverColours = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd",
                                                               "#ff7f0e", "#8c564b", "#e377c2", "#17becf"};
+// Path type per satellite over time: one row per satellite that was ever received or blocked (not
+// only below the mask or without ephemeris), coloured as on the sky plot; from the thinned tracks.
+std::string path_timeline(const std::map<SatelliteId, std::vector<ReportBuilder::TrackPoint>>& drawn,
+                          const std::map<SatelliteId, ReportBuilder::Track>& tracks, double t0_s, double t1_s,
+                          double interval_s) {
+  std::vector<const SatelliteId*> rows;
+  for (const auto& [satellite, points] : drawn) {
+    if (std::any_of(points.begin(), points.end(), [](const auto& p) { return p.track_class != TrackClass::kOther; })) {
+      rows.push_back(&satellite);
+    }
+  }
+  if (rows.empty()) return {};
+  constexpr double kLeft = 60.0, kTop = 10.0, kWidth = 800.0, kRow = 9.0;
+  const double height = kRow * static_cast<double>(rows.size());
+  ChartFrame frame;
+  frame.left = kLeft;
+  frame.top = kTop;
+  frame.width = kWidth;
+  frame.t0_s = t0_s;
+  frame.t1_s = t1_s;
+  std::string svg = fmt::format(
+      R"(<svg xmlns="http://www.w3.org/2000/svg" id="path-timeline" viewBox="0 0 {0} {1}" width="{0}" height="{1}" font-family="sans-serif" font-size="8">)",
+      num(kLeft + kWidth + 200.0), num(kTop + height + 40.0));
+  svg += "\n<title>Path type of each satellite over time</title>\n";
+  std::array<bool, kAllClasses.size()> used{};
+  for (size_t row = 0; row < rows.size(); ++row) {
+    const SatelliteId& satellite = *rows[row];
+    const auto& points = drawn.at(satellite);
+    const double y = kTop + kRow * static_cast<double>(row);
+    svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="end" fill="#333333">{}</text>)", num(kLeft - 4.0),
+                       num(y + kRow - 2.0), satellite.to_string());
+    const double limit_s = gap_limit_s(interval_s, tracks.at(satellite).stride);
+    for (size_t i = 0; i < points.size(); ++i) {
+      // Each point holds until the next one (or one interval when it is the last or a gap follows).
+      const double start_s = points[i].time_s;
+      double end_s = start_s + std::max(interval_s, 0.0) * static_cast<double>(tracks.at(satellite).stride);
+      if (i + 1 < points.size() && points[i + 1].time_s - start_s <= limit_s) end_s = points[i + 1].time_s;
+      // Merge a run of one class into one rectangle.
+      size_t j = i;
+      while (j + 1 < points.size() && points[j + 1].track_class == points[i].track_class &&
+             points[j + 1].time_s - points[j].time_s <= limit_s) {
+        ++j;
+        end_s = j + 1 < points.size() && points[j + 1].time_s - points[j].time_s <= limit_s
+                    ? points[j + 1].time_s
+                    : points[j].time_s + std::max(interval_s, 0.0) * static_cast<double>(tracks.at(satellite).stride);
+      }
+      const auto style = class_style(points[i].track_class);
+      for (size_t c = 0; c < kAllClasses.size(); ++c) used[c] = used[c] || kAllClasses[c] == points[i].track_class;
+      const double x0 = frame.x_of(std::max(start_s, t0_s)), x1 = frame.x_of(std::min(end_s, t1_s));
+      svg += fmt::format(R"(<rect x="{}" y="{}" width="{}" height="{}" fill="{}"/>)", num(x0), num(y + 1.0),
+                         num(std::max(x1 - x0, 0.5)), num(kRow - 2.0), style.colour);
+      i = j;
+    }
+    svg += "\n";
+  }
+  // Time axis as the charts have it.
+  const double span_s = t1_s - t0_s;
+  const double step_s = time_step_s(span_s);
+  svg += "<g fill=\"#333333\" font-size=\"11\">\n";
+  for (double time_s = std::ceil(t0_s / step_s) * step_s; time_s <= t1_s + 1e-6; time_s += step_s) {
+    svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">{}</text>)", num(frame.x_of(time_s)),
+                       num(kTop + height + 14.0), escape(detail::time_axis_label(time_s, step_s, span_s)));
+  }
+  svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">time (GPST)</text>)", num(kLeft + kWidth / 2.0),
+                     num(kTop + height + 32.0));
+  double legend_y = kTop + 8.0;
+  for (size_t c = 0; c < kAllClasses.size(); ++c) {
+    if (!used[c]) continue;
+    const auto style = class_style(kAllClasses[c]);
+    svg += fmt::format(R"(<rect x="{}" y="{}" width="14" height="8" fill="{}"/><text x="{}" y="{}">{}</text>)",
+                       num(kLeft + kWidth + 15.0), num(legend_y - 7.0), style.colour, num(kLeft + kWidth + 34.0),
+                       num(legend_y), escape(style.label));
+    legend_y += 16.0;
+  }
+  svg += "</g>\n</svg>\n";
+  return svg;
+}
+
+// The top view of one receiver: its true track (grey line) and its fixes coloured by solution type,
+// east and north metres at one scale. The view spans the true track plus a margin of twice the
+// 95th percentile of the horizontal error; fixes beyond it are counted, not drawn.
+std::string top_view(const ReportBuilder::FixRuns& receiver, size_t index) {
+  const std::vector<ReportBuilder::FixRuns> receivers = {receiver};
+  double east0 = std::numeric_limits<double>::infinity(), east1 = -east0, north0 = east0, north1 = -east0;
+  double margin_m = 0.02;  // a static receiver's view: its scatter, at least 4 cm across
+  for (const auto& r : receivers) {
+    for (const auto& p : r.points) {
+      east0 = std::min(east0, static_cast<double>(p.truth_east_m));
+      east1 = std::max(east1, static_cast<double>(p.truth_east_m));
+      north0 = std::min(north0, static_cast<double>(p.truth_north_m));
+      north1 = std::max(north1, static_cast<double>(p.truth_north_m));
+    }
+    const double p95_m = histogram_quantile_m(r.horizontal_histogram, 0.95);
+    if (std::isfinite(p95_m)) margin_m = std::max(margin_m, 2.0 * p95_m);
+  }
+  if (!std::isfinite(east0)) return {};
+  east0 -= margin_m;
+  east1 += margin_m;
+  north0 -= margin_m;
+  north1 += margin_m;
+  constexpr double kSize = 520.0, kLeft = 60.0, kTop = 15.0;
+  const double span_m = std::max(east1 - east0, north1 - north0);
+  const double scale = kSize / span_m;  // px per metre, the same both ways
+  const double east_mid = 0.5 * (east0 + east1), north_mid = 0.5 * (north0 + north1);
+  auto x_of = [&](double e) { return kLeft + kSize / 2.0 + (e - east_mid) * scale; };
+  auto y_of = [&](double n) { return kTop + kSize / 2.0 - (n - north_mid) * scale; };
+  std::string svg = fmt::format(
+      R"(<svg xmlns="http://www.w3.org/2000/svg" id="fix-top-view-{2}" viewBox="0 0 {0} {1}" width="{0}" height="{1}" font-family="sans-serif" font-size="11">)",
+      num(kLeft + kSize + 170.0), num(kTop + kSize + 45.0), index + 1);
+  svg += fmt::format("\n<title>The fixes of {} seen from above</title>\n", escape(receiver.receiver));
+  svg += fmt::format(R"(<rect x="{}" y="{}" width="{}" height="{}" fill="#fbfbfb" stroke="#444444" stroke-width="0.8"/>)",
+                     num(kLeft), num(kTop), num(kSize), num(kSize));
+  // Grid in round metres, labelled relative to the view's centre.
+  const double step_m = nice_step(span_m, 6);
+  std::string grid = "\n<g class=\"axes\" stroke=\"#dddddd\" stroke-width=\"0.6\">\n", labels = "<g fill=\"#333333\">\n";
+  for (double d = std::ceil(-span_m / 2.0 / step_m) * step_m; d <= span_m / 2.0 + 1e-9; d += step_m) {
+    const double x = x_of(east_mid + d), y = y_of(north_mid + d);
+    grid += fmt::format(R"(<line x1="{0}" y1="{1}" x2="{0}" y2="{2}"/><line x1="{3}" y1="{4}" x2="{5}" y2="{4}"/>)", num(x),
+                        num(kTop), num(kTop + kSize), num(kLeft), num(y), num(kLeft + kSize));
+    grid += "\n";
+    labels += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">{:g}</text><text x="{}" y="{}" text-anchor="end">{:g}</text>)",
+                          num(x), num(kTop + kSize + 16.0), std::abs(d) < 1e-9 ? 0.0 : d, num(kLeft - 6.0), num(y + 4.0),
+                          std::abs(d) < 1e-9 ? 0.0 : d);
+    labels += "\n";
+  }
+  svg += grid + "</g>\n" + labels;
+  svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="middle">east (m, from the view's centre)</text>)",
+                     num(kLeft + kSize / 2.0), num(kTop + kSize + 36.0));
+  svg += fmt::format("\n<text x=\"14\" y=\"{0}\" text-anchor=\"middle\" transform=\"rotate(-90 14 {0})\">north (m)</text>\n</g>\n",
+                     num(kTop + kSize / 2.0));
+  size_t outside = 0;
+  std::array<bool, 6> types_drawn{};
+  for (const auto& r : receivers) {
+    std::vector<Point2> truth;
+    for (const auto& p : r.points) truth.push_back({x_of(p.truth_east_m), y_of(p.truth_north_m)});
+    if (truth.size() >= 2) {
+      svg += fmt::format(R"(<polyline class="truth" points="{}" fill="none" stroke="#555555" stroke-width="1.5"/>)",
+                         points_attribute(truth));
+      svg += "\n";
+    }
+    svg += "<g class=\"fixes\" fill-opacity=\"0.7\">\n";
+    for (const auto& p : r.points) {
+      const double x = x_of(p.fix_east_m), y = y_of(p.fix_north_m);
+      if (x < kLeft || x > kLeft + kSize || y < kTop || y > kTop + kSize) {
+        ++outside;
+        continue;
+      }
+      types_drawn[p.type] = true;
+      svg += fmt::format(R"(<circle cx="{}" cy="{}" r="1.8" fill="{}"/>)", num(x), num(y), kFixTypeColours[p.type]);
+    }
+    svg += "\n</g>\n";
+  }
+  double y = kTop + 10.0;
+  const double x = kLeft + kSize + 15.0;
+  svg += "<g class=\"legend\" fill=\"#333333\">\n";
+  svg += fmt::format(R"(<line x1="{0}" y1="{1}" x2="{2}" y2="{1}" stroke="#555555" stroke-width="2"/><text x="{3}" y="{4}">true track</text>)",
+                     num(x), num(y), num(x + 18.0), num(x + 24.0), num(y + 4.0));
+  svg += "\n";
+  for (size_t i = kFixTypes.size(); i-- > 1;) {
+    if (!types_drawn[i]) continue;
+    y += 18.0;
+    svg += fmt::format(R"(<circle cx="{}" cy="{}" r="4" fill="{}"/><text x="{}" y="{}">{}</text>)", num(x + 9.0), num(y),
+                       kFixTypeColours[i], num(x + 24.0), num(y + 4.0), kFixTypeLabels[i]);
+    svg += "\n";
+  }
+  if (outside > 0) {
+    y += 22.0;
+    svg += fmt::format(R"(<text x="{}" y="{}">{} fixes outside the view</text>)", num(x), num(y + 4.0), outside);
+    svg += "\n";
+  }
+  svg += "</g>\n</svg>\n";
+  return svg;
+}
+
+// The fix against the truth: a table of error percentiles per receiver, the errors over time, their
+// distribution, satellites used and HDOP over time, and the top view.
+std::string fix_error_section(const std::vector<ReportBuilder::FixRuns>& receivers, double t0_s, double t1_s,
+                              double interval_s) {
+  bool any = false;
+  for (const auto& r : receivers) any = any || r.compared > 0;
+  if (!any) return {};
+  std::string out = "</section>\n<section>\n<h2>Position fix</h2>\n";
+  out += "<p class=\"meta\">The fix against the receiver's true antenna position at the same epoch (epochs with a fix; "
+         "percentiles of every epoch, charts thinned).</p>\n";
+  out += "<table id=\"fix-errors\">\n<thead><tr><th>receiver</th><th>fixes</th><th>horizontal p50 (m)</th>"
+         "<th>p95 (m)</th><th>max (m)</th><th>vertical p50 (m)</th><th>p95 (m)</th><th>max (m)</th>"
+         "<th>satellites used (mean)</th><th>HDOP (mean)</th></tr></thead>\n<tbody>\n";
+  double horizontal_top_m = 0.0, vertical_top_m = 0.0, distribution_top_m = 0.0;
+  int max_satellites = 0;
+  double max_hdop = 0.0;
+  for (const auto& r : receivers) {
+    if (r.compared == 0) continue;
+    const double n = static_cast<double>(r.compared);
+    out += fmt::format("<tr><th scope=\"row\">{}</th><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
+                       "<td>{}</td><td>{:.1f}</td><td>{:.2f}</td></tr>\n",
+                       escape(r.receiver), r.compared, percentile_metres(r.horizontal_histogram, 0.5),
+                       percentile_metres(r.horizontal_histogram, 0.95), metres(r.max_horizontal_m),
+                       percentile_metres(r.vertical_histogram, 0.5), percentile_metres(r.vertical_histogram, 0.95),
+                       metres(r.max_vertical_m),
+                       r.satellites_used_sum / n, r.hdop_sum / n);
+    // Chart ranges from the 99th percentiles: an outlier is drawn at the edge, not allowed to
+    // flatten the rest.
+    horizontal_top_m = std::max(horizontal_top_m, histogram_quantile_m(r.horizontal_histogram, 0.99));
+    vertical_top_m = std::max(vertical_top_m, histogram_quantile_m(r.vertical_histogram, 0.99));
+    distribution_top_m = std::max({distribution_top_m, histogram_quantile_m(r.horizontal_histogram, 0.99),
+                                   histogram_quantile_m(r.vertical_histogram, 0.99)});
+    for (const auto& p : r.points) {
+      max_satellites = std::max(max_satellites, static_cast<int>(p.satellites_used));
+      if (std::isfinite(p.hdop)) max_hdop = std::max(max_hdop, static_cast<double>(p.hdop));
+    }
+  }
+  out += "</tbody>\n</table>\n";
+  const auto round_up = [](double value) {
+    const double step = nice_step(std::max(value, 1e-3), 5);
+    return std::max(step, std::ceil(value * 1.1 / step) * step);
+  };
+  horizontal_top_m = round_up(horizontal_top_m);
+  vertical_top_m = round_up(vertical_top_m);
+  distribution_top_m = round_up(distribution_top_m);
+
+  std::vector<Series> horizontal, vertical, satellites, hdop, distribution;
+  std::vector<LegendEntry> legend, distribution_legend;
+  for (size_t k = 0; k < receivers.size(); ++k) {
+    const auto& r = receivers[k];
+    if (r.compared == 0) continue;
+    const std::string colour(kReceiverColours[k % kReceiverColours.size()]);
+    const double gap_s = gap_limit_s(interval_s, r.point_stride);
+    Series h{colour, 0.9, 1.4, {{}}}, v{colour, 0.9, 1.4, {{}}}, n{colour, 0.9, 1.4, {{}}}, d{colour, 0.9, 1.4, {{}}};
+    for (size_t i = 0; i < r.points.size(); ++i) {
+      const ReportBuilder::FixPoint& p = r.points[i];
+      if (i > 0 && p.time_s - r.points[i - 1].time_s > gap_s) {
+        for (Series* s : {&h, &v, &n, &d}) s->segments.emplace_back();
+      }
+      h.segments.back().push_back({p.time_s, std::min(static_cast<double>(p.horizontal_m), horizontal_top_m)});
+      v.segments.back().push_back({p.time_s, std::clamp(static_cast<double>(p.up_m), -vertical_top_m, vertical_top_m)});
+      n.segments.back().push_back({p.time_s, static_cast<double>(p.satellites_used)});
+      d.segments.back().push_back({p.time_s, std::isfinite(p.hdop) ? static_cast<double>(p.hdop) : 0.0});
+    }
+    horizontal.push_back(std::move(h));
+    vertical.push_back(std::move(v));
+    satellites.push_back(std::move(n));
+    hdop.push_back(std::move(d));
+    legend.push_back({r.receiver, colour});
+    // Distribution functions from the histograms: horizontal solid, vertical lighter.
+    for (const bool is_vertical : {false, true}) {
+      const auto& histogram = is_vertical ? r.vertical_histogram : r.horizontal_histogram;
+      Series cdf{colour, is_vertical ? 0.45 : 0.95, 1.8, {{}}};
+      std::uint64_t below = 0;
+      cdf.segments.back().push_back({0.0, 0.0});
+      for (size_t i = 0; i < histogram.size(); ++i) {
+        if (histogram[i] == 0) continue;
+        below += histogram[i];
+        const double upper_m = kSmallestError_m * std::pow(10.0, static_cast<double>(i + 1) / kErrorBinsPerDecade);
+        cdf.segments.back().push_back({std::min(upper_m, distribution_top_m), 100.0 * static_cast<double>(below) / static_cast<double>(r.compared)});
+      }
+      distribution.push_back(std::move(cdf));
+      distribution_legend.push_back({r.receiver + (is_vertical ? " vertical" : " horizontal"), colour});
+    }
+  }
+  ChartFrame frame;
+  frame.t0_s = t0_s;
+  frame.t1_s = t1_s;
+  frame.y0 = 0.0;
+  frame.y1 = horizontal_top_m;
+  out += line_chart("fix-horizontal-error", "Horizontal error of the fix over time", "horizontal error (m)", frame, horizontal,
+                    legend, nice_step(horizontal_top_m, 5));
+  frame.y0 = -vertical_top_m;
+  frame.y1 = vertical_top_m;
+  out += line_chart("fix-vertical-error", "Vertical error of the fix over time (fix minus truth, up)", "vertical error (m)", frame,
+                    vertical, legend, nice_step(2.0 * vertical_top_m, 6));
+  ChartFrame cdf_frame;
+  cdf_frame.time_axis = false;
+  cdf_frame.x_label = "error (m)";
+  cdf_frame.t0_s = 0.0;
+  cdf_frame.t1_s = distribution_top_m;
+  cdf_frame.y0 = 0.0;
+  cdf_frame.y1 = 100.0;
+  out += line_chart("fix-error-cdf", "Distribution of the errors (share of fixes with a smaller error)", "fixes (%)", cdf_frame,
+                    distribution, distribution_legend, 20.0);
+  frame.y0 = 0.0;
+  frame.y1 = std::max(4.0, static_cast<double>(max_satellites) + 1.0);
+  out += line_chart("fix-satellites-used", "Satellites used in the fix", "satellites used", frame, satellites, legend,
+                    std::max(1.0, nice_step(frame.y1, 6)));
+  frame.y1 = round_up(std::max(max_hdop, 1.0));
+  out += line_chart("fix-hdop", "Horizontal dilution of precision", "HDOP", frame, hdop, legend, nice_step(frame.y1, 5));
+  for (size_t k = 0; k < receivers.size(); ++k) {
+    if (receivers[k].compared == 0) continue;
+    out += fmt::format("<h2>The fixes of {} seen from above</h2>\n", escape(receivers[k].receiver));
+    out += top_view(receivers[k], k);
+  }
+  return out;
+}
+
 }  // namespace
 
-void ReportBuilder::add_fix(const std::string& receiver, const GnssTime& time, std::string_view type) {
+void ReportBuilder::add_fix(const std::string& receiver, const GnssTime& time, std::string_view type,
+                            const FixError* error) {
   auto it = std::find_if(fix_runs_.begin(), fix_runs_.end(), [&](const FixRuns& r) { return r.receiver == receiver; });
   if (it == fix_runs_.end()) {
     fix_runs_.push_back(FixRuns{});
@@ -526,6 +864,41 @@ void ReportBuilder::add_fix(const std::string& receiver, const GnssTime& time, s
     } else {
       r.truncated = true;
     }
+  }
+  if (error == nullptr || level == 0) return;
+  const double horizontal_m = std::hypot(error->east_m, error->north_m);
+  const double vertical_m = std::abs(error->up_m);
+  if (!std::isfinite(horizontal_m) || !std::isfinite(vertical_m)) return;
+  if (r.horizontal_histogram.empty()) {
+    r.horizontal_histogram.assign(kErrorBins, 0);
+    r.vertical_histogram.assign(kErrorBins, 0);
+  }
+  ++r.horizontal_histogram[error_bin(horizontal_m)];
+  ++r.vertical_histogram[error_bin(vertical_m)];
+  r.max_horizontal_m = std::max(r.max_horizontal_m, horizontal_m);
+  r.max_vertical_m = std::max(r.max_vertical_m, vertical_m);
+  r.satellites_used_sum += error->satellites_used;
+  r.hdop_sum += std::isfinite(error->hdop) ? error->hdop : 0.0;
+  if (r.compared++ % r.point_stride != 0) return;
+  FixPoint p;
+  p.time_s = t;
+  p.horizontal_m = static_cast<float>(horizontal_m);
+  p.up_m = static_cast<float>(error->up_m);
+  p.fix_east_m = static_cast<float>(error->fix_east_m);
+  p.fix_north_m = static_cast<float>(error->fix_north_m);
+  p.truth_east_m = static_cast<float>(error->truth_east_m);
+  p.truth_north_m = static_cast<float>(error->truth_north_m);
+  p.hdop = static_cast<float>(error->hdop);
+  p.satellites_used = static_cast<std::uint8_t>(std::clamp(error->satellites_used, 0, 255));
+  p.type = static_cast<std::uint8_t>(level);
+  r.points.push_back(p);
+  if (r.points.size() >= 2 * static_cast<size_t>(max_points_) + 2) {
+    // Full: keep every other point and take every other one from now on.
+    std::vector<FixPoint> kept;
+    kept.reserve(r.points.size() / 2 + 1);
+    for (size_t i = 0; i < r.points.size(); i += 2) kept.push_back(r.points[i]);
+    r.points = std::move(kept);
+    r.point_stride *= 2;
   }
 }
 
@@ -647,6 +1020,9 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
   out += "</section>\n<section>\n<h2>C/N0 (first signal)</h2>\n";
   out += line_chart("cn0-chart", "C/N0 of the first signal per satellite", "C/N0 (dB-Hz)", cn0_frame, cn0_series, cn0_legend,
                     cn0_step);
+  if (std::string timeline = path_timeline(drawn, tracks_, t0_s, t1_s, meta.interval_s); !timeline.empty()) {
+    out += "</section>\n<section>\n<h2>Path type per satellite</h2>\n" + timeline;
+  }
   if (!fix_runs_.empty()) {
     // Solution type per receiver: a table of shares and first fixes, and the type over time.
     out += "</section>\n<section>\n<h2>Solution type</h2>\n<table id=\"solution-types\">\n<thead><tr><th>receiver</th><th>epochs</th>";
@@ -684,6 +1060,7 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
     fix_frame.y0 = 0.0;
     fix_frame.y1 = 5.5;
     out += line_chart("solution-type", "Solution type over time", "solution type", fix_frame, fix_series, fix_legend, 1.0);
+    out += fix_error_section(fix_runs_, t0_s, t1_s, meta.interval_s);
   }
   out += "</section>\n<section>\n<h2>Scenario</h2>\n";
   out += summary_table(meta);

@@ -6,9 +6,11 @@
 #include <cmath>
 #include <complex>
 #include <cstring>
+#include <optional>
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/decimal_text.hpp"
+#include "skytrace/core/frames.hpp"
 #include "skytrace/core/output_file.hpp"
 #include "skytrace/io/fix_csv.hpp"
 #include "skytrace/io/nmea.hpp"
@@ -330,7 +332,32 @@ class ReportSink final : public EpochSink {
   explicit ReportSink(const RunContext& c) : context_(c) {}
   Status add(const SinkEpoch& e) override {
     if (e.fix != nullptr) {
-      report_.add_fix(e.receiver->settings->name, e.observations->receiver_time, positioning::to_string(e.fix->type));
+      // The fix against the true antenna position of the same epoch; the top view's frame is
+      // east-north-up at the first true position the report sees.
+      const Eigen::Vector3d& truth_m = e.observations->receiver.position_m;
+      if (!origin_) {
+        origin_ = truth_m;
+        origin_rotation_ = ecef_to_enu_rotation(ecef_to_geodetic(truth_m));
+      }
+      io::ReportBuilder::FixError error;
+      const bool positioned = e.fix->type != positioning::FixType::kNone && e.fix->position_ecef_m.allFinite();
+      if (positioned) {
+        const Eigen::Vector3d enu_error_m =
+            ecef_to_enu_rotation(ecef_to_geodetic(truth_m)) * (e.fix->position_ecef_m - truth_m);
+        const Eigen::Vector3d fix_view_m = origin_rotation_ * (e.fix->position_ecef_m - *origin_);
+        const Eigen::Vector3d truth_view_m = origin_rotation_ * (truth_m - *origin_);
+        error.east_m = enu_error_m.x();
+        error.north_m = enu_error_m.y();
+        error.up_m = enu_error_m.z();
+        error.fix_east_m = fix_view_m.x();
+        error.fix_north_m = fix_view_m.y();
+        error.truth_east_m = truth_view_m.x();
+        error.truth_north_m = truth_view_m.y();
+        error.satellites_used = e.fix->satellites_used;
+        error.hdop = e.fix->hdop;
+      }
+      report_.add_fix(e.receiver->settings->name, e.observations->receiver_time, positioning::to_string(e.fix->type),
+                      positioned ? &error : nullptr);
     }
     if (e.receiver_index != 0) return Ok{};
     const receiver::EpochObservations& epoch = *e.observations;
@@ -392,6 +419,8 @@ class ReportSink final : public EpochSink {
  private:
   const RunContext& context_;
   io::ReportBuilder report_;
+  std::optional<Eigen::Vector3d> origin_;  // ECEF of the top view's origin
+  Eigen::Matrix3d origin_rotation_ = Eigen::Matrix3d::Identity();
 };
 
 // A table of the truth (truth.csv, paths.csv): NAME.zst when output.truth_format is csv.zst, else NAME.

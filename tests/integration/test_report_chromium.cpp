@@ -71,6 +71,20 @@ io::ReportBuilder synthetic_run(io::ReportMeta& meta) {
       }
       builder.add(sample);
     }
+    // The rover drives a circle of 20 m; its fix scatters by decimetres, RTK fixed after 10 min.
+    io::ReportBuilder::FixError error;
+    const double angle = 2.0 * std::numbers::pi * f;
+    error.truth_east_m = 20.0 * std::cos(angle);
+    error.truth_north_m = 20.0 * std::sin(angle);
+    error.east_m = 0.3 * std::sin(7.0 * k);
+    error.north_m = 0.2 * std::cos(5.0 * k);
+    error.up_m = 0.4 * std::sin(3.0 * k);
+    if (k >= 20) error.east_m *= 0.02, error.north_m *= 0.02, error.up_m *= 0.02;
+    error.fix_east_m = error.truth_east_m + error.east_m;
+    error.fix_north_m = error.truth_north_m + error.north_m;
+    error.satellites_used = 6;
+    error.hdop = 1.1;
+    builder.add_fix("rover", start + 30.0 * k, k >= 20 ? "rtk_fixed" : "3d", &error);
   }
   return builder;
 }
@@ -104,7 +118,9 @@ TEST_F(ReportChromium, DomHoldsThePlots) {
       test::run_command(chromium("profile-dom", "--dump-dom " + test::shell_quote("file://" + report_.string()), log));
   ASSERT_EQ(result.exit_code, 0) << read_all(log);
   const std::string& dom = result.output;
-  for (const char* id : {"id=\"skyplot\"", "id=\"satellite-count\"", "id=\"cn0-chart\"", "id=\"summary\""}) {
+  for (const char* id : {"id=\"skyplot\"", "id=\"satellite-count\"", "id=\"cn0-chart\"", "id=\"summary\"",
+                         "id=\"path-timeline\"", "id=\"solution-type\"", "id=\"fix-errors\"", "id=\"fix-horizontal-error\"",
+                         "id=\"fix-error-cdf\"", "id=\"fix-top-view-1\""}) {
     EXPECT_EQ(count_of(dom, id), 1U) << id << "\n" << read_all(log);
   }
   // The browser parsed the SVG: tracks, markers and chart lines are elements of the DOM.

@@ -389,5 +389,78 @@ TEST(Report, SolutionTypesPerReceiverWithFirstFixes) {
   EXPECT_EQ(ReportBuilder().html(meta).find("solution-types"), std::string::npos);
 }
 
+// The fix against the truth: percentiles from every epoch (histogram bins 2.3 % wide), charts of
+// errors, distribution, satellites used and HDOP, one top view per receiver; epochs without a
+// position are not compared; points stay bounded however long the run.
+TEST(Report, FixErrorsPercentilesChartsAndTopViews) {
+  ReportBuilder report(100.0);
+  // ROVR drives east at 1 m/s; its horizontal error cycles 0.01, 0.02, ..., 1.00 m (due north),
+  // vertical -0.5 m; BASE stands still 3 cm off. The first 5 s ROVR has no fix.
+  for (int k = 0; k < 1000; ++k) {
+    ReportBuilder::FixError rover;
+    rover.north_m = 0.01 * static_cast<double>(k % 100 + 1);
+    rover.up_m = -0.5;
+    rover.truth_east_m = k;
+    rover.fix_east_m = k;
+    rover.fix_north_m = rover.north_m;
+    rover.satellites_used = 12;
+    rover.hdop = 0.8;
+    report.add_fix("ROVR", t0() + k, k < 5 ? "none" : "rtk_fixed", k < 5 ? nullptr : &rover);
+    ReportBuilder::FixError base;
+    base.east_m = 0.03;
+    base.fix_east_m = 0.03;
+    base.satellites_used = 20;
+    base.hdop = 0.6;
+    report.add_fix("BASE", t0() + k, "3d", &base);
+  }
+  ReportMeta meta;
+  meta.scenario_name = "pair";
+  meta.start = t0();
+  meta.end = t0() + 999.0;
+  meta.interval_s = 1.0;
+  const std::string html = report.html(meta);
+  for (const char* id : {"fix-errors", "fix-horizontal-error", "fix-vertical-error", "fix-error-cdf", "fix-satellites-used",
+                         "fix-hdop", "fix-top-view-1", "fix-top-view-2"}) {
+    EXPECT_NE(html.find(std::string("id=\"") + id + "\""), std::string::npos) << id;
+  }
+  // ROVR: 995 fixes; errors uniform on 0.01..1.00 m: p50 0.5, p95 0.95 (to the bins' 2.3 %, two
+  // significant digits); the maxima exact.
+  const std::regex row("<th scope=\"row\">ROVR</th><td>995</td><td>([0-9.]+)</td><td>([0-9.]+)</td><td>1</td>"
+                       "<td>([0-9.]+)</td><td>([0-9.]+)</td><td>0.5</td><td>12.0</td><td>0.80</td>");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(html, m, row)) << html.substr(html.find("fix-errors"), 1200);
+  EXPECT_NEAR(std::stod(m[1]), 0.50, 0.02);
+  EXPECT_NEAR(std::stod(m[2]), 0.95, 0.03);
+  EXPECT_NEAR(std::stod(m[3]), 0.50, 0.012);
+  EXPECT_NEAR(std::stod(m[4]), 0.50, 0.012);
+  EXPECT_NE(html.find("<th scope=\"row\">BASE</th><td>1000</td><td>0.03</td><td>0.03</td><td>0.03</td>"), std::string::npos);
+  // Thinned to at most about twice the point budget per receiver, the percentiles still exact.
+  ReportBuilder long_run(100.0);
+  ReportBuilder::FixError e;
+  e.north_m = 1.0;
+  for (int k = 0; k < 100000; ++k) long_run.add_fix("X", t0() + k, "3d", &e);
+  const std::string long_html = long_run.html(meta);
+  const size_t top_view = long_html.find("id=\"fix-top-view-1\"");
+  ASSERT_NE(top_view, std::string::npos);
+  size_t circles = 0;
+  for (size_t at = long_html.find("<circle", top_view); at != std::string::npos; at = long_html.find("<circle", at + 1)) {
+    ++circles;
+  }
+  EXPECT_LE(circles, 205U);
+  EXPECT_GE(circles, 100U);
+  EXPECT_NE(long_html.find("<td>100000</td><td>1</td><td>1</td><td>1</td>"), std::string::npos);
+  // A fix far off the track is counted, not drawn.
+  ReportBuilder outlier;
+  e.north_m = 0.01;
+  for (int k = 0; k < 100; ++k) outlier.add_fix("Y", t0() + k, "3d", &e);
+  e.fix_north_m = 5000.0;
+  outlier.add_fix("Y", t0() + 100.0, "3d", &e);
+  EXPECT_NE(outlier.html(meta).find("1 fixes outside the view"), std::string::npos);
+  // Solution types without positions (no truth given): no fix section.
+  ReportBuilder types_only;
+  types_only.add_fix("Z", t0(), "3d");
+  EXPECT_EQ(types_only.html(meta).find("fix-errors"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace skytrace::io

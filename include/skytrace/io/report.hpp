@@ -1,7 +1,8 @@
 // The run report: one self-contained HTML page (inline CSS and SVG, no script, no external URL)
 // with a polar sky plot of the sky mask and the satellite tracks, the number of tracked satellites
-// over time per system, C/N0 over time and the scenario summary; and the sky plot alone as an SVG
-// document.
+// over time per system, C/N0 over time, the position fix of every receiver (solution type, error
+// against the truth over time and as a distribution, satellites used, HDOP, the track from above)
+// and the scenario summary; and the sky plot alone as an SVG document.
 //
 // The builder knows nothing of the simulation types: the run loop feeds one ReportSample per
 // satellite and epoch. Memory stays bounded however long the run: each track keeps at most about
@@ -81,8 +82,25 @@ class ReportBuilder {
   // "rtk_float", "rtk_fixed" (unknown names count as "none"). Epochs in time order per receiver.
   // Kept as runs of one type: memory grows with the changes, and stops at kMaxFixRuns per receiver
   // (the counts stay exact).
-  void add_fix(const std::string& receiver, const GnssTime& time, std::string_view type);
+  // With `error`: the fix against the receiver's true antenna position at that epoch, for the
+  // "Position fix" section (errors over time and their distribution, satellites used, HDOP, the
+  // track seen from above). Points for the charts are thinned like the tracks (at most
+  // max_points_per_track per receiver); the error percentiles come from histograms of every
+  // epoch (log-spaced bins 2.3 % wide), so memory stays bounded however long the run.
+  struct FixError {
+    double east_m = 0.0, north_m = 0.0, up_m = 0.0;  // fix minus truth, local east-north-up
+    // The fix and the truth in the top view's frame: east and north metres from one origin (the
+    // first receiver's first true position), the same for every receiver of the report.
+    double fix_east_m = 0.0, fix_north_m = 0.0;
+    double truth_east_m = 0.0, truth_north_m = 0.0;
+    int satellites_used = 0;
+    double hdop = 0.0;
+  };
+  void add_fix(const std::string& receiver, const GnssTime& time, std::string_view type,
+               const FixError* error = nullptr);
   static constexpr size_t kMaxFixRuns = 20000;
+  // Error histograms: bin i holds errors in [10^(i/100 - 4), 10^((i+1)/100 - 4)) m, 0.1 mm to 100 km.
+  static constexpr size_t kErrorBins = 900;
 
   // The self-contained page.
   [[nodiscard]] std::string html(const ReportMeta& meta) const;
@@ -109,6 +127,14 @@ class ReportBuilder {
     // flickering at every sample): from then on plain decimation.
     bool keep_changes = true;
   };
+  struct FixPoint {
+    double time_s = 0.0;
+    float horizontal_m = 0.0F, up_m = 0.0F;
+    float fix_east_m = 0.0F, fix_north_m = 0.0F, truth_east_m = 0.0F, truth_north_m = 0.0F;
+    float hdop = 0.0F;
+    std::uint8_t satellites_used = 0;
+    std::uint8_t type = 0;  // index in kFixTypes order
+  };
   // Solution types of one receiver as runs (start time, type index in kFixTypes order).
   struct FixRuns {
     std::string receiver;
@@ -119,6 +145,13 @@ class ReportBuilder {
     double first_fix_time_s = std::numeric_limits<double>::quiet_NaN();    // first 2D/3D or better
     double first_fixed_time_s = std::numeric_limits<double>::quiet_NaN();  // first rtk_fixed
     bool truncated = false;
+    // Fixes compared with the truth.
+    std::vector<FixPoint> points;  // thinned: every point_stride-th
+    size_t point_stride = 1;
+    size_t compared = 0;
+    std::vector<std::uint32_t> horizontal_histogram, vertical_histogram;  // kErrorBins each, |up| for vertical
+    double max_horizontal_m = 0.0, max_vertical_m = 0.0;
+    double satellites_used_sum = 0.0, hdop_sum = 0.0;
   };
   struct CountPoint {
     double time_s = 0.0;
