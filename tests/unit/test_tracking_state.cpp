@@ -207,7 +207,8 @@ TEST(TrackingState, AidedSemicodelessChannelsHoldWhileTheirCaChannelDoes) {
   int reported = 0;
   for (int i = 0; i < 5; ++i) {
     shade.attenuation_db = i == 0 ? 0.0 : 10.0;
-    for (const auto& s : alone.observe(kStart + static_cast<double>(i)).value().satellites) {
+    const auto epoch = alone.observe(kStart + static_cast<double>(i)).value();
+    for (const auto& s : epoch.satellites) {
       for (const auto& m : s.signals) {
         EXPECT_GE(m.cn0_dbhz, i == 0 ? 40.0 : 20.0) << s.satellite.to_string() << " at " << i;
         ++reported;
