@@ -301,8 +301,8 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
                                      obs.troposphere_m};
   stages::SatelliteAcquisition acquisition = tracking_.begin_satellite(profile, acquirable);
   records_used_.clear();
-  // The phase error of the satellite's L1 C/A loop at this epoch, which aided loops follow.
-  std::optional<double> aiding_phase_noise_m;
+  // The errors of the satellite's L1 C/A loop at this epoch, which aided loops follow.
+  std::optional<stages::AidingLoop> aiding_loop;
   bool aiding_locked = false;  // the satellite's L1 C/A channel this epoch (candidates list it first)
   for (const stages::Candidate& candidate : candidates_) {
     const Signal& signal = *candidate.signal;
@@ -329,16 +329,18 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     m.ionosphere_code_m = stages::ionosphere_code_delay_m(obs.ionosphere_l1_m, m.carrier_hz);
     m.antenna_phase_centre_m = stages::antenna_phase_centre_m(settings_.antenna_phase_centre.get(), signal, obs.direction);
     m.cn0_dbhz = stages::quantize(cn0_dbhz, profile.cn0_resolution_dbhz);
-    const bool aided = profile.semicodeless_aiding_bandwidth_hz > 0.0 && aiding_phase_noise_m.has_value() &&
-                       is_semicodeless(signal);
+    // Semi-codeless channels report the C/A loop's Doppler; their phase follows it when the
+    // profile aids their carrier loop.
+    const bool follows_ca = aiding_loop.has_value() && is_semicodeless(signal);
+    const bool aided = profile.semicodeless_aiding_bandwidth_hz > 0.0 && follows_ca;
     if (settings_.noise) {
       const stages::LoopErrors noise =
           loop_noise_.draw(sat, signal, profile, info, m.carrier_hz, cn0_dbhz,
-                           aided ? aiding_phase_noise_m : std::nullopt, lock == stages::TrackingState::Lock::kContinuing, tag);
+                           follows_ca ? aiding_loop : std::nullopt, lock == stages::TrackingState::Lock::kContinuing, tag);
       m.code_noise_m = noise.code_m;
       m.phase_noise_m = noise.phase_m;
       m.doppler_noise_mps = noise.doppler_mps;
-      if (signal == kAidingSignal) aiding_phase_noise_m = m.phase_noise_m;
+      if (signal == kAidingSignal) aiding_loop = stages::AidingLoop{m.phase_noise_m, m.doppler_noise_mps};
     }
     m.code_multipath_m = candidate.multipath.code_m;
     m.phase_multipath_m = candidate.multipath.phase_m;

@@ -42,7 +42,11 @@ Result<std::shared_ptr<InterpolatedTrajectory>> InterpolatedTrajectory::create(s
 Result<receiver::Kinematics> InterpolatedTrajectory::at(const GnssTime& t) const {
   const GnssTime& first = samples_.front().time;
   const GnssTime& last = samples_.back().time;
-  if (t < first || last < t) {
+  // The epochs are the receiver's: its clock offset (up to a millisecond for receivers that let it
+  // run free) puts the true instant of the first or last epoch just outside a trajectory that
+  // spans the run exactly. The end segments' curves carry on over that much.
+  constexpr double kEndTolerance_s = 0.01;
+  if (t < first - kEndTolerance_s || last + kEndTolerance_s < t) {
     return make_error(ErrorCode::kOutOfRange, name_ + ": time " + t.to_iso8601(TimeScale::kGpst) +
                                                   " GPST is outside the trajectory (" + first.to_iso8601(TimeScale::kGpst) +
                                                   " to " + last.to_iso8601(TimeScale::kGpst) + ")");

@@ -10,7 +10,8 @@
 //
 // Re-recorded (obs.rnx and truth.csv) when GPS L2 P(Y) got its power per block and semi-codeless
 // channels their own threshold (issue #13, docs/validation.md "GPS L2C and L2 P(Y) power per
-// satellite block"): only G2W records changed.
+// satellite block"): only G2W records changed. Again when semi-codeless channels report their L1
+// C/A channel's Doppler (D2W): only that column changed.
 //
 // When a model change is intended: check the new outputs (skytrace compare, the report), then
 // record the digests this test prints on failure, and say so in the commit message.
@@ -77,14 +78,14 @@ Digests run_quickstart(const std::string& name, const std::string& sets) {
 
 TEST(ObservationDigest, QuickstartMinute) {
   const Digests d = run_quickstart("quick", "--set time.duration_s=60");
-  EXPECT_EQ(d.obs_records, "b587a2fd457aff54") << "obs.rnx records changed (see the comment at the top to re-record)";
-  EXPECT_EQ(d.truth, "580311aba08f1106") << "truth.csv changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.obs_records, "57e98cfed6d4ca33") << "obs.rnx records changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "d615634fad545294") << "truth.csv changed (see the comment at the top to re-record)";
 }
 
 TEST(ObservationDigest, QuickstartMultipath) {
   const Digests d = run_quickstart("multipath", "--set time.duration_s=30 --set models.multipath=true");
-  EXPECT_EQ(d.obs_records, "afa094858c9593c6") << "obs.rnx records changed (see the comment at the top to re-record)";
-  EXPECT_EQ(d.truth, "56b71f134f958bb7") << "truth.csv changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.obs_records, "732abd079afaceba") << "obs.rnx records changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "ea47b46a4ef2afc") << "truth.csv changed (see the comment at the top to re-record)";
 }
 
 }  // namespace

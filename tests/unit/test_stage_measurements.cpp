@@ -138,11 +138,22 @@ TEST(StageMeasurementErrors, LoopNoiseHasTheLoopsJitter) {
   }
   EXPECT_NEAR(std::sqrt(code2 / n) / sigma.code_m, 1.0, 0.05);
   EXPECT_NEAR(std::sqrt(phase2 / n) / sigma.phase_m, 1.0, 0.05);
-  // An aided loop follows the aiding loop's phase error.
+  // An aided loop follows the aiding loop's phase error and reports its Doppler error exactly
+  // (the C/A Doppler scaled to L2: the same range rate), even at a C/N0 where an FLL of its own
+  // would be metres per second off.
   const Signal g2w = Signal::parse("G2W").value();
   const SignalInfo& w = *find_signal_info(g2w);
-  const LoopErrors aided = noise.draw(sat, g2w, profile, w, kFrequencyL2_Hz, 40.0, 0.25, false, t);
+  const LoopErrors aided = noise.draw(sat, g2w, profile, w, kFrequencyL2_Hz, 40.0, AidingLoop{0.25, 0.031}, false, t);
   EXPECT_NEAR(aided.phase_m, 0.25, 0.01);
+  EXPECT_DOUBLE_EQ(aided.doppler_mps, 0.031);
+  const LoopErrors weak = noise.draw(sat, g2w, profile, w, kFrequencyL2_Hz, 8.0, AidingLoop{0.0, -0.02}, true, t + 1.0);
+  EXPECT_DOUBLE_EQ(weak.doppler_mps, -0.02);
+  // Without phase aiding in the profile (a loop of its own), the Doppler still is the C/A loop's.
+  ReceiverProfile unaided = profile;
+  unaided.semicodeless_aiding_bandwidth_hz = 0.0;
+  const LoopErrors own = noise.draw(sat, g2w, unaided, w, kFrequencyL2_Hz, 40.0, AidingLoop{0.25, 0.031}, true, t + 2.0);
+  EXPECT_DOUBLE_EQ(own.doppler_mps, 0.031);
+  EXPECT_GT(std::abs(own.phase_m - 0.25), 1e-6);
 }
 
 SignalMeasurement measurement(double carrier_hz) {

@@ -49,7 +49,7 @@ MultipathErrors signal_multipath_errors(const SignalInfo& info, int glonass_chan
 
 LoopErrors LoopNoise::draw(const SatelliteId& sat, const Signal& signal, const ReceiverProfile& profile,
                            const SignalInfo& info, double carrier_hz, double cn0_dbhz,
-                           std::optional<double> aiding_phase_m, bool continuing, const GnssTime& tag) {
+                           std::optional<AidingLoop> aiding, bool continuing, const GnssTime& tag) {
   const SignalKey key{sat, signal};
   auto it = streams_.find(key);
   if (it == streams_.end()) {
@@ -60,7 +60,7 @@ LoopErrors LoopNoise::draw(const SatelliteId& sat, const Signal& signal, const R
              .first;
   }
   Streams& streams = it->second;
-  const bool aided = aiding_phase_m.has_value();
+  const bool aided = aiding.has_value() && profile.semicodeless_aiding_bandwidth_hz > 0.0;
   const TrackingNoise sigma = tracking_noise(profile, info, carrier_hz, cn0_dbhz);
   const double phase_bandwidth_hz = aided ? profile.semicodeless_aiding_bandwidth_hz : profile.pll_bandwidth_hz;
   // Loop outputs, correlated over each loop's time constant (profile.hpp); a new arc starts afresh.
@@ -82,9 +82,9 @@ LoopErrors LoopNoise::draw(const SatelliteId& sat, const Signal& signal, const R
     const double wavelength_m = kC / carrier_hz;
     const double residual_m =
         pll_jitter_rad(profile, cn0_dbhz, phase_bandwidth_hz) * wavelength_m / (2.0 * std::numbers::pi);
-    out.phase_m = *aiding_phase_m + residual_m * loops.phase;
+    out.phase_m = aiding->phase_m + residual_m * loops.phase;
   }
-  out.doppler_mps = sigma.doppler_mps * loops.doppler;
+  out.doppler_mps = aiding ? aiding->doppler_mps : sigma.doppler_mps * loops.doppler;
   return out;
 }
 

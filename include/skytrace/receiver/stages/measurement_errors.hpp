@@ -66,19 +66,25 @@ struct LoopErrors {
 };
 
 // The noise of every tracked signal's code, phase and frequency loops: unit-variance first-order
-// Gauss-Markov outputs (profile.hpp) scaled by the loops' jitter at the signal's C/N0. A loop
-// aided by the satellite's L1 C/A loop (semi-codeless P(Y)) follows that loop's phase error plus
-// what its narrow loop adds.
+// Gauss-Markov outputs (profile.hpp) scaled by the loops' jitter at the signal's C/N0. A
+// semi-codeless P(Y) channel reports the Doppler of the satellite's L1 C/A loop (scaled to its
+// carrier: the same range-rate error), as real receivers do (D2W - D1C scaled is within 0.008 m/s
+// in ESBC's PolaRx5 file and 0.000 in NYA1's NetR9 file at any C/N0); with
+// semicodeless_aiding_bandwidth_hz its phase follows that loop too, plus what its narrow loop adds.
+struct AidingLoop {
+  double phase_m = 0.0;
+  double doppler_mps = 0.0;
+};
 class LoopNoise {
  public:
   LoopNoise(std::uint64_t seed, int receiver_index) : seed_(seed), receiver_index_(receiver_index) {}
 
   // The errors of `signal` of `sat` at `tag`; `continuing`: tracked at the previous epoch (the
-  // loops run on; a new arc starts afresh). `aiding_phase_m`: the aiding loop's phase error at
-  // this epoch, for an aided loop (nullopt: not aided).
+  // loops run on; a new arc starts afresh). `aiding`: the L1 C/A loop's errors at this epoch, for
+  // a semi-codeless channel (nullopt otherwise).
   [[nodiscard]] LoopErrors draw(const SatelliteId& sat, const Signal& signal, const ReceiverProfile& profile,
                                 const SignalInfo& info, double carrier_hz, double cn0_dbhz,
-                                std::optional<double> aiding_phase_m, bool continuing, const GnssTime& tag);
+                                std::optional<AidingLoop> aiding, bool continuing, const GnssTime& tag);
 
  private:
   struct Streams {

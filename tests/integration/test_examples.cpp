@@ -1,0 +1,97 @@
+// Every example in examples/ runs as the README shows it, cut short (CI time): each scenario for a
+// few seconds of its time into a temporary folder, checking its outputs; the scripts with their
+// smallest arguments. Examples that read ../shared/data skip when it is absent.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "process.hpp"
+#include "test_support.hpp"
+
+namespace skytrace {
+namespace {
+
+std::filesystem::path skytrace_binary() { return test::binary_dir() / "bin" / "skytrace"; }
+bool shared_data_beside_the_checkout() {
+  return std::filesystem::exists(test::source_dir().parent_path() / "shared" / "data" / "real");
+}
+
+struct Example {
+  const char* scenario;   // relative to examples/
+  double duration_s;      // time.duration_s for the test
+  bool needs_shared_data;
+  std::vector<const char*> outputs;
+};
+
+class Examples : public ::testing::TestWithParam<Example> {};
+
+TEST_P(Examples, RunsAndWritesItsOutputs) {
+  const Example& e = GetParam();
+  if (e.needs_shared_data && !shared_data_beside_the_checkout()) GTEST_SKIP() << "../shared/data absent";
+  const auto scenario = test::source_dir() / "examples" / e.scenario;
+  ASSERT_TRUE(std::filesystem::exists(scenario)) << scenario;
+  std::string name = e.scenario;
+  for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  const auto out = test::make_temp_dir("example_" + name) / "out";
+  const auto r = test::run_command(test::shell_quote(skytrace_binary().string()) + " run " +
+                                   test::shell_quote(scenario.string()) + " --out " + test::shell_quote(out.string()) +
+                                   " --quiet --set time.duration_s=" + std::to_string(e.duration_s) + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* file : e.outputs) EXPECT_TRUE(std::filesystem::exists(out / file)) << file << "\n" << r.output;
+  // The report shows the fix of every example.
+  std::ifstream report(out / "report.html");
+  std::stringstream html;
+  html << report.rdbuf();
+  EXPECT_NE(html.str().find("id=\"fix-errors\""), std::string::npos);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryScenario, Examples,
+    ::testing::Values(
+        Example{"quickstart.yaml", 20, false, {"obs.rnx", "nav.rnx", "truth.csv.zst", "fix.csv", "report.html"}},
+        Example{"citysim-drive.yaml", 10, true, {"obs.rnx", "truth.csv.zst", "paths.csv.zst", "report.html"}},
+        Example{"osm-city.yaml", 20, true, {"obs.rnx", "report.html"}},
+        Example{"berlin-city-model.yaml", 20, true, {"obs.rnx", "report.html"}},
+        Example{"under-trees.yaml", 20, true, {"obs.rnx", "report.html"}},
+        Example{"ros2-bag.yaml", 5, false, {"obs.rnx", "fix.nmea", "bag/metadata.yaml", "report.html"}},
+        Example{"rtk/rtk-yard.yaml", 20, true, {"obs_BASE.rnx", "obs_ROVR.rnx", "fix_ROVR.csv", "report.html"}}),
+    [](const ::testing::TestParamInfo<Example>& example) {
+      std::string name = example.param.scenario;
+      std::string out;
+      for (const char c : name.substr(0, name.rfind('.'))) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+      return out;
+    });
+
+// skytrace serve feeding gpsd: gpsd reports 3D fixes from the simulated receiver.
+TEST(ExampleScripts, ServeGpsd) {
+  if (!std::filesystem::exists("/usr/sbin/gpsd") || test::run_command("command -v gpspipe").exit_code != 0) {
+    GTEST_SKIP() << "gpsd and gpspipe (Debian packages gpsd, gpsd-clients) are not installed";
+  }
+  const auto r = test::run_command("SKYTRACE=" + test::shell_quote(skytrace_binary().string()) + " " +
+                                   test::shell_quote((test::source_dir() / "examples/serve-gpsd.sh").string()) +
+                                   " 12 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"class\":\"TPV\""), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"mode\":3"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"altMSL\""), std::string::npos) << r.output;
+}
+
+// Comparing against a real recording: the table has the station's signals.
+TEST(ExampleScripts, CompareReal) {
+  if (!shared_data_beside_the_checkout()) GTEST_SKIP() << "../shared/data absent";
+  const auto out = test::make_temp_dir("example_compare_real") / "out";
+  const auto r = test::run_command("SKYTRACE=" + test::shell_quote(skytrace_binary().string()) + " " +
+                                   test::shell_quote((test::source_dir() / "examples/compare-real.sh").string()) + " " +
+                                   test::shell_quote(out.string()) + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\nG1C "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\nE1X "), std::string::npos) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(out / "compare.json"));
+}
+
+}  // namespace
+}  // namespace skytrace
