@@ -215,6 +215,30 @@ TEST_F(RosNodeTest, PublishesAFixAtTheStationAndEveryTrackedSatellite) {
   EXPECT_EQ(count_lines(files / "node.nmea", "$GNGGA") + count_lines(files / "node.nmea", "$GPGGA"), epochs);
 }
 
+// What docs/ros.md tells users to run: rostopic echo shows the fix, and with the generated Python
+// messages (PYTHONPATH=<build>/apps/ros/gen/python) skytrace's own observations and sky.
+TEST_F(RosNodeTest, RostopicEchoShowsTheFixAndTheObservations) {
+  if (!test::program_available("rostopic")) GTEST_SKIP() << "rostopic not installed (python3-rostopic, scripts/setup)";
+  start_node({"_pose_source:=scenario", "_rate_hz:=2"}, "node_rostopic");
+  std::string environment;
+  for (const auto& [key, value] : RosMaster::instance().environment()) environment += key + "=" + test::shell_quote(value) + " ";
+  environment += "PYTHONPATH=" + test::shell_quote((test::binary_dir() / "apps/ros/gen/python").string()) + " ";
+  const auto echo = [&](const std::string& topic) {
+    return test::run_command(environment + "timeout 60 rostopic echo -n 1 " + topic + " 2>&1");
+  };
+  const auto fix = echo("/skytrace/fix");
+  ASSERT_EQ(fix.exit_code, 0) << fix.output << node_.log_text();
+  EXPECT_NE(fix.output.find("latitude: 55.49"), std::string::npos) << fix.output;
+  EXPECT_NE(fix.output.find("status: 0"), std::string::npos) << fix.output;  // STATUS_FIX
+  const auto observations = echo("/skytrace/observations");
+  ASSERT_EQ(observations.exit_code, 0) << observations.output;
+  EXPECT_NE(observations.output.find("pseudorange_m: "), std::string::npos) << observations.output;
+  EXPECT_NE(observations.output.find("signal: \"1C\""), std::string::npos) << observations.output;
+  const auto sky = echo("/skytrace/sky");
+  ASSERT_EQ(sky.exit_code, 0) << sky.output;
+  EXPECT_NE(sky.output.find("azimuth_deg: "), std::string::npos) << sky.output;
+}
+
 TEST_F(RosNodeTest, PoseTopicMovesTheFixAndBadPosesAreIgnored) {
   ros::NodeHandle nh;
   std::optional<sensor_msgs::NavSatFix> last_fix;
