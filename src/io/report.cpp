@@ -718,6 +718,94 @@ std::string top_view(const ReportBuilder::FixRuns& receiver, size_t index) {
   return svg;
 }
 
+// The world seen from above around the receivers' true tracks: buildings, trees and other objects
+// as their outlines, each receiver's track (a dot where it stood still) and its start. The view
+// spans the tracks plus 100 m (the reach of the reflections that matter), at one scale.
+std::string world_map(const std::vector<ReportMeta::MapOutline>& outlines,
+                      const std::vector<ReportBuilder::FixRuns>& receivers) {
+  double east0 = std::numeric_limits<double>::infinity(), east1 = -east0, north0 = east0, north1 = -east0;
+  for (const auto& r : receivers) {
+    for (const auto& p : r.points) {
+      east0 = std::min(east0, static_cast<double>(p.truth_east_m));
+      east1 = std::max(east1, static_cast<double>(p.truth_east_m));
+      north0 = std::min(north0, static_cast<double>(p.truth_north_m));
+      north1 = std::max(north1, static_cast<double>(p.truth_north_m));
+    }
+  }
+  if (!std::isfinite(east0) || outlines.empty()) return {};
+  constexpr double kMargin_m = 100.0, kSize = 620.0, kLeft = 60.0, kTop = 15.0;
+  const double span_m = std::max(east1 - east0, north1 - north0) + 2.0 * kMargin_m;
+  const double scale = kSize / span_m;
+  const double east_mid = 0.5 * (east0 + east1), north_mid = 0.5 * (north0 + north1);
+  auto x_of = [&](double e) { return kLeft + kSize / 2.0 + (e - east_mid) * scale; };
+  auto y_of = [&](double n) { return kTop + kSize / 2.0 - (n - north_mid) * scale; };
+  std::string svg = fmt::format(
+      R"(<svg xmlns="http://www.w3.org/2000/svg" id="world-map" viewBox="0 0 {0} {1}" width="{0}" height="{1}" font-family="sans-serif" font-size="11">)",
+      num(kLeft + kSize + 170.0), num(kTop + kSize + 45.0));
+  svg += "\n<title>The world seen from above with the receivers' tracks</title>\n";
+  svg += fmt::format(R"(<defs><clipPath id="world-map-clip"><rect x="{0}" y="{1}" width="{2}" height="{2}"/></clipPath></defs>)",
+                     num(kLeft), num(kTop), num(kSize));
+  svg += fmt::format(R"(<rect x="{}" y="{}" width="{}" height="{}" fill="#fbfbfb" stroke="#444444" stroke-width="0.8"/>)",
+                     num(kLeft), num(kTop), num(kSize), num(kSize));
+  svg += "\n<g clip-path=\"url(#world-map-clip)\" stroke-width=\"0.6\">\n";
+  const double half_m = span_m / 2.0;
+  size_t drawn_buildings = 0, drawn_trees = 0;
+  for (const auto& o : outlines) {
+    // Only what reaches into the view.
+    bool inside = false;
+    for (const auto& [e, n] : o.east_north_m) {
+      inside = inside || (std::abs(e - east_mid) <= half_m * 1.5 && std::abs(n - north_mid) <= half_m * 1.5);
+    }
+    if (!inside || o.east_north_m.size() < 3) continue;
+    std::vector<Point2> xy;
+    for (const auto& [e, n] : o.east_north_m) xy.push_back({x_of(e), y_of(n)});
+    const char* style = o.kind == ReportMeta::MapOutline::Kind::kBuilding ? R"(fill="#b0b0b0" stroke="#707070")"
+                        : o.kind == ReportMeta::MapOutline::Kind::kTree   ? R"(fill="#9ccf8c" fill-opacity="0.8" stroke="#4f8f3f")"
+                                                                           : R"(fill="#dddddd" stroke="#aaaaaa")";
+    svg += fmt::format(R"(<polygon points="{}" {}/>)", points_attribute(xy), style);
+    svg += "\n";
+    drawn_buildings += o.kind == ReportMeta::MapOutline::Kind::kBuilding ? 1 : 0;
+    drawn_trees += o.kind == ReportMeta::MapOutline::Kind::kTree ? 1 : 0;
+  }
+  for (size_t k = 0; k < receivers.size(); ++k) {
+    const auto& r = receivers[k];
+    if (r.points.empty()) continue;
+    const std::string colour(kReceiverColours[k % kReceiverColours.size()]);
+    std::vector<Point2> track;
+    for (const auto& p : r.points) track.push_back({x_of(p.truth_east_m), y_of(p.truth_north_m)});
+    if (track.size() >= 2) {
+      svg += fmt::format(R"(<polyline points="{}" fill="none" stroke="{}" stroke-width="2"/>)", points_attribute(track), colour);
+    }
+    svg += fmt::format(R"(<circle cx="{}" cy="{}" r="4" fill="{}" stroke="#ffffff" stroke-width="1"/>)", num(track.front().x),
+                       num(track.front().y), colour);
+    svg += "\n";
+  }
+  svg += "</g>\n";
+  // Scale bar: a round length of about a fifth of the view.
+  const double bar_m = nice_step(span_m / 5.0, 1);
+  const double bar_y = kTop + kSize + 20.0;
+  svg += fmt::format(R"(<g fill="#333333"><line x1="{0}" y1="{1}" x2="{2}" y2="{1}" stroke="#333333" stroke-width="2"/><text x="{3}" y="{4}">{5:g} m</text>)",
+                     num(kLeft), num(bar_y), num(kLeft + bar_m * scale), num(kLeft + bar_m * scale + 6.0), num(bar_y + 4.0),
+                     bar_m);
+  svg += fmt::format(R"(<text x="{}" y="{}" text-anchor="end">north up</text>)", num(kLeft + kSize), num(bar_y + 4.0));
+  double y = kTop + 10.0;
+  const double x = kLeft + kSize + 15.0;
+  for (size_t k = 0; k < receivers.size(); ++k) {
+    if (receivers[k].points.empty()) continue;
+    svg += fmt::format(R"(<line x1="{0}" y1="{1}" x2="{2}" y2="{1}" stroke="{3}" stroke-width="3"/><text x="{4}" y="{5}">{6}</text>)",
+                       num(x), num(y), num(x + 18.0), kReceiverColours[k % kReceiverColours.size()], num(x + 24.0), num(y + 4.0),
+                       escape(receivers[k].receiver));
+    y += 18.0;
+  }
+  svg += fmt::format(R"(<rect x="{}" y="{}" width="16" height="10" fill="#b0b0b0"/><text x="{}" y="{}">buildings ({})</text>)",
+                     num(x), num(y - 5.0), num(x + 24.0), num(y + 4.0), drawn_buildings);
+  y += 18.0;
+  svg += fmt::format(R"(<rect x="{}" y="{}" width="16" height="10" fill="#9ccf8c"/><text x="{}" y="{}">trees ({})</text>)",
+                     num(x), num(y - 5.0), num(x + 24.0), num(y + 4.0), drawn_trees);
+  svg += "\n</g>\n</svg>\n";
+  return svg;
+}
+
 // The fix against the truth: a table of error percentiles per receiver, the errors over time, their
 // distribution, satellites used and HDOP over time, and the top view.
 std::string fix_error_section(const std::vector<ReportBuilder::FixRuns>& receivers, double t0_s, double t1_s,
@@ -1061,6 +1149,9 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
     fix_frame.y1 = 5.5;
     out += line_chart("solution-type", "Solution type over time", "solution type", fix_frame, fix_series, fix_legend, 1.0);
     out += fix_error_section(fix_runs_, t0_s, t1_s, meta.interval_s);
+    if (std::string map = world_map(meta.world_outlines, fix_runs_); !map.empty()) {
+      out += "</section>\n<section>\n<h2>The world from above</h2>\n" + map;
+    }
   }
   out += "</section>\n<section>\n<h2>Scenario</h2>\n";
   out += summary_table(meta);

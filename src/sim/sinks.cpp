@@ -403,6 +403,20 @@ class ReportSink final : public EpochSink {
                                                   std::to_string(w.buildings) + " buildings, " + std::to_string(w.trees) +
                                                   " trees)");
       meta.warnings.insert(meta.warnings.end(), w.warnings.begin(), w.warnings.end());
+      if (origin_) {
+        // The world's objects in the frame of the fixes' top views.
+        for (const auto& f : w.footprints) {
+          io::ReportMeta::MapOutline outline;
+          outline.kind = f.kind == world::ObjectKind::kBuilding ? io::ReportMeta::MapOutline::Kind::kBuilding
+                         : f.kind == world::ObjectKind::kTree   ? io::ReportMeta::MapOutline::Kind::kTree
+                                                                : io::ReportMeta::MapOutline::Kind::kOther;
+          for (const auto& v : f.outline_m) {
+            const Eigen::Vector3d en = origin_rotation_ * (w.frame.to_ecef(Eigen::Vector3d(v.x(), v.y(), 0.0)) - *origin_);
+            outline.east_north_m.emplace_back(en.x(), en.y());
+          }
+          meta.world_outlines.push_back(std::move(outline));
+        }
+      }
       auto start_position = first.kinematics->at(s.time.start);
       if (start_position) {
         constexpr double kMaskStep_deg = 2.0;

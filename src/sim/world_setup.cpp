@@ -200,6 +200,10 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
   loaded.trees = summary.trees;
   loaded.triangles = (*scene)->stats().triangles;
   loaded.warnings = model.warnings;
+  for (const auto& object : model.objects) {
+    if (object.kind == world::ObjectKind::kGround) continue;
+    if (auto f = world::footprint(object); f.outline_m.size() >= 3) loaded.footprints.push_back(std::move(f));
+  }
   std::shared_ptr<world::EmbreeScene> shared_scene(std::move(*scene));
   loaded.move_object = [shared_scene](const std::string& name, const Eigen::Isometry3d& pose) {
     return shared_scene->set_object_pose(name, pose);

@@ -1,5 +1,6 @@
 #include "skytrace/world/world_model.hpp"
 
+#include <algorithm>
 #include <limits>
 
 namespace skytrace::world {
@@ -18,6 +19,41 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> world_bounds(const WorldModel& world
   }
   if (!any) return {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   return {low, high};
+}
+
+Footprint footprint(const WorldObject& object) {
+  Footprint f;
+  f.kind = object.kind;
+  std::vector<Eigen::Vector2d> points;
+  points.reserve(object.mesh.vertices_m.size());
+  for (const auto& v : object.mesh.vertices_m) {
+    const Eigen::Vector3d p = object.pose * v.cast<double>();
+    if (p.allFinite()) points.emplace_back(p.x(), p.y());
+  }
+  std::sort(points.begin(), points.end(),
+            [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  if (points.size() < 3) {
+    f.outline_m = points;
+    return f;
+  }
+  // Andrew's monotone chain: lower hull, then upper hull.
+  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Eigen::Vector2d> hull(2 * points.size());
+  size_t k = 0;
+  for (const auto& p : points) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p) <= 0.0) --k;
+    hull[k++] = p;
+  }
+  for (size_t i = points.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], points[i]) <= 0.0) --k;
+    hull[k++] = points[i];
+  }
+  hull.resize(k - 1);  // the last point repeats the first
+  f.outline_m = std::move(hull);
+  return f;
 }
 
 }  // namespace skytrace::world

@@ -47,6 +47,8 @@ TEST_P(Examples, RunsAndWritesItsOutputs) {
   std::stringstream html;
   html << report.rdbuf();
   EXPECT_NE(html.str().find("id=\"fix-errors\""), std::string::npos);
+  // Every example has a world, drawn from above with the receivers' tracks.
+  EXPECT_NE(html.str().find("id=\"world-map\""), std::string::npos);
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -47,6 +47,9 @@ io::ReportBuilder synthetic_run(io::ReportMeta& meta) {
   }
   meta.sky_mask_azimuth_step_deg = 5.0;
   meta.warnings = {"model tree_7 skipped: mesh not found"};
+  // A building north of the rover's circle and a tree crown inside it, seen from above.
+  meta.world_outlines.push_back({io::ReportMeta::MapOutline::Kind::kBuilding, {{-30, 30}, {30, 30}, {30, 45}, {-30, 45}}});
+  meta.world_outlines.push_back({io::ReportMeta::MapOutline::Kind::kTree, {{-4, -3}, {4, -3}, {4, 3}, {-4, 3}}});
 
   io::ReportBuilder builder;
   const char* satellites[] = {"G02", "G05", "G13", "E11", "E24", "C20", "C29", "G30"};
@@ -120,7 +123,7 @@ TEST_F(ReportChromium, DomHoldsThePlots) {
   const std::string& dom = result.output;
   for (const char* id : {"id=\"skyplot\"", "id=\"satellite-count\"", "id=\"cn0-chart\"", "id=\"summary\"",
                          "id=\"path-timeline\"", "id=\"solution-type\"", "id=\"fix-errors\"", "id=\"fix-horizontal-error\"",
-                         "id=\"fix-error-cdf\"", "id=\"fix-top-view-1\""}) {
+                         "id=\"fix-error-cdf\"", "id=\"fix-top-view-1\"", "id=\"world-map\""}) {
     EXPECT_EQ(count_of(dom, id), 1U) << id << "\n" << read_all(log);
   }
   // The browser parsed the SVG: tracks, markers and chart lines are elements of the DOM.

@@ -1196,5 +1196,35 @@ TEST(WorldOsm, NoBuildingsIsAnErrorUnlessAllowed) {
   EXPECT_FALSE(load_osm_world(dir / "absent.osm").ok());
 }
 
+// An object seen from above: the convex hull of its posed vertices on the x-y plane, counter-
+// clockwise, inner and repeated vertices dropped (an L-shaped prism gives its hull).
+TEST(WorldFootprint, ConvexHullOfThePosedVerticesOnTheGround) {
+  WorldObject l_shape;
+  l_shape.kind = ObjectKind::kBuilding;
+  // An L of 10 x 10 m with a 5 x 5 m notch at the north-east, floor and roof, and a point inside.
+  for (const float z : {0.0F, 8.0F}) {
+    for (const auto& [x, y] : std::vector<std::pair<float, float>>{{0, 0}, {10, 0}, {10, 5}, {5, 5}, {5, 10}, {0, 10}, {2, 2}}) {
+      l_shape.mesh.vertices_m.emplace_back(x, y, z);
+    }
+  }
+  l_shape.pose = Eigen::Translation3d(100.0, 50.0, 0.0) * Eigen::AngleAxisd(M_PI / 2.0, Eigen::Vector3d::UnitZ());
+  const Footprint f = footprint(l_shape);
+  EXPECT_EQ(f.kind, ObjectKind::kBuilding);
+  ASSERT_EQ(f.outline_m.size(), 5U);  // the notch's corner (5, 5) is inside the hull
+  double twice_area = 0.0;
+  for (size_t i = 0; i < f.outline_m.size(); ++i) {
+    const auto& a = f.outline_m[i];
+    const auto& b = f.outline_m[(i + 1) % f.outline_m.size()];
+    twice_area += a.x() * b.y() - b.x() * a.y();
+    // Rotated by 90 degrees and moved: x in [90, 100], y in [50, 60].
+    EXPECT_GE(a.x(), 90.0 - 1e-9);
+    EXPECT_LE(a.x(), 100.0 + 1e-9);
+    EXPECT_GE(a.y(), 50.0 - 1e-9);
+    EXPECT_LE(a.y(), 60.0 + 1e-9);
+  }
+  EXPECT_NEAR(twice_area / 2.0, 100.0 - 12.5, 1e-6);  // counter-clockwise: positive
+  EXPECT_TRUE(footprint(WorldObject{}).outline_m.empty());
+}
+
 }  // namespace
 }  // namespace skytrace::world

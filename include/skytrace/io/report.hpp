@@ -56,6 +56,13 @@ struct ReportMeta {
   std::vector<double> sky_mask_elevation_deg;
   double sky_mask_azimuth_step_deg = 0.0;
   std::vector<std::string> warnings;
+  // The world seen from above, in the frame of the fixes' top views (east and north metres from
+  // the first true position the report saw): objects' outlines; drawn with the receivers' tracks.
+  struct MapOutline {
+    enum class Kind : std::uint8_t { kBuilding, kTree, kOther } kind = Kind::kOther;
+    std::vector<std::pair<double, double>> east_north_m;
+  };
+  std::vector<MapOutline> world_outlines;
 };
 
 // How a sample is drawn on the sky plot.

@@ -17,6 +17,7 @@
 #include "skytrace/core/path_query.hpp"
 #include "skytrace/sim/moving_models.hpp"
 #include "skytrace/sim/scenario.hpp"
+#include "skytrace/world/world_model.hpp"
 
 namespace skytrace::sim {
 
@@ -26,6 +27,8 @@ struct LoadedWorld {
   std::shared_ptr<const PathQuery> scene;
   std::size_t objects = 0, buildings = 0, trees = 0, triangles = 0;
   std::vector<std::string> warnings;    // what the loader skipped
+  // Every object but the ground seen from above (world frame x-y), for the report's map.
+  std::vector<world::Footprint> footprints;
   // Moves a movable (non-static) object of the scene; not concurrently with tracing.
   std::function<Status(const std::string& name, const Eigen::Isometry3d& pose_world)> move_object;
 

@@ -51,4 +51,12 @@ struct WorldModel {
 // Axis-aligned bounds of all objects in the world frame (min, max); zero box when empty.
 [[nodiscard]] std::pair<Eigen::Vector3d, Eigen::Vector3d> world_bounds(const WorldModel& world);
 
+// An object seen from above: the convex hull of its vertices on the world frame's x-y plane
+// (counter-clockwise; empty for an object without vertices). For maps, not for geometry.
+struct Footprint {
+  ObjectKind kind = ObjectKind::kOther;
+  std::vector<Eigen::Vector2d> outline_m;
+};
+[[nodiscard]] Footprint footprint(const WorldObject& object);
+
 }  // namespace skytrace::world
