@@ -192,14 +192,19 @@ MaterialRuleSetting parse_material_rule(const Node& node) {
 }
 
 void parse_world(const Node& world, const std::filesystem::path& base, WorldSettings& w) {
-  world.expect_keys({"sdf", "model_paths", "osm", "meshes", "materials", "moving", "vegetation_attenuation_db_per_m",
-                     "vegetation_hull_tolerance_m",
+  world.expect_keys({"sdf", "model_paths", "osm", "footprints", "footprint_height_field", "meshes", "materials", "moving",
+                     "vegetation_attenuation_db_per_m", "vegetation_hull_tolerance_m",
                      "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
   if (auto c = world.child("sdf")) w.sdf = existing_file(*c, base);
   if (auto c = world.child("model_paths")) {
     for (const Node& p : c->as_list_or_single()) w.model_paths.push_back(resolve(base, p.as_string()));
   }
   if (auto c = world.child("osm")) w.osm = existing_file(*c, base);
+  if (auto c = world.child("footprints")) w.footprints = existing_file(*c, base);
+  if (auto c = world.child("footprint_height_field")) {
+    if (!w.footprints) c->fail("needs world.footprints");
+    w.footprint_height_field = c->as_string();
+  }
   if (auto c = world.child("meshes")) {
     for (const Node& m : c->elements()) {
       w.meshes.push_back(parse_mesh(m, base));
@@ -220,7 +225,7 @@ void parse_world(const Node& world, const std::filesystem::path& base, WorldSett
   if (w.latitude_deg.has_value() != w.longitude_deg.has_value()) {
     world.fail("give both world.latitude_deg and world.longitude_deg, or neither");
   }
-  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.latitude_deg) {
+  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.footprints && !w.latitude_deg) {
     world.required("meshes").fail("meshes are placed in the world frame: give world.latitude_deg and world.longitude_deg "
                                   "(and elevation_m, heading_deg), or a world.sdf / world.osm that has an origin");
   }
@@ -354,9 +359,11 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   for (const auto& r : s.receivers) {
     const bool needs_world = (r.position && r.position->kind == PositionSetting::Kind::kWorldEnu) ||
                              (r.trajectory && r.trajectory->frame == PositionSetting::Kind::kWorldEnu);
-    if (needs_world && !s.world.sdf && !s.world.osm && !(s.world.latitude_deg && s.world.longitude_deg)) {
+    if (needs_world && !s.world.sdf && !s.world.osm && !s.world.footprints &&
+        !(s.world.latitude_deg && s.world.longitude_deg)) {
       root.fail("receiver '" + r.name +
-                "' uses world_enu_m coordinates: give world.sdf, world.osm or world.latitude_deg/longitude_deg");
+                "' uses world_enu_m coordinates: give world.sdf, world.osm, world.footprints or "
+                "world.latitude_deg/longitude_deg");
     }
   }
 
@@ -554,6 +561,8 @@ std::string scenario_to_json(const Scenario& s) {
   if (s.world.elevation_m) w["elevation_m"] = *s.world.elevation_m;
   if (s.world.heading_deg) w["heading_deg"] = *s.world.heading_deg;
   if (s.world.osm) w["osm"] = s.world.osm->string();
+  if (s.world.footprints) w["footprints"] = s.world.footprints->string();
+  if (!s.world.footprint_height_field.empty()) w["footprint_height_field"] = s.world.footprint_height_field;
   if (s.world.vegetation_attenuation_db_per_m) w["vegetation_attenuation_db_per_m"] = *s.world.vegetation_attenuation_db_per_m;
   if (s.world.vegetation_hull_tolerance_m) w["vegetation_hull_tolerance_m"] = *s.world.vegetation_hull_tolerance_m;
   w["meshes"] = json::array();

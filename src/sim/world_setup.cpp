@@ -113,6 +113,24 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     if (model.name.empty()) model.name = osm->name;
     append_world(model, std::move(*osm), enu_to_world);
   }
+  if (w.footprints) {
+    world::FootprintLoadOptions options;
+    if (frame) {
+      options.origin = frame->origin;
+      options.ground_height_m = frame->origin.height_m;
+    } else {
+      options.ground_height_m = w.elevation_m.value_or(0.0);
+    }
+    options.height_field = w.footprint_height_field;
+    options.material_rules = rules;
+    auto footprints = world::load_footprint_world(*w.footprints, options);
+    if (!footprints) return footprints.error();
+    if (!frame) frame = footprints->geo_origin;
+    // Like OSM: east-north-up; the world x axis is `heading` counter-clockwise from east.
+    const Eigen::Isometry3d enu_to_world(Eigen::AngleAxisd(-frame->heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()));
+    if (model.name.empty()) model.name = footprints->name;
+    append_world(model, std::move(*footprints), enu_to_world);
+  }
   if (!frame) {
     return make_error(ErrorCode::kParse,
                       s.source.string() + ": world.meshes need a geographic origin: give world.latitude_deg and "

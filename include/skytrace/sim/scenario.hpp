@@ -131,6 +131,10 @@ struct WorldSettings {
   std::optional<std::filesystem::path> sdf;
   std::vector<std::filesystem::path> model_paths;
   std::optional<std::filesystem::path> osm;  // .osm / .osm.pbf extract
+  // City-model footprints with heights (GeoJSON, GeoPackage, ... through GDAL) and the attribute
+  // that holds the height (empty: height, measuredHeight, ... or storeys, world/loaders.hpp).
+  std::optional<std::filesystem::path> footprints;
+  std::string footprint_height_field;
   std::vector<MeshSetting> meshes;
   std::vector<MaterialRuleSetting> materials;
   std::vector<MovingModelSetting> moving;
@@ -138,7 +142,7 @@ struct WorldSettings {
   std::optional<double> vegetation_hull_tolerance_m;      // simplification of vegetation hulls
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
-  [[nodiscard]] bool any() const { return sdf || osm || !meshes.empty(); }
+  [[nodiscard]] bool any() const { return sdf || osm || footprints || !meshes.empty(); }
 };
 
 struct OutputSettings {

@@ -283,6 +283,39 @@ struct OsmLoadOptions {
 [[nodiscard]] Result<WorldModel> load_osm_world(const std::filesystem::path& path,
                                                 const OsmLoadOptions& options = {});
 
+// ---------------------------------------------------------------------------------------------
+// City-model footprints with heights through GDAL/OGR (footprint_loader.cpp): GeoJSON, GeoPackage
+// and any other vector format GDAL reads (LoD1 prisms, LoD2 parts as prisms).
+
+struct FootprintLoadOptions {
+  // The world origin; default: the centre of the features' extent (in WGS84).
+  std::optional<Geodetic> origin;
+  // Ellipsoidal height of the ground, the base of every building (the origin's height when
+  // `origin` is not given).
+  double ground_height_m = 0.0;
+  // The height attribute: this field when given, else the first of kFootprintHeightFields a
+  // feature has; else storeys (kFootprintLevelFields) * level_height_m; else
+  // default_building_height_m (counted in one warning).
+  std::string height_field;
+  double level_height_m = 3.0;
+  double default_building_height_m = 10.0;
+  Material building_material{};
+  std::vector<MaterialRule> material_rules;
+};
+inline constexpr const char* kFootprintHeightFields[] = {"height", "height_m", "measuredHeight", "building:height",
+                                                         "bldg_measuredHeight", "measured_height"};
+inline constexpr const char* kFootprintLevelFields[] = {"building:levels", "storeysAboveGround", "levels"};
+
+// Loads every polygon and multipolygon feature of every layer as a building prism from the ground
+// to its height, transformed from the layer's CRS to WGS84 (PROJ through GDAL; a layer without a
+// CRS is taken as WGS84 longitude/latitude, as GeoJSON defines) and projected on the local tangent
+// plane of the origin, east-north-up. Objects are named "FILE/LAYER:FID". Invalid outlines (self-
+// intersecting, unclosed) are repaired by GEOS with a warning. Features that cannot be
+// built (invalid outline, no height) are skipped and named in the warnings; a layer in a CRS PROJ
+// cannot transform, or a file without any polygon, is an error naming the file.
+[[nodiscard]] Result<WorldModel> load_footprint_world(const std::filesystem::path& path,
+                                                      const FootprintLoadOptions& options = {});
+
 // An OSM length ("12", "12 m", "12.5m", "40 ft", "40'", "12'6\"") in metres.
 [[nodiscard]] Result<double> parse_osm_length_m(std::string_view text);
 
