@@ -7,6 +7,7 @@
 #include <complex>
 #include <cstring>
 #include <optional>
+#include <set>
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/decimal_text.hpp"
@@ -100,7 +101,8 @@ double power_db(std::complex<double> amplitude) { return 10.0 * std::log10(std::
 
 std::string csv_text(const std::string& text);
 
-void append_paths(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
+void append_paths(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name,
+                  std::map<std::string, std::set<SatelliteId>>& /*without_ephemeris*/) {
   const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
   for (const auto& sat : epoch.satellites) {
     const std::string sat_name = sat.satellite.to_string();
@@ -135,7 +137,12 @@ std::string csv_text(const std::string& text) {
   return quoted + "\"";
 }
 
-void append_truth(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name) {
+// `without_ephemeris`: receiver and satellite of the satellites whose last row said no_ephemeris.
+// A satellite without a valid ephemeris has no geometry: one row when it enters that state (at
+// the first epoch, or when its records end), not one at every epoch.
+void append_truth(std::string& out, const receiver::EpochObservations& epoch, const std::string& receiver_name,
+                  std::map<std::string, std::set<SatelliteId>>& without_ephemeris) {
+  std::set<SatelliteId>& missing = without_ephemeris[receiver_name];
   const double c = constants::kSpeedOfLight_mps;
   const std::string time = epoch.true_time.to_iso8601(TimeScale::kGpst, 6);
   const auto& rx = epoch.receiver;
@@ -158,6 +165,11 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
     const std::string_view status = receiver::to_string(sat.status);
     const std::string sat_name = sat.satellite.to_string();
     const bool has_geometry = !(sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris);
+    if (!has_geometry) {
+      if (!missing.insert(sat.satellite).second) continue;
+    } else if (!missing.empty()) {
+      missing.erase(sat.satellite);
+    }
     // Geometry cells with a satellite clock: the satellite's, and in a signal's row the clock that
     // signal got (the same one unless the generator gave it another: formatted again only then).
     const auto geometry_with = [&](std::string& cells, double satellite_clock_m) {
@@ -230,11 +242,12 @@ class CompressedFile final : public ByteStream {
 // satellite-epoch with any).
 class TableSink final : public EpochSink {
  public:
-  using AppendRows = void (*)(std::string&, const receiver::EpochObservations&, const std::string&);
+  using AppendRows = void (*)(std::string&, const receiver::EpochObservations&, const std::string&,
+                              std::map<std::string, std::set<SatelliteId>>&);
   TableSink(std::unique_ptr<ByteStream> file, AppendRows append_rows) : file_(std::move(file)), append_rows_(append_rows) {}
   Status add(const SinkEpoch& e) override {
     text_.clear();
-    append_rows_(text_, *e.observations, e.receiver->settings->name);
+    append_rows_(text_, *e.observations, e.receiver->settings->name, state_);
     return file_->write(text_);
   }
   Status finish() override { return file_->close(); }
@@ -243,6 +256,7 @@ class TableSink final : public EpochSink {
   std::unique_ptr<ByteStream> file_;
   AppendRows append_rows_;
   std::string text_;
+  std::map<std::string, std::set<SatelliteId>> state_;  // what the row function carries from epoch to epoch
 };
 
 // --- obs.rnx -------------------------------------------------------------------------------------

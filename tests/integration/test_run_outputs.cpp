@@ -6,7 +6,9 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
+#include <vector>
 
 #include "process.hpp"
 #include "skytrace/io/rinex_obs.hpp"
@@ -88,6 +90,29 @@ TEST_F(RunOutputs, ObservationFileReadsBackToTheTruth) {
   EXPECT_EQ(summary["epochs"].get<size_t>(), 121u);
   EXPECT_EQ(summary["signal_observations"].get<size_t>(), compared);
   EXPECT_EQ(summary["configuration"]["seed"].get<int>(), 1);
+}
+
+// A satellite the navigation data holds no valid ephemeris for has no geometry: truth.csv says so
+// in one row when it enters that state, not at every epoch (the contract's file: several BeiDou
+// and Galileo satellites all along).
+TEST_F(RunOutputs, SatellitesWithoutEphemerisHaveOneTruthRowNotOnePerEpoch) {
+  const std::string truth = test::read_zst_text(out_ / "truth.csv.zst");
+  std::map<std::string, int> rows_without_ephemeris;
+  std::set<std::string> epochs;
+  std::istringstream lines(truth);
+  std::string line;
+  std::getline(lines, line);  // header
+  for (; std::getline(lines, line);) {
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    ASSERT_GE(cells.size(), 6U);
+    epochs.insert(cells[0]);
+    if (cells[4] == "no_ephemeris") ++rows_without_ephemeris[cells[2]];
+  }
+  ASSERT_GT(epochs.size(), 100U);
+  EXPECT_GE(rows_without_ephemeris.size(), 5U);
+  for (const auto& [satellite, rows] : rows_without_ephemeris) EXPECT_LE(rows, 2) << satellite;
 }
 
 TEST_F(RunOutputs, NavigationFileHoldsOnlyRecordsUsedAndReadsBack) {
