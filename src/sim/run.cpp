@@ -7,6 +7,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <condition_variable>
@@ -297,6 +298,50 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     rx.generator = std::move(*generator);
     rx.header = make_observation_header(s, *rx.settings, rx.marker_m, ephemerides, resources->left_out_systems,
                                         rx.generator->settings().profile.antenna_rinex_type);
+  }
+
+  if (world && world->has_objects) {
+    // A receiver the world cannot touch (above every roof, below every base, beyond its extent) is
+    // most often a height or origin given wrongly (OSM and footprints have no terrain heights).
+    for (const ReceiverRun& rx : receivers) {
+      const auto start = rx.kinematics->at(s.time.start);
+      if (!start) continue;
+      const Eigen::Vector3d p = world->frame.from_ecef(start->position_m);
+      const double ground_m = world->frame.origin.height_m;
+      const std::string who = "receiver '" + rx.settings->name + "'";
+      // High above the ground with no object below it: hovering over a street (a rooftop antenna
+      // stands over its building's footprint).
+      constexpr double kHigh_m = 10.0;
+      const auto over = [&](const world::Footprint& f) {
+        for (size_t i = 0; i < f.outline_m.size(); ++i) {
+          const Eigen::Vector2d& a = f.outline_m[i];
+          const Eigen::Vector2d& b = f.outline_m[(i + 1) % f.outline_m.size()];
+          if ((b - a).x() * (p.y() - a.y()) - (b - a).y() * (p.x() - a.x()) < 0.0) return false;  // counter-clockwise hull
+        }
+        return true;
+      };
+      if (p.z() > kHigh_m && std::none_of(world->footprints.begin(), world->footprints.end(), over)) {
+        resources->warnings.push_back(fmt::format(
+            "{} starts {:.1f} m above the world's ground ({:.1f} m above the ellipsoid) over no object{}: is the "
+            "receiver's height or world.elevation_m (the ground's ellipsoidal height) right?",
+            who, p.z(), ground_m,
+            p.z() > world->high_m.z() ? fmt::format(", above every object (the tallest reaches {:.1f} m)", world->high_m.z())
+                                      : std::string()));
+      } else if (p.z() < world->low_m.z() - 2.0) {
+        resources->warnings.push_back(fmt::format(
+            "{} starts {:.1f} m below the world's ground ({:.1f} m above the ellipsoid), below the base of every "
+            "object ({:.1f} m): is the receiver's height or world.elevation_m right?",
+            who, -p.z(), ground_m, world->low_m.z()));
+      }
+      constexpr double kBeyond_m = 100.0;
+      if (p.x() < world->low_m.x() - kBeyond_m || p.x() > world->high_m.x() + kBeyond_m ||
+          p.y() < world->low_m.y() - kBeyond_m || p.y() > world->high_m.y() + kBeyond_m) {
+        resources->warnings.push_back(fmt::format(
+            "{} starts at ({:.0f}, {:.0f}) m in the world frame, more than {:.0f} m outside the world's objects "
+            "(x {:.0f} to {:.0f}, y {:.0f} to {:.0f} m): the world has little to block there",
+            who, p.x(), p.y(), kBeyond_m, world->low_m.x(), world->high_m.x(), world->low_m.y(), world->high_m.y()));
+      }
+    }
   }
 
   RunSummary summary;

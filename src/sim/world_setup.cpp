@@ -218,9 +218,18 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
   loaded.trees = summary.trees;
   loaded.triangles = (*scene)->stats().triangles;
   loaded.warnings = model.warnings;
-  for (const auto& object : model.objects) {
-    if (object.kind == world::ObjectKind::kGround) continue;
-    if (auto f = world::footprint(object); f.outline_m.size() >= 3) loaded.footprints.push_back(std::move(f));
+  {
+    world::WorldModel above_ground;
+    for (const auto& object : model.objects) {
+      if (object.kind == world::ObjectKind::kGround) continue;
+      if (auto f = world::footprint(object); f.outline_m.size() >= 3) loaded.footprints.push_back(std::move(f));
+      above_ground.objects.push_back(world::WorldObject{object.name, object.kind, object.material, object.mesh, object.pose,
+                                                        object.is_static});
+    }
+    if (!above_ground.objects.empty()) {
+      std::tie(loaded.low_m, loaded.high_m) = world::world_bounds(above_ground);
+      loaded.has_objects = true;
+    }
   }
   std::shared_ptr<world::EmbreeScene> shared_scene(std::move(*scene));
   loaded.move_object = [shared_scene](const std::string& name, const Eigen::Isometry3d& pose) {

@@ -83,6 +83,12 @@ Result<WorldModel> load_footprint_world(const std::filesystem::path& path, const
   }
   static std::once_flag registered;
   std::call_once(registered, [] { GDALAllRegister(); });
+  // GDAL's and GEOS's own messages ("Self-intersection at or near point ...") go to the warnings
+  // below, not to stderr.
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  struct PopHandler {
+    ~PopHandler() { CPLPopErrorHandler(); }
+  } pop_handler;
   CPLErrorReset();
   std::unique_ptr<GDALDataset, DatasetCloser> dataset(
       GDALDataset::Open(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));

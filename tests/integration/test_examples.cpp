@@ -95,5 +95,24 @@ TEST(ExampleScripts, CompareReal) {
   EXPECT_TRUE(std::filesystem::exists(out / "compare.json"));
 }
 
+// A city model without terrain heights placed at the wrong height: the receiver hovers 75 m above
+// the streets, and the run says so, naming the heights (issue #15); placed right, not a word.
+TEST(WorldHeights, AReceiverHighAboveTheGroundOverNoObjectIsWarnedAbout) {
+  if (!shared_data_beside_the_checkout()) GTEST_SKIP() << "../shared/data absent";
+  const auto dir = test::make_temp_dir("world_heights");
+  const std::string run = test::shell_quote(skytrace_binary().string()) + " run " +
+                          test::shell_quote((test::source_dir() / "examples/berlin-city-model.yaml").string()) +
+                          " --set time.duration_s=2 --out ";
+  const auto wrong = test::run_command(run + test::shell_quote((dir / "wrong").string()) + " --set world.elevation_m=0 2>&1");
+  ASSERT_EQ(wrong.exit_code, 0) << wrong.output;
+  EXPECT_NE(wrong.output.find("warning: receiver 'BERL' starts 75.4 m above the world's ground (0.0 m above the "
+                              "ellipsoid) over no object"),
+            std::string::npos)
+      << wrong.output;
+  const auto right = test::run_command(run + test::shell_quote((dir / "right").string()) + " 2>&1");
+  ASSERT_EQ(right.exit_code, 0) << right.output;
+  EXPECT_EQ(right.output.find("above the world's ground"), std::string::npos) << right.output;
+}
+
 }  // namespace
 }  // namespace skytrace

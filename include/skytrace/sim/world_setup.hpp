@@ -29,6 +29,9 @@ struct LoadedWorld {
   std::vector<std::string> warnings;    // what the loader skipped
   // Every object but the ground seen from above (world frame x-y), for the report's map.
   std::vector<world::Footprint> footprints;
+  // Bounds of every object but the ground in the world frame (min, max; zero without objects).
+  Eigen::Vector3d low_m = Eigen::Vector3d::Zero(), high_m = Eigen::Vector3d::Zero();
+  bool has_objects = false;
   // Moves a movable (non-static) object of the scene; not concurrently with tracing.
   std::function<Status(const std::string& name, const Eigen::Isometry3d& pose_world)> move_object;
 
