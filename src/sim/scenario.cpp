@@ -192,7 +192,8 @@ MaterialRuleSetting parse_material_rule(const Node& node) {
 }
 
 void parse_world(const Node& world, const std::filesystem::path& base, WorldSettings& w) {
-  world.expect_keys({"sdf", "model_paths", "osm", "footprints", "footprint_height_field", "meshes", "materials", "moving",
+  world.expect_keys({"sdf", "model_paths", "osm", "footprints", "footprint_height_field", "cityjson",
+                     "cityjson_height_offset_m", "meshes", "materials", "moving",
                      "vegetation_attenuation_db_per_m", "vegetation_hull_tolerance_m",
                      "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
   if (auto c = world.child("sdf")) w.sdf = existing_file(*c, base);
@@ -201,6 +202,11 @@ void parse_world(const Node& world, const std::filesystem::path& base, WorldSett
   }
   if (auto c = world.child("osm")) w.osm = existing_file(*c, base);
   if (auto c = world.child("footprints")) w.footprints = existing_file(*c, base);
+  if (auto c = world.child("cityjson")) w.cityjson = existing_file(*c, base);
+  if (auto c = world.child("cityjson_height_offset_m")) {
+    if (!w.cityjson) c->fail("needs world.cityjson");
+    w.cityjson_height_offset_m = c->as_double_in(-500.0, 10000.0);
+  }
   if (auto c = world.child("footprint_height_field")) {
     if (!w.footprints) c->fail("needs world.footprints");
     w.footprint_height_field = c->as_string();
@@ -225,7 +231,7 @@ void parse_world(const Node& world, const std::filesystem::path& base, WorldSett
   if (w.latitude_deg.has_value() != w.longitude_deg.has_value()) {
     world.fail("give both world.latitude_deg and world.longitude_deg, or neither");
   }
-  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.footprints && !w.latitude_deg) {
+  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.footprints && !w.cityjson && !w.latitude_deg) {
     world.required("meshes").fail("meshes are placed in the world frame: give world.latitude_deg and world.longitude_deg "
                                   "(and elevation_m, heading_deg), or a world.sdf / world.osm that has an origin");
   }
@@ -359,7 +365,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   for (const auto& r : s.receivers) {
     const bool needs_world = (r.position && r.position->kind == PositionSetting::Kind::kWorldEnu) ||
                              (r.trajectory && r.trajectory->frame == PositionSetting::Kind::kWorldEnu);
-    if (needs_world && !s.world.sdf && !s.world.osm && !s.world.footprints &&
+    if (needs_world && !s.world.sdf && !s.world.osm && !s.world.footprints && !s.world.cityjson &&
         !(s.world.latitude_deg && s.world.longitude_deg)) {
       root.fail("receiver '" + r.name +
                 "' uses world_enu_m coordinates: give world.sdf, world.osm, world.footprints or "
@@ -563,6 +569,8 @@ std::string scenario_to_json(const Scenario& s) {
   if (s.world.osm) w["osm"] = s.world.osm->string();
   if (s.world.footprints) w["footprints"] = s.world.footprints->string();
   if (!s.world.footprint_height_field.empty()) w["footprint_height_field"] = s.world.footprint_height_field;
+  if (s.world.cityjson) w["cityjson"] = s.world.cityjson->string();
+  if (s.world.cityjson_height_offset_m) w["cityjson_height_offset_m"] = *s.world.cityjson_height_offset_m;
   if (s.world.vegetation_attenuation_db_per_m) w["vegetation_attenuation_db_per_m"] = *s.world.vegetation_attenuation_db_per_m;
   if (s.world.vegetation_hull_tolerance_m) w["vegetation_hull_tolerance_m"] = *s.world.vegetation_hull_tolerance_m;
   w["meshes"] = json::array();

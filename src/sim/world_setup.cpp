@@ -131,6 +131,19 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     if (model.name.empty()) model.name = footprints->name;
     append_world(model, std::move(*footprints), enu_to_world);
   }
+  if (w.cityjson) {
+    world::CityJsonLoadOptions options;
+    if (frame) options.origin = frame->origin;
+    options.height_offset_m = w.cityjson_height_offset_m;
+    options.material_rules = rules;
+    options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
+    auto city = world::load_cityjson_world(*w.cityjson, options);
+    if (!city) return city.error();
+    if (!frame) frame = city->geo_origin;
+    const Eigen::Isometry3d enu_to_world(Eigen::AngleAxisd(-frame->heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()));
+    if (model.name.empty()) model.name = city->name;
+    append_world(model, std::move(*city), enu_to_world);
+  }
   if (!frame) {
     return make_error(ErrorCode::kParse,
                       s.source.string() + ": world.meshes need a geographic origin: give world.latitude_deg and "

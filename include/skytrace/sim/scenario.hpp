@@ -135,6 +135,9 @@ struct WorldSettings {
   // that holds the height (empty: height, measuredHeight, ... or storeys, world/loaders.hpp).
   std::optional<std::filesystem::path> footprints;
   std::string footprint_height_field;
+  // A CityJSON city model (its heights above mean sea level unless cityjson_height_offset_m).
+  std::optional<std::filesystem::path> cityjson;
+  std::optional<double> cityjson_height_offset_m;
   std::vector<MeshSetting> meshes;
   std::vector<MaterialRuleSetting> materials;
   std::vector<MovingModelSetting> moving;
@@ -142,7 +145,7 @@ struct WorldSettings {
   std::optional<double> vegetation_hull_tolerance_m;      // simplification of vegetation hulls
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
-  [[nodiscard]] bool any() const { return sdf || osm || footprints || !meshes.empty(); }
+  [[nodiscard]] bool any() const { return sdf || osm || footprints || cityjson || !meshes.empty(); }
 };
 
 struct OutputSettings {

@@ -316,6 +316,31 @@ inline constexpr const char* kFootprintLevelFields[] = {"building:levels", "stor
 [[nodiscard]] Result<WorldModel> load_footprint_world(const std::filesystem::path& path,
                                                       const FootprintLoadOptions& options = {});
 
+// ---------------------------------------------------------------------------------------------
+// CityJSON city models (cityjson_loader.cpp): CityJSON 1.0-2.0, every city object's geometry of
+// the highest LoD it has (Solid, CompositeSolid, MultiSolid, MultiSurface, CompositeSurface), each
+// surface polygon (holes included) triangulated on its own plane, roofs as modelled.
+
+struct CityJsonLoadOptions {
+  // The world origin; default: the centre of the model's extent, at the height of its lowest point.
+  std::optional<Geodetic> origin;
+  // Ellipsoidal height of the model's z = 0. Default (nullopt): the model's heights are above mean
+  // sea level and the EGM96 geoid (core/geoid) gives the ellipsoid's offset at the model's centre
+  // (national height datums are within decimetres of it); without a geoid grid, 0.
+  std::optional<double> height_offset_m;
+  std::vector<MaterialRule> material_rules;
+  double vegetation_attenuation_db_per_m = kDefaultVegetationAttenuationDbPerM;
+};
+
+// Loads a CityJSON file. Coordinates are transformed from metadata.referenceSystem (an EPSG URL or
+// "urn:ogc:def:crs:EPSG::N"; absent: WGS84 longitude/latitude) to WGS84 by PROJ through GDAL and
+// projected on the tangent plane of the origin. Objects are named "FILE/ID"; Building(Part)s are
+// buildings, SolitaryVegetationObject and PlantCover vegetation, TINRelief and LandUse ground.
+// Errors name the file and what is wrong (not JSON, not CityJSON, a vertex index out of range, a
+// CRS PROJ cannot transform).
+[[nodiscard]] Result<WorldModel> load_cityjson_world(const std::filesystem::path& path,
+                                                     const CityJsonLoadOptions& options = {});
+
 // An OSM length ("12", "12 m", "12.5m", "40 ft", "40'", "12'6\"") in metres.
 [[nodiscard]] Result<double> parse_osm_length_m(std::string_view text);
 
