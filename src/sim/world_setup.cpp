@@ -218,6 +218,23 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     }
   }
 
+  // OpenStreetMap, footprints and CityJSON without a terrain have no ground: a plane at the world's
+  // z = 0 (its ground height) under everything and 200 m beyond, so that the ground reflects
+  // (models.multipath) and blocks what is below the horizon, as Gazebo worlds' ground planes do.
+  const bool has_ground = std::any_of(model.objects.begin(), model.objects.end(),
+                                      [](const world::WorldObject& o) { return o.kind == world::ObjectKind::kGround; });
+  if (!has_ground && !model.objects.empty() && (w.osm || w.footprints || w.cityjson)) {
+    const auto [low, high] = world::world_bounds(model);
+    constexpr double kBeyond_m = 200.0;
+    world::WorldObject ground;
+    ground.name = "ground plane";
+    ground.kind = world::ObjectKind::kGround;
+    ground.material.material_class = MaterialClass::kGround;
+    ground.mesh = world::make_plane(Eigen::Vector3d::UnitZ(),
+                                    Eigen::Vector2d(high.x() - low.x() + 2.0 * kBeyond_m, high.y() - low.y() + 2.0 * kBeyond_m));
+    ground.pose = Eigen::Translation3d(0.5 * (low.x() + high.x()), 0.5 * (low.y() + high.y()), 0.0);
+    model.objects.push_back(std::move(ground));
+  }
   auto scene = world::EmbreeScene::build(model);
   if (!scene) {
     // A world the scene refuses (non-finite vertices, bad indices) is bad input, not a bad command.
