@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <string_view>
 
 namespace skytrace::io {
@@ -622,24 +623,35 @@ std::string path_timeline(const std::map<SatelliteId, std::vector<ReportBuilder:
   return svg;
 }
 
+// East and north bounds of the receivers' true tracks; infinite bounds when there is no point.
+struct TrackExtent {
+  double east0 = std::numeric_limits<double>::infinity(), east1 = -std::numeric_limits<double>::infinity();
+  double north0 = std::numeric_limits<double>::infinity(), north1 = -std::numeric_limits<double>::infinity();
+  [[nodiscard]] bool empty() const { return !std::isfinite(east0); }
+};
+TrackExtent truth_extent(std::span<const ReportBuilder::FixRuns> receivers) {
+  TrackExtent x;
+  for (const auto& r : receivers) {
+    for (const auto& p : r.points) {
+      x.east0 = std::min(x.east0, static_cast<double>(p.truth_east_m));
+      x.east1 = std::max(x.east1, static_cast<double>(p.truth_east_m));
+      x.north0 = std::min(x.north0, static_cast<double>(p.truth_north_m));
+      x.north1 = std::max(x.north1, static_cast<double>(p.truth_north_m));
+    }
+  }
+  return x;
+}
+
 // The top view of one receiver: its true track (grey line) and its fixes coloured by solution type,
 // east and north metres at one scale. The view spans the true track plus a margin of twice the
 // 95th percentile of the horizontal error; fixes beyond it are counted, not drawn.
 std::string top_view(const ReportBuilder::FixRuns& receiver, size_t index) {
-  const std::vector<ReportBuilder::FixRuns> receivers = {receiver};
-  double east0 = std::numeric_limits<double>::infinity(), east1 = -east0, north0 = east0, north1 = -east0;
-  double margin_m = 0.02;  // a static receiver's view: its scatter, at least 4 cm across
-  for (const auto& r : receivers) {
-    for (const auto& p : r.points) {
-      east0 = std::min(east0, static_cast<double>(p.truth_east_m));
-      east1 = std::max(east1, static_cast<double>(p.truth_east_m));
-      north0 = std::min(north0, static_cast<double>(p.truth_north_m));
-      north1 = std::max(north1, static_cast<double>(p.truth_north_m));
-    }
-    const double p95_m = histogram_quantile_m(r.horizontal_histogram, 0.95);
-    if (std::isfinite(p95_m)) margin_m = std::max(margin_m, 2.0 * p95_m);
-  }
+  const std::span<const ReportBuilder::FixRuns> receivers(&receiver, 1);
+  auto [east0, east1, north0, north1] = truth_extent(receivers);
   if (!std::isfinite(east0)) return {};
+  double margin_m = 0.02;  // a static receiver's view: its scatter, at least 4 cm across
+  const double p95_m = histogram_quantile_m(receiver.horizontal_histogram, 0.95);
+  if (std::isfinite(p95_m)) margin_m = std::max(margin_m, 2.0 * p95_m);
   east0 -= margin_m;
   east1 += margin_m;
   north0 -= margin_m;
@@ -723,15 +735,7 @@ std::string top_view(const ReportBuilder::FixRuns& receiver, size_t index) {
 // spans the tracks plus 100 m (the reach of the reflections that matter), at one scale.
 std::string world_map(const std::vector<ReportMeta::MapOutline>& outlines,
                       const std::vector<ReportBuilder::FixRuns>& receivers) {
-  double east0 = std::numeric_limits<double>::infinity(), east1 = -east0, north0 = east0, north1 = -east0;
-  for (const auto& r : receivers) {
-    for (const auto& p : r.points) {
-      east0 = std::min(east0, static_cast<double>(p.truth_east_m));
-      east1 = std::max(east1, static_cast<double>(p.truth_east_m));
-      north0 = std::min(north0, static_cast<double>(p.truth_north_m));
-      north1 = std::max(north1, static_cast<double>(p.truth_north_m));
-    }
-  }
+  const auto [east0, east1, north0, north1] = truth_extent(receivers);
   if (!std::isfinite(east0) || outlines.empty()) return {};
   constexpr double kMargin_m = 100.0, kSize = 620.0, kLeft = 60.0, kTop = 15.0;
   const double span_m = std::max(east1 - east0, north1 - north0) + 2.0 * kMargin_m;

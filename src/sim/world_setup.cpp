@@ -83,6 +83,14 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     frame = sdf->geo_origin;
     model = std::move(*sdf);
   }
+  // OpenStreetMap, footprints and CityJSON load east-north-up around an origin (the world's when it
+  // has one already, else theirs); the world x axis is `heading` counter-clockwise from east.
+  const auto append_enu_world = [&](world::WorldModel&& part) {
+    if (!frame) frame = part.geo_origin;
+    const Eigen::Isometry3d enu_to_world(Eigen::AngleAxisd(-frame->heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()));
+    if (model.name.empty()) model.name = part.name;
+    append_world(model, std::move(part), enu_to_world);
+  };
   if (w.osm) {
     world::OsmLoadOptions options;
     if (frame) {
@@ -107,11 +115,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
       osm->warnings.push_back(w.osm->string() + ": no buildings in the OSM data, only vegetation (" +
                               std::to_string(osm->objects.size()) + " trees or woods)");
     }
-    if (!frame) frame = osm->geo_origin;
-    // The OSM loader works east-north-up; the world x axis is `heading` counter-clockwise from east.
-    const Eigen::Isometry3d enu_to_world(Eigen::AngleAxisd(-frame->heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()));
-    if (model.name.empty()) model.name = osm->name;
-    append_world(model, std::move(*osm), enu_to_world);
+    append_enu_world(std::move(*osm));
   }
   if (w.footprints) {
     world::FootprintLoadOptions options;
@@ -125,11 +129,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     options.material_rules = rules;
     auto footprints = world::load_footprint_world(*w.footprints, options);
     if (!footprints) return footprints.error();
-    if (!frame) frame = footprints->geo_origin;
-    // Like OSM: east-north-up; the world x axis is `heading` counter-clockwise from east.
-    const Eigen::Isometry3d enu_to_world(Eigen::AngleAxisd(-frame->heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()));
-    if (model.name.empty()) model.name = footprints->name;
-    append_world(model, std::move(*footprints), enu_to_world);
+    append_enu_world(std::move(*footprints));
   }
   if (w.cityjson) {
     world::CityJsonLoadOptions options;
@@ -139,10 +139,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
     auto city = world::load_cityjson_world(*w.cityjson, options);
     if (!city) return city.error();
-    if (!frame) frame = city->geo_origin;
-    const Eigen::Isometry3d enu_to_world(Eigen::AngleAxisd(-frame->heading_deg * kDegToRad, Eigen::Vector3d::UnitZ()));
-    if (model.name.empty()) model.name = city->name;
-    append_world(model, std::move(*city), enu_to_world);
+    append_enu_world(std::move(*city));
   }
   if (!frame) {
     return make_error(ErrorCode::kParse,

@@ -282,15 +282,7 @@ Result<WorldModel> load_cityjson_world(const std::filesystem::path& path, const 
       }
     }
     if (o.mesh.triangles.empty()) continue;
-    // Vertices relative to the object's centre keep float precision far from the origin.
-    Eigen::Vector3f low = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity()), high = -low;
-    for (const auto& p : o.mesh.vertices_m) {
-      low = low.cwiseMin(p);
-      high = high.cwiseMax(p);
-    }
-    Eigen::Vector3f centre = 0.5F * (low + high);
-    for (auto& p : o.mesh.vertices_m) p -= centre;
-    o.pose = Eigen::Translation3d(centre.cast<double>());
+    centre_mesh_horizontally(o);
     world.objects.push_back(std::move(o));
   }
   if (skipped_surfaces > 0) {

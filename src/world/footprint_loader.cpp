@@ -246,17 +246,7 @@ Result<WorldModel> load_footprint_world(const std::filesystem::path& path, const
       if (rule->kind) object.kind = *rule->kind;
     }
     object.mesh = std::move(*prism);
-    // Vertices relative to the footprint's centre keep float precision far from the origin.
-    Eigen::Vector3f low = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());
-    Eigen::Vector3f high = -low;
-    for (const auto& v : object.mesh.vertices_m) {
-      low = low.cwiseMin(v);
-      high = high.cwiseMax(v);
-    }
-    Eigen::Vector3f centre = 0.5F * (low + high);
-    centre.z() = 0.0F;
-    for (auto& v : object.mesh.vertices_m) v -= centre;
-    object.pose = Eigen::Translation3d(centre.cast<double>());
+    centre_mesh_horizontally(object);
     world.objects.push_back(std::move(object));
   }
   if (world.objects.empty()) {

@@ -758,20 +758,6 @@ std::optional<double> tag_number(const std::map<std::string, std::string>& tags,
   return value;
 }
 
-// Object mesh around its own centre (pose carries the position: float vertices stay precise).
-void centre_mesh(WorldObject& object) {
-  Eigen::Vector3f low = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());
-  Eigen::Vector3f high = -low;
-  for (const auto& v : object.mesh.vertices_m) {
-    low = low.cwiseMin(v);
-    high = high.cwiseMax(v);
-  }
-  Eigen::Vector3f centre = 0.5F * (low + high);
-  centre.z() = 0.0F;
-  for (auto& v : object.mesh.vertices_m) v -= centre;
-  object.pose = Eigen::Translation3d(centre.cast<double>()) * object.pose;
-}
-
 }  // namespace
 
 namespace {
@@ -1017,7 +1003,7 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path,
     if (failed) continue;
     if (!area.rejected.empty())
       warnings.push_back(area.rejected + "; built from its outline as drawn");
-    centre_mesh(object);
+    centre_mesh_horizontally(object);
     if (object.kind == ObjectKind::kBuilding) ++buildings;
     world.objects.push_back(std::move(object));
   }

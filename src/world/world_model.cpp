@@ -21,6 +21,20 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> world_bounds(const WorldModel& world
   return {low, high};
 }
 
+void centre_mesh_horizontally(WorldObject& object) {
+  Eigen::Vector3f low = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());
+  Eigen::Vector3f high = -low;
+  for (const auto& v : object.mesh.vertices_m) {
+    low = low.cwiseMin(v);
+    high = high.cwiseMax(v);
+  }
+  if (!low.allFinite() || !high.allFinite()) return;
+  Eigen::Vector3f centre = 0.5F * (low + high);
+  centre.z() = 0.0F;
+  for (auto& v : object.mesh.vertices_m) v -= centre;
+  object.pose = Eigen::Translation3d(centre.cast<double>()) * object.pose;
+}
+
 Footprint footprint(const WorldObject& object) {
   Footprint f;
   f.kind = object.kind;

@@ -51,6 +51,10 @@ struct WorldModel {
 // Axis-aligned bounds of all objects in the world frame (min, max); zero box when empty.
 [[nodiscard]] std::pair<Eigen::Vector3d, Eigen::Vector3d> world_bounds(const WorldModel& world);
 
+// Moves an object's vertices around their horizontal centre, the pose carrying that offset (z
+// stays): float vertices stay precise however far the object is from the world origin.
+void centre_mesh_horizontally(WorldObject& object);
+
 // An object seen from above: the convex hull of its vertices on the world frame's x-y plane
 // (counter-clockwise; empty for an object without vertices). For maps, not for geometry.
 struct Footprint {
