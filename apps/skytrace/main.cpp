@@ -12,6 +12,10 @@ namespace skytrace::cli {
 
 int report_error(const Error& error) {
   std::cerr << "skytrace: error: " << error.message << "\n";
+  return exit_code_for(error);
+}
+
+int exit_code_for(const Error& error) {
   switch (error.code) {
     case ErrorCode::kInvalidArgument: return kExitUsage;
     case ErrorCode::kParse:
@@ -42,6 +46,7 @@ int main(int argc, char** argv) {
   register_gz_command(app, exit_code);
   register_serve_command(app, exit_code);
   register_position_command(app, exit_code);
+  register_sweep_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -24,6 +24,7 @@ InputLimits read_limits() {
   limits.max_grid_points = from_environment("SKYTRACE_MAX_GRID_POINTS", limits.max_grid_points, 1);
   limits.max_table_rows = from_environment("SKYTRACE_MAX_TABLE_ROWS", limits.max_table_rows, 1);
   limits.max_way_nodes = from_environment("SKYTRACE_MAX_WAY_NODES", limits.max_way_nodes, 1);
+  limits.max_sweep_points = from_environment("SKYTRACE_MAX_SWEEP_POINTS", limits.max_sweep_points, 1);
   return limits;
 }
 

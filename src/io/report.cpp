@@ -507,39 +507,14 @@ constexpr std::array<std::string_view, 6> kFixTypeLabels = {"none", "2D", "3D", 
 // Colours of the solution types on the top view (none is not drawn).
 constexpr std::array<std::string_view, 6> kFixTypeColours = {"#999999", "#d62728", "#ff7f0e", "#9467bd", "#1f77b4",
                                                              "#2ca02c"};
-constexpr double kErrorBinsPerDecade = 100.0;
-constexpr double kSmallestError_m = 1e-4;
-
-size_t error_bin(double error_m) {
-  if (!(error_m > kSmallestError_m)) return 0;
-  const double bin = std::floor(std::log10(error_m / kSmallestError_m) * kErrorBinsPerDecade);
-  return static_cast<size_t>(std::min(bin, static_cast<double>(ReportBuilder::kErrorBins - 1)));
-}
-
-// The error below which a fraction q of the histogram's epochs lie (the bin's geometric centre).
-double histogram_quantile_m(const std::vector<std::uint32_t>& histogram, double q) {
-  std::uint64_t total = 0;
-  for (const auto n : histogram) total += n;
-  if (total == 0) return std::numeric_limits<double>::quiet_NaN();
-  const double wanted = q * static_cast<double>(total);
-  std::uint64_t below = 0;
-  for (size_t i = 0; i < histogram.size(); ++i) {
-    below += histogram[i];
-    if (static_cast<double>(below) >= wanted) {
-      return kSmallestError_m * std::pow(10.0, (static_cast<double>(i) + 0.5) / kErrorBinsPerDecade);
-    }
-  }
-  return kSmallestError_m * std::pow(10.0, static_cast<double>(histogram.size()) / kErrorBinsPerDecade);
-}
-
 // Metres with three significant digits (0.0123, 1.23, 123); percentiles from the histogram with
 // two, as precise as its bins.
 std::string metres(double value_m) {
   if (!std::isfinite(value_m)) return "-";
   return fmt::format("{:.3g}", value_m);
 }
-std::string percentile_metres(const std::vector<std::uint32_t>& histogram, double q) {
-  const double value_m = histogram_quantile_m(histogram, q);
+std::string percentile_metres(const ErrorHistogram& histogram, double q) {
+  const double value_m = histogram.quantile_m(q);
   if (!std::isfinite(value_m)) return "-";
   return fmt::format("{:.2g}", value_m);
 }
@@ -650,7 +625,7 @@ std::string top_view(const ReportBuilder::FixRuns& receiver, size_t index) {
   auto [east0, east1, north0, north1] = truth_extent(receivers);
   if (!std::isfinite(east0)) return {};
   double margin_m = 0.02;  // a static receiver's view: its scatter, at least 4 cm across
-  const double p95_m = histogram_quantile_m(receiver.horizontal_histogram, 0.95);
+  const double p95_m = receiver.horizontal_histogram.quantile_m(0.95);
   if (std::isfinite(p95_m)) margin_m = std::max(margin_m, 2.0 * p95_m);
   east0 -= margin_m;
   east1 += margin_m;
@@ -832,16 +807,16 @@ std::string fix_error_section(const std::vector<ReportBuilder::FixRuns>& receive
     out += fmt::format("<tr><th scope=\"row\">{}</th><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>"
                        "<td>{}</td><td>{:.1f}</td><td>{:.2f}</td></tr>\n",
                        escape(r.receiver), r.compared, percentile_metres(r.horizontal_histogram, 0.5),
-                       percentile_metres(r.horizontal_histogram, 0.95), metres(r.max_horizontal_m),
+                       percentile_metres(r.horizontal_histogram, 0.95), metres(r.horizontal_histogram.max_m()),
                        percentile_metres(r.vertical_histogram, 0.5), percentile_metres(r.vertical_histogram, 0.95),
-                       metres(r.max_vertical_m),
+                       metres(r.vertical_histogram.max_m()),
                        r.satellites_used_sum / n, r.hdop_sum / n);
     // Chart ranges from the 99th percentiles: an outlier is drawn at the edge, not allowed to
     // flatten the rest.
-    horizontal_top_m = std::max(horizontal_top_m, histogram_quantile_m(r.horizontal_histogram, 0.99));
-    vertical_top_m = std::max(vertical_top_m, histogram_quantile_m(r.vertical_histogram, 0.99));
-    distribution_top_m = std::max({distribution_top_m, histogram_quantile_m(r.horizontal_histogram, 0.99),
-                                   histogram_quantile_m(r.vertical_histogram, 0.99)});
+    horizontal_top_m = std::max(horizontal_top_m, r.horizontal_histogram.quantile_m(0.99));
+    vertical_top_m = std::max(vertical_top_m, r.vertical_histogram.quantile_m(0.99));
+    distribution_top_m = std::max({distribution_top_m, r.horizontal_histogram.quantile_m(0.99),
+                                   r.vertical_histogram.quantile_m(0.99)});
     for (const auto& p : r.points) {
       max_satellites = std::max(max_satellites, static_cast<int>(p.satellites_used));
       if (std::isfinite(p.hdop)) max_hdop = std::max(max_hdop, static_cast<double>(p.hdop));
@@ -885,10 +860,11 @@ std::string fix_error_section(const std::vector<ReportBuilder::FixRuns>& receive
       Series cdf{colour, is_vertical ? 0.45 : 0.95, 1.8, {{}}};
       std::uint64_t below = 0;
       cdf.segments.back().push_back({0.0, 0.0});
-      for (size_t i = 0; i < histogram.size(); ++i) {
-        if (histogram[i] == 0) continue;
-        below += histogram[i];
-        const double upper_m = kSmallestError_m * std::pow(10.0, static_cast<double>(i + 1) / kErrorBinsPerDecade);
+      const auto& bins = histogram.bins();
+      for (size_t i = 0; i < bins.size(); ++i) {
+        if (bins[i] == 0) continue;
+        below += bins[i];
+        const double upper_m = ErrorHistogram::bin_upper_m(i);
         cdf.segments.back().push_back({std::min(upper_m, distribution_top_m), 100.0 * static_cast<double>(below) / static_cast<double>(r.compared)});
       }
       distribution.push_back(std::move(cdf));
@@ -961,14 +937,8 @@ void ReportBuilder::add_fix(const std::string& receiver, const GnssTime& time, s
   const double horizontal_m = std::hypot(error->east_m, error->north_m);
   const double vertical_m = std::abs(error->up_m);
   if (!std::isfinite(horizontal_m) || !std::isfinite(vertical_m)) return;
-  if (r.horizontal_histogram.empty()) {
-    r.horizontal_histogram.assign(kErrorBins, 0);
-    r.vertical_histogram.assign(kErrorBins, 0);
-  }
-  ++r.horizontal_histogram[error_bin(horizontal_m)];
-  ++r.vertical_histogram[error_bin(vertical_m)];
-  r.max_horizontal_m = std::max(r.max_horizontal_m, horizontal_m);
-  r.max_vertical_m = std::max(r.max_vertical_m, vertical_m);
+  r.horizontal_histogram.add(horizontal_m);
+  r.vertical_histogram.add(vertical_m);
   r.satellites_used_sum += error->satellites_used;
   r.hdop_sum += std::isfinite(error->hdop) ? error->hdop : 0.0;
   if (r.compared++ % r.point_stride != 0) return;

@@ -1,4 +1,5 @@
 #include "skytrace/sim/run.hpp"
+#include "skytrace/sim/run_figures.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -376,6 +377,9 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   }
   auto sinks = make_run_sinks(context);
   if (!sinks) return sinks.error();
+  auto figures_sink = std::make_unique<RunFigures>(context.receivers);
+  const RunFigures& figures = *figures_sink;
+  sinks->push_back(std::move(figures_sink));
 
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
   // The bases' recent epochs: a rover takes the latest one that has reached it (rtk.latency_s,
@@ -590,6 +594,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   j["signal_observations"] = summary.observations;
   j["navigation_records_used"] = used.record_count();
   j["wall_time_s"] = summary.wall_time_s;
+  j["receivers"] = figures.to_json();
   if (world) {
     const LoadedWorld& w = *world;
     j["world"] = {{"name", w.name},       {"objects", w.objects},     {"buildings", w.buildings},

@@ -21,6 +21,9 @@ struct InputLimits {
   // Nodes of one OpenStreetMap way outlining a building (SKYTRACE_MAX_WAY_NODES, default 10,000;
   // the largest real footprints have a few thousand).
   std::uint64_t max_way_nodes = 10'000;
+  // Points of one `skytrace sweep` (SKYTRACE_MAX_SWEEP_POINTS, default 10^7; a grid of a few axes
+  // multiplies fast).
+  std::uint64_t max_sweep_points = 10'000'000;
 };
 
 // The limits in force: defaults overridden by the environment, read once.

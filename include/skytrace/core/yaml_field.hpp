@@ -31,6 +31,7 @@ class YamlField {
       : node_(std::move(node)), path_(std::move(path)), file_(file), document_(std::move(document)) {}
 
   [[nodiscard]] const std::string& path() const { return path_; }
+  [[nodiscard]] const YAML::Node& node() const { return node_; }
   [[nodiscard]] bool is_map() const { return node_.IsMap(); }
   [[nodiscard]] bool is_sequence() const { return node_.IsSequence(); }
   [[nodiscard]] bool is_scalar() const { return node_.IsScalar(); }

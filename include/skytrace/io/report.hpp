@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "skytrace/core/satellite.hpp"
+#include "skytrace/core/error_histogram.hpp"
 #include "skytrace/core/time.hpp"
 
 namespace skytrace::io {
@@ -106,8 +107,6 @@ class ReportBuilder {
   void add_fix(const std::string& receiver, const GnssTime& time, std::string_view type,
                const FixError* error = nullptr);
   static constexpr size_t kMaxFixRuns = 20000;
-  // Error histograms: bin i holds errors in [10^(i/100 - 4), 10^((i+1)/100 - 4)) m, 0.1 mm to 100 km.
-  static constexpr size_t kErrorBins = 900;
 
   // The self-contained page.
   [[nodiscard]] std::string html(const ReportMeta& meta) const;
@@ -156,8 +155,7 @@ class ReportBuilder {
     std::vector<FixPoint> points;  // thinned: every point_stride-th
     size_t point_stride = 1;
     size_t compared = 0;
-    std::vector<std::uint32_t> horizontal_histogram, vertical_histogram;  // kErrorBins each, |up| for vertical
-    double max_horizontal_m = 0.0, max_vertical_m = 0.0;
+    ErrorHistogram horizontal_histogram, vertical_histogram;  // |up| for vertical
     double satellites_used_sum = 0.0, hdop_sum = 0.0;
   };
   struct CountPoint {
