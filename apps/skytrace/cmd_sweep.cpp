@@ -163,8 +163,10 @@ int run_worker(const sim::SweepPlan& plan, const sim::SweepLayout& layout, const
 
 std::vector<std::uint64_t> pending_points(const sim::SweepPlan& plan, const sim::SweepLayout& layout) {
   std::vector<std::uint64_t> out;
+  const auto records = sim::read_point_records(plan, layout);
   for (std::uint64_t i = 0; i < plan.point_count; ++i) {
-    if (!sim::point_done(plan, sim::read_point_record(layout, plan.point_id(i)), i)) out.push_back(i);
+    const auto found = records.find(i);
+    if (found == records.end() || !sim::point_done(plan, found->second, i)) out.push_back(i);
   }
   return out;
 }
@@ -512,9 +514,10 @@ Result<bool> wait_for_job(const sim::SweepPlan& plan, const sim::SweepLayout& la
 // --- the command -----------------------------------------------------------------------------------
 
 int finish(const sim::SweepPlan& plan, const sim::SweepLayout& layout,
-           const std::vector<std::pair<std::uint64_t, std::string>>& reasons, double wall_s, bool quiet_pending = false) {
+           const std::vector<std::pair<std::uint64_t, std::string>>& reasons, Clock::time_point start, bool quiet_pending = false) {
   auto counts = sim::write_sweep_manifest(plan, layout, reasons);
   if (!counts) return report_error(counts.error());
+  const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   std::cout << fmt::format("skytrace sweep: {} points: {} done, {} failed, {} pending ({:.2f} s)\n", plan.point_count,
                            counts->done, counts->failed, counts->pending, wall_s);
   for (const char* file : {"manifest.json", "manifest.csv", "summaries.csv"}) {
@@ -535,7 +538,6 @@ int finish(const sim::SweepPlan& plan, const sim::SweepLayout& layout,
 
 int sweep(const SweepArgs& args) {
   const auto start = Clock::now();
-  auto elapsed_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   if (args.local && args.slurm) return report_error(make_error(ErrorCode::kInvalidArgument, "--local and --slurm: choose one back-end"));
   if (args.threads_per_run < 1 || args.threads_per_run > 1024) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "--threads-per-run: expected 1 to 1024"));
@@ -557,18 +559,18 @@ int sweep(const SweepArgs& args) {
     bool running = false;
     const auto reasons = slurm_reasons(*plan, layout, &running);
     if (running) std::cerr << "skytrace sweep: the sweep's last Slurm job is still queued or running (or Slurm did not answer)\n";
-    return finish(*plan, layout, reasons, elapsed_s(), running);
+    return finish(*plan, layout, reasons, start, running);
   }
   if (auto st = sim::check_sweep_against_scenario(*plan); !st) return report_error(st.error());
   const auto pending = pending_points(*plan, layout);
-  if (args.plan_only) return finish(*plan, layout, {}, elapsed_s(), true);
+  if (args.plan_only) return finish(*plan, layout, {}, start, true);
   std::cout << fmt::format("skytrace sweep: {} points, {} to run ({} done before)\n", plan->point_count, pending.size(),
                            plan->point_count - pending.size());
-  if (pending.empty()) return finish(*plan, layout, {}, elapsed_s());
+  if (pending.empty()) return finish(*plan, layout, {}, start);
   if (!args.slurm) {
     auto local = run_local(*plan, layout, args, pending);
     if (!local) return report_error(local.error());
-    const int code = finish(*plan, layout, local->reasons, elapsed_s());
+    const int code = finish(*plan, layout, local->reasons, start);
     if (local->cancelled) return report_error(cancelled_error());
     return code;
   }
@@ -579,17 +581,17 @@ int sweep(const SweepArgs& args) {
   if (args.no_wait) {
     std::cout << fmt::format("skytrace sweep: not waiting; `skytrace sweep {} --out {} --gather` writes the manifest\n",
                              args.sweep_file, args.out_dir);
-    return finish(*plan, layout, {}, elapsed_s(), true);
+    return finish(*plan, layout, {}, start, true);
   }
   auto ended = wait_for_job(*plan, layout, *submission, args.poll_s, pending.size());
   if (!ended) return report_error(ended.error());
   if (!*ended) {
     std::cerr << fmt::format("skytrace sweep: stopped waiting; Slurm job {} goes on (`scancel {}` stops it, `--gather` collects it)\n",
                              submission->job_id, submission->job_id);
-    finish(*plan, layout, {}, elapsed_s(), true);
+    finish(*plan, layout, {}, start, true);
     return report_error(cancelled_error());
   }
-  return finish(*plan, layout, slurm_reasons(*plan, layout, nullptr), elapsed_s());
+  return finish(*plan, layout, slurm_reasons(*plan, layout, nullptr), start);
 }
 
 }  // namespace

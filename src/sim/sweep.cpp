@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "skytrace/core/input_limits.hpp"
@@ -354,6 +355,18 @@ std::optional<PointRecord> read_point_record(const SweepLayout& layout, const st
   }
 }
 
+std::map<std::uint64_t, PointRecord> read_point_records(const SweepPlan& plan, const SweepLayout& layout) {
+  std::map<std::uint64_t, PointRecord> records;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(layout.runs(), ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string id = it->path().filename().string();
+    const auto index = plan.point_index(id);
+    if (!index) continue;
+    if (auto record = read_point_record(layout, id)) records.emplace(*index, std::move(*record));
+  }
+  return records;
+}
+
 bool point_done(const SweepPlan& plan, const std::optional<PointRecord>& record, std::uint64_t index) {
   return record && record->status == "done" && record->overrides == plan.overrides(index) &&
          record->scenario == plan.scenario.string();
@@ -393,7 +406,9 @@ const nlohmann::json& at_path(const nlohmann::json& j, std::initializer_list<con
 Result<SweepCounts> write_sweep_manifest(const SweepPlan& plan, const SweepLayout& layout,
                                          const std::vector<std::pair<std::uint64_t, std::string>>& reasons) {
   SweepCounts counts;
-  nlohmann::json points = nlohmann::json::array();
+  // The points' part of manifest.json, one object per line: written as it is built, so that the
+  // manifest of 10^6 points does not hold a JSON tree of them all.
+  std::string points_text;
   std::string manifest_csv = "id,status";
   std::string summaries_csv = "id,status";
   for (const SweepAxis& axis : plan.axes) {
@@ -409,10 +424,13 @@ Result<SweepCounts> write_sweep_manifest(const SweepPlan& plan, const SweepLayou
   size_t next_reason = 0;
   std::vector<std::pair<std::uint64_t, std::string>> sorted_reasons = reasons;
   std::sort(sorted_reasons.begin(), sorted_reasons.end());
+  auto records = read_point_records(plan, layout);
+  static const std::optional<PointRecord> kNoRecord;
   for (std::uint64_t i = 0; i < plan.point_count; ++i) {
     const std::string id = plan.point_id(i);
     const nlohmann::json parameters = plan.parameters(i);
-    auto record = read_point_record(layout, id);
+    const auto found = records.find(i);
+    std::optional<PointRecord> record = found == records.end() ? kNoRecord : std::optional<PointRecord>(found->second);
     if (record && (record->overrides != plan.overrides(i) || record->scenario != plan.scenario.string())) record.reset();
     std::string status = record ? record->status : "pending";
     std::string error = record ? record->error : "";
@@ -466,24 +484,29 @@ Result<SweepCounts> write_sweep_manifest(const SweepPlan& plan, const SweepLayou
     manifest_csv += csv_field(id) + "," + status + parameter_fields;
     manifest_csv += record ? fmt::format(",{},{},{}", record->exit_code, record->wall_time_s, csv_field(record->host)) : ",,,";
     manifest_csv += "," + csv_field(error) + "\n";
-    points.push_back(std::move(point));
+    points_text += (i == 0 ? "\n  " : ",\n  ") + point.dump();
   }
-  nlohmann::json manifest;
-  manifest["sweep"] = plan.name;
-  manifest["sweep_file"] = std::filesystem::absolute(plan.file).lexically_normal().string();
-  manifest["scenario"] = plan.scenario.string();
-  manifest["combine"] = plan.zip ? "zip" : "grid";
-  manifest["random_seed"] = plan.random_seed;
-  manifest["set"] = plan.fixed_overrides;
+  // One line per key, one line per point: readable, and written without a JSON tree of every point.
   nlohmann::json axes = nlohmann::json::array();
   for (const SweepAxis& axis : plan.axes) axes.push_back({{"key", axis.key}, {"values", axis.json_values}});
-  manifest["axes"] = axes;
-  manifest["points_total"] = plan.point_count;
-  manifest["done"] = counts.done;
-  manifest["failed"] = counts.failed;
-  manifest["pending"] = counts.pending;
-  manifest["points"] = std::move(points);
-  if (auto st = write_file_atomically(layout.out / "manifest.json", manifest.dump(1) + "\n"); !st) return st.error();
+  const std::vector<std::pair<const char*, nlohmann::json>> header = {
+      {"sweep", plan.name},
+      {"sweep_file", std::filesystem::absolute(plan.file).lexically_normal().string()},
+      {"scenario", plan.scenario.string()},
+      {"combine", plan.zip ? "zip" : "grid"},
+      {"random_seed", plan.random_seed},
+      {"set", plan.fixed_overrides},
+      {"axes", axes},
+      {"points_total", plan.point_count},
+      {"done", counts.done},
+      {"failed", counts.failed},
+      {"pending", counts.pending}};
+  std::string manifest_text = "{\n";
+  for (const auto& [key, value] : header) manifest_text += fmt::format(" \"{}\": {},\n", key, value.dump());
+  manifest_text.reserve(manifest_text.size() + points_text.size() + 32);
+  manifest_text.append(" \"points\": [").append(points_text).append(points_text.empty() ? "]\n}\n" : "\n ]\n}\n");
+  points_text = std::string();
+  if (auto st = write_file_atomically(layout.out / "manifest.json", manifest_text); !st) return st.error();
   if (auto st = write_file_atomically(layout.out / "manifest.csv", manifest_csv); !st) return st.error();
   if (auto st = write_file_atomically(layout.out / "summaries.csv", summaries_csv); !st) return st.error();
   return counts;

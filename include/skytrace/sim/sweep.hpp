@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -77,6 +78,10 @@ struct PointRecord {
 [[nodiscard]] Status write_point_record(const SweepLayout& layout, const PointRecord& record);
 // nullopt when the point has no record (not run, running, or killed before it ended).
 [[nodiscard]] std::optional<PointRecord> read_point_record(const SweepLayout& layout, const std::string& id);
+
+// Every point's record, by index: the runs folder is listed once, so that a sweep of 10^5 points
+// that has run few of them does not look for 10^5 files.
+[[nodiscard]] std::map<std::uint64_t, PointRecord> read_point_records(const SweepPlan& plan, const SweepLayout& layout);
 
 // A point counts as done when its record says so for the same overrides and base scenario.
 [[nodiscard]] bool point_done(const SweepPlan& plan, const std::optional<PointRecord>& record, std::uint64_t index);
