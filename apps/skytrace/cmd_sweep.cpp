@@ -240,8 +240,13 @@ Result<LocalResult> run_local(const sim::SweepPlan& plan, const sim::SweepLayout
       }
     }
     if (running.empty()) break;
+    // Polled, so that a signal to this process alone (SIGTERM) stops the points at once.
     int wait_status = 0;
-    const pid_t pid = waitpid(-1, &wait_status, 0);
+    const pid_t pid = waitpid(-1, &wait_status, WNOHANG);
+    if (pid == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
     if (pid < 0) {
       if (errno == EINTR) continue;
       break;

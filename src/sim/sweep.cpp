@@ -19,12 +19,23 @@
 namespace skytrace::sim {
 namespace {
 
-// A YAML node as the flow text --set takes: [1, 2, 3], {a: 1}, "quoted text".
+// A YAML node as the flow text --set takes: [1, 2, 3], {a: 1}, "07". Quoted scalars stay quoted
+// (yaml-cpp's emitter would drop the quotes of "07", which --set would then read as a number).
 std::string flow_yaml(const YAML::Node& node) {
+  if (node.IsSequence()) {
+    std::string out = "[";
+    for (size_t i = 0; i < node.size(); ++i) out += (i > 0 ? ", " : "") + flow_yaml(node[i]);
+    return out + "]";
+  }
+  if (node.IsMap()) {
+    std::string out = "{";
+    for (const auto& entry : node) out += (out.size() > 1 ? ", " : "") + flow_yaml(entry.first) + ": " + flow_yaml(entry.second);
+    return out + "}";
+  }
+  if (!node.IsScalar()) return "null";
   YAML::Emitter out;
-  out.SetSeqFormat(YAML::Flow);
-  out.SetMapFormat(YAML::Flow);
-  out << node;
+  if (node.Tag() == "!") out << YAML::DoubleQuoted;
+  out << node.Scalar();
   return out.c_str();
 }
 
