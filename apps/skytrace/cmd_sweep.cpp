@@ -49,6 +49,7 @@ struct SweepArgs {
   bool plan_only = false;
   int threads_per_run = 1;
   bool no_truth = false;
+  std::vector<std::string> overrides;  // --set, after the sweep file's `set:`
   // The worker (hidden): runs points and records them.
   std::string run_points;
   std::string task_file;
@@ -176,6 +177,10 @@ std::vector<std::string> worker_arguments(const sim::SweepPlan& plan, const sim:
                                    "--out", std::filesystem::absolute(layout.out).string(),
                                    "--threads-per-run", std::to_string(args.threads_per_run)};
   if (args.no_truth) argv.emplace_back("--no-truth");
+  for (const auto& o : args.overrides) {
+    argv.emplace_back("--set");
+    argv.push_back(o);
+  }
   return argv;
 }
 
@@ -552,6 +557,7 @@ int sweep(const SweepArgs& args) {
   }
   auto plan = sim::load_sweep(args.sweep_file);
   if (!plan) return report_error(plan.error());
+  plan->fixed_overrides.insert(plan->fixed_overrides.end(), args.overrides.begin(), args.overrides.end());
   const sim::SweepLayout layout{args.out_dir};
   if (!args.run_points.empty() || !args.task_file.empty()) return run_worker(*plan, layout, args);
   if (std::filesystem::exists(args.out_dir) && !std::filesystem::is_directory(args.out_dir)) {
@@ -626,6 +632,8 @@ void register_sweep_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--plan", args->plan_only, "Only check the sweep and write the manifest of its points");
   cmd->add_option("--threads-per-run", args->threads_per_run, "Threads of each point's run (default 1)");
   cmd->add_flag("--no-truth", args->no_truth, "The runs write no truth.csv.zst (nor paths.csv.zst)");
+  cmd->add_option("--set", args->overrides,
+                  "Override a scenario key in every point, KEY.PATH=YAML_VALUE (repeatable; after the sweep file's set:)");
   cmd->add_option("--run-points", args->run_points, "(worker) run these point ids, comma-separated")->group("");
   cmd->add_option("--task-file", args->task_file, "(worker) a submission's task file")->group("");
   cmd->add_option("--task", args->task, "(worker) the line of --task-file to run")->group("");

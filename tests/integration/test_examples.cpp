@@ -82,6 +82,21 @@ TEST(ExampleScripts, ServeGpsd) {
   EXPECT_NE(r.output.find("\"altMSL\""), std::string::npos) << r.output;
 }
 
+// The Monte Carlo sweep of the quick start, its points cut to 3 s: 40 done, one row each in the table.
+TEST(ExampleScripts, SweepMonteCarlo) {
+  const auto out = test::make_temp_dir("example_sweep") / "out";
+  const auto r = test::run_command(test::shell_quote(skytrace_binary().string()) + " sweep " +
+                                   test::shell_quote((test::source_dir() / "examples/sweeps/courtyard-monte-carlo.yaml").string()) +
+                                   " --out " + test::shell_quote(out.string()) + " --set time.duration_s=3 --no-truth 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("40 points: 40 done, 0 failed, 0 pending"), std::string::npos) << r.output;
+  std::ifstream table(out / "summaries.csv");
+  std::string line;
+  int rows = 0;
+  while (std::getline(table, line)) ++rows;
+  EXPECT_EQ(rows, 41);
+}
+
 // Comparing against a real recording: the table has the station's signals.
 TEST(ExampleScripts, CompareReal) {
   if (!shared_data_beside_the_checkout()) GTEST_SKIP() << "../shared/data absent";
