@@ -111,11 +111,9 @@ double gap_limit_s(double interval_s, size_t stride) {
 }
 
 // The grey area between the horizon and the obstruction elevation, per azimuth.
-std::string sky_mask_path(const ReportMeta& meta) {
-  const auto& mask = meta.sky_mask_elevation_deg;
+std::string sky_mask_path(const std::vector<double>& mask, double azimuth_step_deg) {
   if (mask.empty()) return {};
-  const double step_deg =
-      meta.sky_mask_azimuth_step_deg > 0.0 ? meta.sky_mask_azimuth_step_deg : 360.0 / static_cast<double>(mask.size());
+  const double step_deg = azimuth_step_deg > 0.0 ? azimuth_step_deg : 360.0 / static_cast<double>(mask.size());
   // Outer ring (horizon) as two arcs, inner boundary as the mask polygon: even-odd fill leaves
   // the open sky inside the mask curve empty.
   std::string d = fmt::format("M {0} 0 A {0} {0} 0 1 0 -{0} 0 A {0} {0} 0 1 0 {0} 0 Z ", num(kSkyRadius));
@@ -130,23 +128,26 @@ std::string sky_mask_path(const ReportMeta& meta) {
          "\n";
 }
 
-std::string draw_sky_plot(const ReportMeta& meta, const std::map<SatelliteId, ReportBuilder::Track>& tracks,
-                          bool standalone) {
+// The sky plot of one receiver; `id` names the SVG and prefixes its groups' ids (one page may hold
+// several receivers' plots).
+std::string draw_sky_plot(const ReportMeta& meta, const std::vector<double>& mask,
+                          const std::map<SatelliteId, ReportBuilder::Track>& tracks, bool standalone,
+                          const std::string& id = "skyplot", const std::string& receiver = "") {
   std::string svg;
   const double legend_top = kSkyRadius + 26.0;
   const double height = legend_top + 10.0 * static_cast<double>(kAllClasses.size()) + 4.0 + 125.0;
   if (standalone) svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   svg += fmt::format(
-      R"(<svg xmlns="http://www.w3.org/2000/svg" id="skyplot" viewBox="-125 -125 250 {}" width="500" height="{}" font-family="sans-serif">)",
-      num(height), num(2.0 * height));
+      R"(<svg xmlns="http://www.w3.org/2000/svg" id="{}" viewBox="-125 -125 250 {}" width="500" height="{}" font-family="sans-serif">)",
+      id, num(height), num(2.0 * height));
   svg += "\n";
-  svg += fmt::format("<title>Sky plot: {}</title>\n", escape(meta.scenario_name));
+  svg += fmt::format("<title>Sky plot: {}{}</title>\n", escape(meta.scenario_name), receiver.empty() ? "" : ", " + escape(receiver));
   svg += "<rect x=\"-125\" y=\"-125\" width=\"250\" height=\"" + num(height) + "\" fill=\"#ffffff\"/>\n";
   svg += R"(<circle cx="0" cy="0" r="100" fill="#f4f8ff" stroke="none"/>)";
   svg += "\n";
-  svg += "<g id=\"skyplot-mask\">\n" + sky_mask_path(meta) + "</g>\n";
+  svg += "<g id=\"" + id + "-mask\">\n" + sky_mask_path(mask, meta.sky_mask_azimuth_step_deg) + "</g>\n";
   // Grid: elevation rings at 0/30/60 deg, the N-S and E-W lines.
-  svg += "<g id=\"skyplot-grid\" fill=\"none\" stroke=\"#555555\">\n";
+  svg += "<g id=\"" + id + "-grid\" fill=\"none\" stroke=\"#555555\">\n";
   for (const double elevation_deg : {0.0, 30.0, 60.0}) {
     const double r = kSkyRadius * (90.0 - elevation_deg) / 90.0;
     svg += fmt::format(R"(<circle cx="0" cy="0" r="{}" stroke-width="{}"{}/>)", num(r), elevation_deg == 0.0 ? "0.8" : "0.4",
@@ -154,7 +155,7 @@ std::string draw_sky_plot(const ReportMeta& meta, const std::map<SatelliteId, Re
     svg += "\n";
   }
   svg += R"(<line x1="0" y1="-100" x2="0" y2="100" stroke-width="0.3"/><line x1="-100" y1="0" x2="100" y2="0" stroke-width="0.3"/>)";
-  svg += "\n</g>\n<g id=\"skyplot-labels\" font-size=\"7\" fill=\"#333333\" text-anchor=\"middle\">\n";
+  svg += "\n</g>\n<g id=\"" + id + "-labels\" font-size=\"7\" fill=\"#333333\" text-anchor=\"middle\">\n";
   svg += R"(<text x="0" y="-104">N</text><text x="108" y="2.5">E</text><text x="0" y="110">S</text><text x="-108" y="2.5">W</text>)";
   svg += "\n";
   for (const double elevation_deg : {0.0, 30.0, 60.0}) {
@@ -167,7 +168,7 @@ std::string draw_sky_plot(const ReportMeta& meta, const std::map<SatelliteId, Re
 
   // Tracks: one polyline per run of samples of the same class; a run ends on a class change (the
   // segment to the next sample takes the earlier sample's class), below the horizon or on a gap.
-  svg += "<g id=\"skyplot-tracks\" fill=\"none\" stroke-width=\"1.2\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
+  svg += "<g id=\"" + id + "-tracks\" fill=\"none\" stroke-width=\"1.2\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
   std::string labels;
   for (const auto& [satellite, track] : tracks) {
     const auto points = drawn_points(track);
@@ -223,10 +224,10 @@ std::string draw_sky_plot(const ReportMeta& meta, const std::map<SatelliteId, Re
                           escape(satellite.to_string()));
     labels += "\n";
   }
-  svg += "</g>\n<g id=\"skyplot-satellite-labels\" font-size=\"5.5\" fill=\"#111111\">\n" + labels + "</g>\n";
+  svg += "</g>\n<g id=\"" + id + "-satellite-labels\" font-size=\"5.5\" fill=\"#111111\">\n" + labels + "</g>\n";
 
   // Legend below the plot.
-  svg += "<g id=\"skyplot-legend\" font-size=\"6\" fill=\"#333333\">\n";
+  svg += "<g id=\"" + id + "-legend\" font-size=\"6\" fill=\"#333333\">\n";
   double y = legend_top;
   for (const auto track_class : kAllClasses) {
     const auto style = class_style(track_class);
@@ -235,7 +236,7 @@ std::string draw_sky_plot(const ReportMeta& meta, const std::map<SatelliteId, Re
     svg += "\n";
     y += 10.0;
   }
-  if (!meta.sky_mask_elevation_deg.empty()) {
+  if (!mask.empty()) {
     svg += fmt::format(R"(<rect x="20" y="{}" width="10" height="6" fill="#8a8a8a" fill-opacity="0.55"/><text x="34" y="{}">sky mask</text>)",
                        num(legend_top - 3.0), num(legend_top + 2.0));
     svg += "\n";
@@ -417,13 +418,22 @@ ReportBuilder::ReportBuilder(double max_points_per_track)
                       : 2000) {}
 
 size_t ReportBuilder::track_points(const SatelliteId& satellite) const {
-  const auto it = tracks_.find(satellite);
-  return it == tracks_.end() ? 0 : it->second.points.size();
+  if (views_.empty()) return 0;
+  const auto it = views_.front().tracks.find(satellite);
+  return it == views_.front().tracks.end() ? 0 : it->second.points.size();
 }
 
 void ReportBuilder::add(const ReportSample& sample) {
   const double time_s = sample.time.gpst_seconds_approx();
-  auto& track = tracks_[sample.satellite];
+  auto view_it = std::find_if(views_.begin(), views_.end(), [&](const SatelliteView& v) {
+    return v.receiver == sample.receiver || (sample.receiver.empty() && &v == &views_.front());
+  });
+  if (view_it == views_.end()) {
+    views_.emplace_back().receiver = sample.receiver;
+    view_it = std::prev(views_.end());
+  }
+  SatelliteView& view = *view_it;
+  auto& track = view.tracks[sample.satellite];
   if (track.samples_seen > 0 && time_s <= track.latest.time_s) {
     ++ignored_samples_;
     return;
@@ -446,36 +456,36 @@ void ReportBuilder::add(const ReportSample& sample) {
 
   // Tracked satellites per system at this epoch.
   const size_t system = system_index(sample.satellite.system);
-  systems_seen_[system] = true;
+  view.systems_seen[system] = true;
   const bool tracked = sample.status == "tracked";
-  if (!has_pending_) {
-    pending_ = CountPoint{time_s, {}};
-    has_pending_ = true;
-  } else if (time_s > pending_.time_s + kEpochTolerance_s) {
-    flush_pending_epoch();
-    pending_ = CountPoint{time_s, {}};
-    has_pending_ = true;
-  } else if (time_s < pending_.time_s - kEpochTolerance_s) {
+  if (!view.has_pending) {
+    view.pending = CountPoint{time_s, {}};
+    view.has_pending = true;
+  } else if (time_s > view.pending.time_s + kEpochTolerance_s) {
+    flush_pending_epoch(view);
+    view.pending = CountPoint{time_s, {}};
+    view.has_pending = true;
+  } else if (time_s < view.pending.time_s - kEpochTolerance_s) {
     // A late sample of an earlier epoch: counted if that epoch was kept.
-    const auto it = std::lower_bound(counts_.begin(), counts_.end(), time_s - kEpochTolerance_s,
+    const auto it = std::lower_bound(view.counts.begin(), view.counts.end(), time_s - kEpochTolerance_s,
                                      [](const CountPoint& c, double t_s) { return c.time_s < t_s; });
-    if (tracked && it != counts_.end() && std::abs(it->time_s - time_s) <= kEpochTolerance_s) ++it->tracked[system];
+    if (tracked && it != view.counts.end() && std::abs(it->time_s - time_s) <= kEpochTolerance_s) ++it->tracked[system];
     return;
   }
-  if (tracked) ++pending_.tracked[system];
+  if (tracked) ++view.pending.tracked[system];
 }
 
-void ReportBuilder::flush_pending_epoch() {
-  if (!has_pending_) return;
-  if (epochs_seen_ % count_stride_ == 0) counts_.push_back(pending_);
-  ++epochs_seen_;
-  has_pending_ = false;
-  if (counts_.size() >= max_points_) {
+void ReportBuilder::flush_pending_epoch(SatelliteView& view) const {
+  if (!view.has_pending) return;
+  if (view.epochs_seen % view.count_stride == 0) view.counts.push_back(view.pending);
+  ++view.epochs_seen;
+  view.has_pending = false;
+  if (view.counts.size() >= max_points_) {
     // Keep epochs 0, 2 stride, 4 stride, ...: the series stays evenly sampled.
     size_t kept = 0;
-    for (size_t i = 0; i < counts_.size(); i += 2) counts_[kept++] = counts_[i];
-    counts_.resize(kept);
-    count_stride_ *= 2;
+    for (size_t i = 0; i < view.counts.size(); i += 2) view.counts[kept++] = view.counts[i];
+    view.counts.resize(kept);
+    view.count_stride *= 2;
   }
 }
 
@@ -524,7 +534,7 @@ constexpr std::array<std::string_view, 8> kReceiverColours = {"#1f77b4", "#d6272
 // only below the mask or without ephemeris), coloured as on the sky plot; from the thinned tracks.
 std::string path_timeline(const std::map<SatelliteId, std::vector<ReportBuilder::TrackPoint>>& drawn,
                           const std::map<SatelliteId, ReportBuilder::Track>& tracks, double t0_s, double t1_s,
-                          double interval_s) {
+                          double interval_s, const std::string& id = "path-timeline") {
   std::vector<const SatelliteId*> rows;
   for (const auto& [satellite, points] : drawn) {
     if (std::any_of(points.begin(), points.end(), [](const auto& p) { return p.track_class != TrackClass::kOther; })) {
@@ -541,8 +551,8 @@ std::string path_timeline(const std::map<SatelliteId, std::vector<ReportBuilder:
   frame.t0_s = t0_s;
   frame.t1_s = t1_s;
   std::string svg = fmt::format(
-      R"(<svg xmlns="http://www.w3.org/2000/svg" id="path-timeline" viewBox="0 0 {0} {1}" width="{0}" height="{1}" font-family="sans-serif" font-size="8">)",
-      num(kLeft + kWidth + 200.0), num(kTop + height + 40.0));
+      R"(<svg xmlns="http://www.w3.org/2000/svg" id="{2}" viewBox="0 0 {0} {1}" width="{0}" height="{1}" font-family="sans-serif" font-size="8">)",
+      num(kLeft + kWidth + 200.0), num(kTop + height + 40.0), id);
   svg += "\n<title>Path type of each satellite over time</title>\n";
   std::array<bool, kAllClasses.size()> used{};
   for (size_t row = 0; row < rows.size(); ++row) {
@@ -964,23 +974,25 @@ void ReportBuilder::add_fix(const std::string& receiver, const GnssTime& time, s
   }
 }
 
-std::string ReportBuilder::sky_plot_svg(const ReportMeta& meta) const { return draw_sky_plot(meta, tracks_, true); }
+std::string ReportBuilder::sky_plot_svg(const ReportMeta& meta) const {
+  static const std::map<SatelliteId, Track> kNoTracks;
+  return draw_sky_plot(meta, meta.sky_mask_elevation_deg, views_.empty() ? kNoTracks : views_.front().tracks, true);
+}
 
-std::string ReportBuilder::html(const ReportMeta& meta) const {
+// The sky plot, tracked satellites, C/N0 and path types of one receiver: sections with the
+// receiver's name in their titles and ids when the report has several.
+std::string ReportBuilder::satellite_sections(const SatelliteView& view, size_t index, const ReportMeta& meta, double t0_s,
+                                              double t1_s) const {
   // Satellite counts, including the epoch still being filled.
-  std::vector<CountPoint> counts = counts_;
-  if (has_pending_ && epochs_seen_ % count_stride_ == 0) counts.push_back(pending_);
+  std::vector<CountPoint> counts = view.counts;
+  if (view.has_pending && view.epochs_seen % view.count_stride == 0) counts.push_back(view.pending);
 
-  double data_t0_s = std::numeric_limits<double>::infinity();
-  double data_t1_s = -std::numeric_limits<double>::infinity();
   float cn0_min = std::numeric_limits<float>::infinity();
   float cn0_max = -std::numeric_limits<float>::infinity();
   std::map<SatelliteId, std::vector<TrackPoint>> drawn;
-  for (const auto& [satellite, track] : tracks_) {
+  for (const auto& [satellite, track] : view.tracks) {
     auto points = drawn_points(track);
     for (const auto& p : points) {
-      data_t0_s = std::min(data_t0_s, p.time_s);
-      data_t1_s = std::max(data_t1_s, p.time_s);
       if (std::isfinite(p.cn0_dbhz)) {
         cn0_min = std::min(cn0_min, p.cn0_dbhz);
         cn0_max = std::max(cn0_max, p.cn0_dbhz);
@@ -988,12 +1000,11 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
     }
     drawn.emplace(satellite, std::move(points));
   }
-  const auto [t0_s, t1_s] = time_range(meta, data_t0_s, data_t1_s);
 
   // Tracked satellites per system, and all together.
   std::vector<Series> count_series;
   std::vector<LegendEntry> count_legend;
-  const double count_gap_s = gap_limit_s(meta.interval_s, count_stride_);
+  const double count_gap_s = gap_limit_s(meta.interval_s, view.count_stride);
   int max_count = 0;
   const auto count_segments = [&](auto value_of) {
     std::vector<std::vector<Point2>> segments(1);
@@ -1006,7 +1017,7 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
     return segments;
   };
   for (const auto system : kAllSystems) {
-    if (!systems_seen_[system_index(system)]) continue;
+    if (!view.systems_seen[system_index(system)]) continue;
     count_series.push_back(
         {std::string(system_colour(system)), 1.0, 1.6,
          count_segments([system](const CountPoint& c) { return static_cast<int>(c.tracked[system_index(system)]); })});
@@ -1031,7 +1042,7 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
   std::array<bool, kAllSystems.size()> cn0_systems{};
   for (const auto& [satellite, points] : drawn) {
     Series s{std::string(system_colour(satellite.system)), 0.45, 1.0, {{}}};
-    const double limit_s = gap_limit_s(meta.interval_s, tracks_.at(satellite).stride);
+    const double limit_s = gap_limit_s(meta.interval_s, view.tracks.at(satellite).stride);
     const TrackPoint* previous = nullptr;
     for (const auto& p : points) {
       if (!std::isfinite(p.cn0_dbhz)) {
@@ -1065,25 +1076,71 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
   }
   const double cn0_step = nice_step(cn0_frame.y1 - cn0_frame.y0, 7);
 
+  const bool several = views_.size() > 1;
+  std::string suffix;  // ids of the first receiver's charts stay as they were with one receiver
+  if (index > 0) {
+    suffix = "-";
+    for (const char c : view.receiver) suffix += std::isalnum(static_cast<unsigned char>(c)) || c == '_' ? c : '-';
+    if (suffix == "-") suffix += std::to_string(index);
+  }
+  const std::string name = view.receiver.empty() ? meta.receiver_name : view.receiver;
+  const std::string of = several ? ": " + escape(name) : "";
+  const std::vector<double>* mask = &meta.sky_mask_elevation_deg;
+  if (index > 0) {
+    static const std::vector<double> kOpenSky;
+    const auto it = meta.receiver_sky_masks_deg.find(view.receiver);
+    mask = it != meta.receiver_sky_masks_deg.end() ? &it->second : &kOpenSky;
+  }
+  std::string out = "<section>\n<h2>Sky plot" + of + "</h2>\n";
+  out += draw_sky_plot(meta, *mask, view.tracks, false, "skyplot" + suffix, several ? name : "");
+  out += "</section>\n<section>\n<h2>Tracked satellites" + of + "</h2>\n";
+  out += line_chart("satellite-count" + suffix, "Tracked satellites per system" + (several ? ", " + name : ""),
+                    "tracked satellites", count_frame, count_series, count_legend, count_step);
+  out += "</section>\n<section>\n<h2>C/N0 (first signal)" + of + "</h2>\n";
+  out += line_chart("cn0-chart" + suffix, "C/N0 of the first signal per satellite" + (several ? ", " + name : ""),
+                    "C/N0 (dB-Hz)", cn0_frame, cn0_series, cn0_legend, cn0_step);
+  if (std::string timeline = path_timeline(drawn, view.tracks, t0_s, t1_s, meta.interval_s, "path-timeline" + suffix);
+      !timeline.empty()) {
+    out += "</section>\n<section>\n<h2>Path type per satellite" + of + "</h2>\n" + timeline;
+  }
+  return out;
+}
+
+std::string ReportBuilder::html(const ReportMeta& meta) const {
+  // One time axis for every chart: the span of every receiver's samples.
+  double data_t0_s = std::numeric_limits<double>::infinity();
+  double data_t1_s = -std::numeric_limits<double>::infinity();
+  size_t satellites_seen = 0;
+  std::string receivers;
+  for (const SatelliteView& view : views_) {
+    for (const auto& [satellite, track] : view.tracks) {
+      for (const auto& p : drawn_points(track)) {
+        data_t0_s = std::min(data_t0_s, p.time_s);
+        data_t1_s = std::max(data_t1_s, p.time_s);
+      }
+    }
+    satellites_seen = std::max(satellites_seen, view.tracks.size());
+    receivers += (receivers.empty() ? "" : ", ") + (view.receiver.empty() ? meta.receiver_name : view.receiver);
+  }
+  if (receivers.empty()) receivers = meta.receiver_name;
+  const auto [t0_s, t1_s] = time_range(meta, data_t0_s, data_t1_s);
+
   std::string out;
   out.reserve(1 << 16);
   out += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   out += fmt::format("<title>skytrace report: {}</title>\n<style>\n{}</style>\n</head>\n<body>\n", escape(meta.scenario_name),
                      kStyle);
   out += fmt::format("<h1>skytrace run report: {}</h1>\n", escape(meta.scenario_name));
-  out += fmt::format("<p class=\"meta\">Receiver {} &#183; {} to {} GPST &#183; interval {:g} s &#183; {} satellites seen</p>\n",
-                     escape(meta.receiver_name), escape(meta.start.to_iso8601(TimeScale::kGpst, 0)),
-                     escape(meta.end.to_iso8601(TimeScale::kGpst, 0)), meta.interval_s, tracks_.size());
-  out += "<section>\n<h2>Sky plot</h2>\n";
-  out += draw_sky_plot(meta, tracks_, false);
-  out += "</section>\n<section>\n<h2>Tracked satellites</h2>\n";
-  out += line_chart("satellite-count", "Tracked satellites per system", "tracked satellites", count_frame, count_series,
-                    count_legend, count_step);
-  out += "</section>\n<section>\n<h2>C/N0 (first signal)</h2>\n";
-  out += line_chart("cn0-chart", "C/N0 of the first signal per satellite", "C/N0 (dB-Hz)", cn0_frame, cn0_series, cn0_legend,
-                    cn0_step);
-  if (std::string timeline = path_timeline(drawn, tracks_, t0_s, t1_s, meta.interval_s); !timeline.empty()) {
-    out += "</section>\n<section>\n<h2>Path type per satellite</h2>\n" + timeline;
+  out += fmt::format("<p class=\"meta\">{} {} &#183; {} to {} GPST &#183; interval {:g} s &#183; {} satellites seen</p>\n",
+                     views_.size() > 1 ? "Receivers" : "Receiver", escape(receivers),
+                     escape(meta.start.to_iso8601(TimeScale::kGpst, 0)), escape(meta.end.to_iso8601(TimeScale::kGpst, 0)),
+                     meta.interval_s, satellites_seen);
+  if (views_.empty()) {
+    out += satellite_sections(SatelliteView{}, 0, meta, t0_s, t1_s);
+  }
+  for (size_t k = 0; k < views_.size(); ++k) {
+    if (k > 0) out += "</section>\n";
+    out += satellite_sections(views_[k], k, meta, t0_s, t1_s);
   }
   if (!fix_runs_.empty()) {
     // Solution type per receiver: a table of shares and first fixes, and the type over time.

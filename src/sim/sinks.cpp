@@ -340,7 +340,7 @@ Result<std::unique_ptr<EpochSink>> per_receiver_files(const RunContext& c, const
   return std::unique_ptr<EpochSink>(std::move(group));
 }
 
-// --- report.html, skyplot.svg of the first receiver ------------------------------------------------
+// --- report.html (every receiver), skyplot.svg of the first receiver ------------------------------------------------
 class ReportSink final : public EpochSink {
  public:
   explicit ReportSink(const RunContext& c) : context_(c) {}
@@ -373,7 +373,6 @@ class ReportSink final : public EpochSink {
       report_.add_fix(e.receiver->settings->name, e.observations->receiver_time, positioning::to_string(e.fix->type),
                       positioned ? &error : nullptr);
     }
-    if (e.receiver_index != 0) return Ok{};
     const receiver::EpochObservations& epoch = *e.observations;
     for (const auto& sat : epoch.satellites) {
       if (sat.status == receiver::SatelliteStatus::kNoEphemeris && !sat.waiting_for_ephemeris) continue;
@@ -386,6 +385,7 @@ class ReportSink final : public EpochSink {
       if (!sat.signals.empty()) sample.cn0_dbhz = sat.signals.front().cn0_dbhz;
       sample.vegetation_attenuation_db = sat.vegetation_attenuation_db;
       sample.path_kind = std::string(receiver::to_string(sat.path_kind));
+      sample.receiver = e.receiver->settings->name;
       report_.add(sample);
     }
     return Ok{};
@@ -431,12 +431,19 @@ class ReportSink final : public EpochSink {
           meta.world_outlines.push_back(std::move(outline));
         }
       }
-      auto start_position = first.kinematics->at(s.time.start);
-      if (start_position) {
-        constexpr double kMaskStep_deg = 2.0;
+      // Each receiver's sky mask where it starts.
+      constexpr double kMaskStep_deg = 2.0;
+      meta.sky_mask_azimuth_step_deg = kMaskStep_deg;
+      for (size_t k = 0; k < context_.receivers.size(); ++k) {
+        const SinkReceiver& rx = context_.receivers[k];
+        auto start_position = rx.kinematics->at(s.time.start);
+        if (!start_position) continue;
         if (auto mask = world_sky_mask_deg(w, start_position->position_m, kMaskStep_deg)) {
-          meta.sky_mask_elevation_deg = *mask;
-          meta.sky_mask_azimuth_step_deg = kMaskStep_deg;
+          if (k == 0) {
+            meta.sky_mask_elevation_deg = std::move(*mask);
+          } else {
+            meta.receiver_sky_masks_deg[rx.settings->name] = std::move(*mask);
+          }
         }
       }
     }

@@ -360,6 +360,46 @@ TEST(Report, TimeAxisLabelsRoundedToTheSecondCarryIntoMinuteHourDayMonthAndYear)
 namespace skytrace::io {
 namespace {
 
+// Several receivers: each gets its own sky plot (with its own sky mask), satellite counts, C/N0 and
+// path types, titled with its name; the first receiver's ids stay as with one receiver.
+TEST(Report, EveryReceiverHasItsOwnSkyAndCharts) {
+  ReportBuilder report;
+  for (int k = 0; k <= 60; ++k) {
+    const double dt_s = 60.0 * k;
+    auto base = sample(dt_s, "G05", 100.0, 40.0, "tracked");
+    base.receiver = "BASE";
+    report.add(base);
+    auto rover = sample(dt_s, "G05", 100.0, 40.0, k < 30 ? "blocked" : "tracked");
+    rover.receiver = "ROVR";
+    report.add(rover);
+    auto rover_e = sample(dt_s, "E11", 200.0, 20.0, "tracked");
+    rover_e.receiver = "ROVR";
+    report.add(rover_e);
+  }
+  ReportMeta meta = crossing_meta();
+  meta.receiver_sky_masks_deg["ROVR"] = std::vector<double>(36, 25.0);
+  const std::string html = report.html(meta);
+  for (const char* id : {"skyplot", "satellite-count", "cn0-chart", "path-timeline", "skyplot-ROVR", "satellite-count-ROVR",
+                         "cn0-chart-ROVR", "path-timeline-ROVR", "skyplot-ROVR-mask"}) {
+    EXPECT_EQ(count_of(html, std::string("id=\"") + id + "\""), 1u) << id;
+  }
+  EXPECT_NE(html.find("<h2>Sky plot: BASE</h2>"), std::string::npos);
+  EXPECT_NE(html.find("<h2>Path type per satellite: ROVR</h2>"), std::string::npos);
+  EXPECT_NE(html.find("Receivers BASE, ROVR"), std::string::npos);
+  // The rover's blocked G05 is drawn red (blocked) on its own plot only.
+  const size_t base_at = html.find("id=\"skyplot\"");
+  const size_t rover_at = html.find("id=\"skyplot-ROVR\"");
+  const auto tracks_of = [&](size_t from) {
+    const size_t begin = html.find("-tracks\"", from);
+    return html.substr(begin, html.find("</g>", begin) - begin);
+  };
+  EXPECT_NE(tracks_of(rover_at).find("#d7191c"), std::string::npos);
+  EXPECT_EQ(tracks_of(base_at).find("#d7191c"), std::string::npos);
+  // The standalone skyplot.svg is the first receiver's.
+  EXPECT_NE(report.sky_plot_svg(meta).find("id=\"skyplot\""), std::string::npos);
+  EXPECT_EQ(report.track_points(SatelliteId{GnssSystem::kGalileo, 11}), 0u);  // E11 only on the rover
+}
+
 // Solution types per receiver: shares, first fix and first RTK fixed after the start, one run per
 // change (so a flickering rover does not grow memory beyond kMaxFixRuns).
 TEST(Report, SolutionTypesPerReceiverWithFirstFixes) {

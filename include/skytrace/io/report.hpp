@@ -44,6 +44,9 @@ struct ReportSample {
   // models.multipath: "los", "multipath" (direct plus reflected or diffracted paths), "nlos"
   // (received only off reflections or diffraction); empty without the model.
   std::string path_kind;
+  // Whose sky: each receiver gets its own sky plot, satellite counts, C/N0 and path-type charts, in
+  // the order first seen; empty counts as the first receiver's.
+  std::string receiver;
 };
 
 struct ReportMeta {
@@ -56,6 +59,8 @@ struct ReportMeta {
   // Obstruction elevation at azimuths 0, step, 2 step, ... (deg); empty: open sky.
   std::vector<double> sky_mask_elevation_deg;
   double sky_mask_azimuth_step_deg = 0.0;
+  // The other receivers' masks at their start, by receiver name, at the same azimuth step.
+  std::map<std::string, std::vector<double>> receiver_sky_masks_deg;
   std::vector<std::string> warnings;
   // The world seen from above, in the frame of the fixes' top views (east and north metres from
   // the first true position the report saw): objects' outlines; drawn with the receivers' tracks.
@@ -114,7 +119,8 @@ class ReportBuilder {
   [[nodiscard]] std::string sky_plot_svg(const ReportMeta& meta) const;
 
   [[nodiscard]] size_t ignored_samples() const { return ignored_samples_; }
-  // Points currently held for a satellite's track (0 if unknown): shows the memory bound.
+  // Points currently held for a satellite's track of the first receiver (0 if unknown): shows the
+  // memory bound.
   [[nodiscard]] size_t track_points(const SatelliteId& satellite) const;
 
   struct TrackPoint {
@@ -163,18 +169,26 @@ class ReportBuilder {
     std::array<std::uint16_t, kAllSystems.size()> tracked{};  // per GnssSystem
   };
 
+  // One receiver's satellites: tracks and the tracked count per epoch.
+  struct SatelliteView {
+    std::string receiver;
+    std::map<SatelliteId, Track> tracks;
+    std::vector<CountPoint> counts;  // decimated, in time order
+    CountPoint pending;              // the epoch being filled
+    bool has_pending = false;
+    size_t epochs_seen = 0;
+    size_t count_stride = 1;
+    std::array<bool, kAllSystems.size()> systems_seen{};
+  };
+
  private:
-  void flush_pending_epoch();
+  void flush_pending_epoch(SatelliteView& view) const;
   void compact_track(Track& track) const;
+  [[nodiscard]] std::string satellite_sections(const SatelliteView& view, size_t index, const ReportMeta& meta, double t0_s,
+                                               double t1_s) const;
 
   size_t max_points_;
-  std::map<SatelliteId, Track> tracks_;
-  std::vector<CountPoint> counts_;  // decimated, in time order
-  CountPoint pending_;              // the epoch being filled
-  bool has_pending_ = false;
-  size_t epochs_seen_ = 0;
-  size_t count_stride_ = 1;
-  std::array<bool, kAllSystems.size()> systems_seen_{};
+  std::vector<SatelliteView> views_;  // per receiver, in the order first seen
   size_t ignored_samples_ = 0;
   std::vector<FixRuns> fix_runs_;  // per receiver, in the order first seen
 };
