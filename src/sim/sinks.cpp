@@ -93,6 +93,7 @@ std::string_view path_type_name(PathType type) {
     case PathType::kDirect: return "direct";
     case PathType::kReflected: return "reflected";
     case PathType::kDiffracted: return "diffracted";
+    case PathType::kScattered: return "scattered";
   }
   return "?";
 }

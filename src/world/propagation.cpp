@@ -50,6 +50,15 @@ struct KeyHash {
   }
 };
 
+// The direct path first, then the others strongest first.
+void sort_indirect_paths_by_power(std::vector<PathSet>& sets) {
+  for (PathSet& set : sets) {
+    const auto begin = set.paths.begin() + ((!set.paths.empty() && set.paths.front().type == PathType::kDirect) ? 1 : 0);
+    std::stable_sort(begin, set.paths.end(),
+                     [](const SignalPath& a, const SignalPath& b) { return a.power_linear() > b.power_linear(); });
+  }
+}
+
 // RHCP/LHCP field components after a reflection with the given circular coefficients.
 void reflect_state(std::complex<double>& rhcp, std::complex<double>& lhcp, const FresnelCoefficients& f) {
   const std::complex<double> r = f.co * rhcp + f.cross * lhcp;
@@ -392,6 +401,116 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   return c;
 }
 
+void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::vector<Eigen::Vector3d>& directions,
+                                           const PathSearchSettings& settings, const std::vector<NearFacet>& near_facets,
+                                           std::vector<PathSet>& out) const {
+  // Effective-roughness model, Lambertian (Degli-Esposti et al., IEEE Trans. Antennas Propag. 55(1),
+  // 2007): a patch of area dA lit at incidence theta_i re-radiates S^2 |Gamma|^2 of the power it
+  // intercepts with a cos(theta_s) pattern, so that at distance d its power relative to the
+  // incident plane wave is S^2 |Gamma|^2 dA cos(theta_i) cos(theta_s) / (pi d^2). The patches of
+  // one facade add in power (their phases are random); the path takes their power-weighted delay,
+  // direction and point, and half its power in each circular hand (scattering depolarises).
+  std::vector<std::size_t> blocked;
+  for (std::size_t i = 0; i < directions.size(); ++i) {
+    if (out[i].direct.blocked) blocked.push_back(i);
+  }
+  if (blocked.empty()) return;
+  const double s2 = settings.scattering_coefficient * settings.scattering_coefficient;
+  const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
+  constexpr std::size_t kMaxPatchesPerFacet = 256;
+  struct Patch {
+    std::size_t facet = 0;  // index in near_facets
+    Eigen::Vector3d point_m;
+    double area_m2 = 0.0, distance_m = 0.0, cos_receiver = 0.0, vegetation_db = 0.0;
+  };
+  // The patches within the radius on the receiver's side of each facet.
+  std::vector<Patch> patches;
+  std::vector<Eigen::Vector3d> towards;
+  for (std::size_t k = 0; k < near_facets.size(); ++k) {
+    const NearFacet& nf = near_facets[k];
+    const Facet& f = facets_[nf.index];
+    if ((r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm() > settings.scattering_radius_m) continue;
+    const Eigen::Vector2d span = f.max_uv - f.min_uv;
+    const double step = std::max(settings.scattering_patch_m,
+                                 std::sqrt(std::max(span.x() * span.y(), 1e-6) / static_cast<double>(kMaxPatchesPerFacet)));
+    const int nu = std::max(1, static_cast<int>(std::ceil(span.x() / step)));
+    const int nv = std::max(1, static_cast<int>(std::ceil(span.y() / step)));
+    const double du = span.x() / nu, dv = span.y() / nv;
+    for (int a = 0; a < nu; ++a) {
+      for (int b = 0; b < nv; ++b) {
+        const Eigen::Vector2d uv = f.min_uv + Eigen::Vector2d((a + 0.5) * du, (b + 0.5) * dv);
+        const Eigen::Vector3d point = f.origin_m + uv.x() * f.axis_u + uv.y() * f.axis_v;
+        if (!f.contains(point)) continue;
+        const Eigen::Vector3d to_point = point - r;
+        const double d = to_point.norm();
+        if (d < 0.5 || d > settings.scattering_radius_m) continue;
+        const double cos_receiver = -nf.normal.dot(to_point) / d;
+        if (cos_receiver <= 1e-3) continue;
+        patches.push_back(Patch{k, point, du * dv, d, cos_receiver, 0.0});
+        towards.push_back(to_point / d);
+      }
+    }
+  }
+  if (patches.empty()) return;
+  // Which patches the receiver sees: one batch from it.
+  const std::vector<RayOutcome> seen = scene_->trace(r, towards);
+  std::vector<Patch> visible;
+  for (std::size_t k = 0; k < patches.size(); ++k) {
+    const RayOutcome& o = seen[k];
+    if (o.blocked && o.blocking_distance_m < patches[k].distance_m - leg_tolerance_m(patches[k].distance_m)) continue;
+    patches[k].vegetation_db = o.vegetation_attenuation_db;
+    visible.push_back(patches[k]);
+  }
+  struct Sum {
+    double power = 0.0, excess = 0.0;
+    Eigen::Vector3d point = Eigen::Vector3d::Zero(), arrival = Eigen::Vector3d::Zero();
+  };
+  std::vector<Sum> sums(near_facets.size());
+  std::vector<Eigen::Vector3d> one(1);
+  for (const std::size_t i : blocked) {
+    const Eigen::Vector3d& s = directions[i];
+    std::fill(sums.begin(), sums.end(), Sum{});
+    for (const Patch& patch : visible) {
+      const NearFacet& nf = near_facets[patch.facet];
+      const double cos_incidence = nf.normal.dot(s);
+      if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
+      const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
+      const double reradiated = 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm));
+      double power = s2 * reradiated * patch.area_m2 * cos_incidence * patch.cos_receiver /
+                     (std::numbers::pi * patch.distance_m * patch.distance_m);
+      if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
+      one[0] = s;
+      const RayOutcome lit = scene_->trace(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();
+      if (lit.blocked) continue;
+      power *= std::pow(10.0, -(patch.vegetation_db + lit.vegetation_attenuation_db) / 10.0);
+      Sum& sum = sums[patch.facet];
+      const Eigen::Vector3d to_point = patch.point_m - r;
+      sum.power += power;
+      sum.excess += power * (patch.distance_m - s.dot(to_point));
+      sum.point += power * patch.point_m;
+      sum.arrival += power * to_point / patch.distance_m;
+    }
+    for (std::size_t k = 0; k < sums.size(); ++k) {
+      const Sum& sum = sums[k];
+      if (sum.power < min_power) continue;
+      const Facet& f = facets_[near_facets[k].index];
+      SignalPath p;
+      p.type = PathType::kScattered;
+      p.excess_delay_m = std::max(sum.excess / sum.power, 0.0);
+      p.rhcp_amplitude = std::sqrt(0.5 * sum.power);
+      p.lhcp_amplitude = std::sqrt(0.5 * sum.power);
+      p.point_m = sum.point / sum.power;
+      p.arrival_direction = sum.arrival.normalized();
+      p.material = f.material;
+      p.object = object_names_[f.object];
+      // As for a point scatterer at the centroid: excess = |p - r| - s . (p - r).
+      p.delay_gradient_origin = s - p.arrival_direction;
+      p.delay_gradient_direction = -(p.point_m - r);
+      out[i].paths.push_back(std::move(p));
+    }
+  }
+}
+
 std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                              const PathSearchSettings& settings) const {
   const Eigen::Vector3d& r = origin_m;
@@ -430,8 +549,9 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   }
   // The facet candidates seen from the antenna: normal towards it, its height above the plane.
   std::vector<NearFacet> near_facets;
-  const std::shared_ptr<const Candidates> near =
-      settings.max_reflection_order >= 1 ? candidates(r, settings) : std::make_shared<const Candidates>();
+  const std::shared_ptr<const Candidates> near = settings.max_reflection_order >= 1 || settings.scattering_coefficient > 0.0
+                                                     ? candidates(r, settings)
+                                                     : std::make_shared<const Candidates>();
   near_facets.reserve(near->facets.size());
   for (const NearFacet& c : near->facets) {
     const double h = c.normal.dot(r) - facets_[c.index].offset_m;
@@ -440,6 +560,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   }
   const double wavelength_m = kSpeedOfLight_mps / settings.frequency_hz;
   const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
+  // What a rough facade keeps for its specular reflection: the rest is scattered (power balance of
+  // the effective-roughness model, R^2 + S^2 = 1).
+  const double specular_factor = std::sqrt(1.0 - std::min(settings.scattering_coefficient, 1.0) *
+                                                     std::min(settings.scattering_coefficient, 1.0));
 
   // A path in the making: its geometry and the legs still to be checked beyond the first.
   struct Leg {
@@ -490,6 +614,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         p.path.rhcp_amplitude = 1.0;
         p.path.lhcp_amplitude = 0.0;
         reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(nf.eta, ns));
+        p.path.rhcp_amplitude *= specular_factor;
+        p.path.lhcp_amplitude *= specular_factor;
         if (p.path.power_linear() < min_power) continue;
         p.path.arrival_direction = (point - r) / t;
         p.path.point_m = point;
@@ -543,6 +669,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           p.path.lhcp_amplitude = 0.0;
           reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(b.eta, nbs));
           reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(a.eta, std::abs(na.dot(u12))));
+          p.path.rhcp_amplitude *= specular_factor * specular_factor;
+          p.path.lhcp_amplitude *= specular_factor * specular_factor;
           if (p.path.power_linear() < min_power) continue;
           p.path.arrival_direction = (p1 - r) / d1;
           p.path.point_m = p1;
@@ -659,7 +787,11 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       }
     }
   }
-  if (pending.empty()) return out;
+  if (settings.scattering_coefficient > 0.0) add_scattered_paths(r, directions, settings, near_facets, out);
+  if (pending.empty()) {
+    sort_indirect_paths_by_power(out);
+    return out;
+  }
 
   // All first legs start at the receiver: one batch. The others one ray each.
   const std::vector<RayOutcome> first = scene_->trace(r, first_legs);
@@ -696,11 +828,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     if (p.path.type == PathType::kDiffracted) ++diffracted_kept[p.satellite];
     list.push_back(std::move(p.path));
   }
-  for (PathSet& set : out) {
-    const auto begin = set.paths.begin() + ((!set.paths.empty() && set.paths.front().type == PathType::kDirect) ? 1 : 0);
-    std::stable_sort(begin, set.paths.end(),
-                     [](const SignalPath& a, const SignalPath& b) { return a.power_linear() > b.power_linear(); });
-  }
+  sort_indirect_paths_by_power(out);
   return out;
 }
 

@@ -42,7 +42,9 @@ struct RayOutcome {
   double vegetation_attenuation_db = 0.0;
 };
 
-enum class PathType : std::uint8_t { kDirect, kReflected, kDiffracted };
+// kScattered: diffuse scattering off one rough facade (the incoherent sum of its lit patches that
+// the receiver sees), world/propagation.hpp.
+enum class PathType : std::uint8_t { kDirect, kReflected, kDiffracted, kScattered };
 
 // One way a satellite's signal reaches the receiver (multipath work, world/propagation.hpp).
 struct SignalPath {
@@ -92,6 +94,13 @@ struct PathSearchSettings {
   // Facets smaller than this reflect no coherent specular signal (smaller than a Fresnel zone,
   // about sqrt(wavelength * distance) ~ 2 m across at 20 m).
   double min_facet_area_m2 = 1.0;
+  // Diffuse scattering off facades (effective-roughness model, Lambertian): the scattering
+  // coefficient S (0: none); specular reflections keep sqrt(1 - S^2) of their amplitude. Computed for
+  // satellites whose direct ray is blocked, from facade patches of about scattering_patch_m across
+  // within scattering_radius_m of the receiver.
+  double scattering_coefficient = 0.0;
+  double scattering_radius_m = 100.0;
+  double scattering_patch_m = 2.0;
 };
 
 // Every path of one satellite: the direct ray's outcome (blocked or not, vegetation) and the

@@ -92,6 +92,10 @@ struct ModelSettings {
   double multipath_radius_m = 150.0;
   int multipath_order = 1;
   bool diffraction = true;
+  // Diffuse scattering off rough facades for blocked satellites (effective roughness; 0: none), and
+  // the distance from the antenna within which facades scatter (docs/multipath.md).
+  double scattering_coefficient = 0.0;
+  double scattering_radius_m = 100.0;
   // Residual fields the models leave, shared by the receivers (docs/models/atmosphere-residuals.md):
   // gradients in parts per million of the distance (0: none), correlation lengths.
   double ionosphere_residual_ppm = 0.0;

@@ -1,6 +1,7 @@
 // Signal paths through the 3D world for multipath work: the direct ray, specular reflections off
-// planar facets (image method, first and optionally second order) and knife-edge diffraction over
-// building edges (ITU-R P.526), each leg checked against the scene for obstruction and vegetation.
+// planar facets (image method, first and optionally second order), knife-edge diffraction over
+// building edges (ITU-R P.526) and diffuse scattering off rough facades (effective roughness,
+// Degli-Esposti et al. 2007), each leg checked against the scene for obstruction and vegetation.
 // The electrical side: complex permittivities of the material classes (ITU-R P.2040-1 Table 3,
 // ground from ITU-R P.527), Fresnel coefficients for both linear polarisations combined into
 // co- and cross-polar circular coefficients. docs/multipath.md explains the models and limits.
@@ -125,6 +126,11 @@ class PropagationScene final : public PathQuery {
   // last answer serves an antenna moving less than the margin. Normal and height as seen from the
   // cached point; paths() turns them to the antenna's actual position.
   std::shared_ptr<const Candidates> candidates(const Eigen::Vector3d& origin_m, const PathSearchSettings& settings) const;
+  // Diffuse scattering (settings.scattering_coefficient > 0): for each satellite whose direct ray is
+  // blocked, one path per facade from its patches lit by the satellite and seen by the receiver.
+  void add_scattered_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
+                           const PathSearchSettings& settings, const std::vector<NearFacet>& near_facets,
+                           std::vector<PathSet>& out) const;
 
   std::shared_ptr<const PathQuery> scene_;
   std::vector<Facet> facets_;
