@@ -332,7 +332,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   if (auto models = root.child("models")) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
                          "multipath_radius_m", "multipath_order", "diffraction", "scattering_coefficient",
-                         "scattering_radius_m", "ionosphere_residual_ppm",
+                         "scattering_lobe_exponent", "scattering_radius_m", "ionosphere_residual_ppm",
                          "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
     if (auto c = models->child("ionex_file")) s.models.ionex_file = existing_file(*c, base);
@@ -353,6 +353,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     }
     if (auto c = models->child("diffraction")) s.models.diffraction = c->as_bool();
     if (auto c = models->child("scattering_coefficient")) s.models.scattering_coefficient = c->as_double_in(0.0, 1.0);
+    if (auto c = models->child("scattering_lobe_exponent")) s.models.scattering_lobe_exponent = c->as_int_in(0, 20);
     if (auto c = models->child("scattering_radius_m")) s.models.scattering_radius_m = c->as_double_in(1.0, 1000.0);
     if (auto c = models->child("ionosphere_residual_ppm")) s.models.ionosphere_residual_ppm = c->as_double_in(0.0, 50.0);
     if (auto c = models->child("ionosphere_residual_length_km")) {
@@ -559,6 +560,7 @@ std::string scenario_to_json(const Scenario& s) {
                  {"multipath_order", s.models.multipath_order},
                  {"diffraction", s.models.diffraction},
                  {"scattering_coefficient", s.models.scattering_coefficient},
+                 {"scattering_lobe_exponent", s.models.scattering_lobe_exponent},
                  {"scattering_radius_m", s.models.scattering_radius_m},
                  {"ionosphere_residual_ppm", s.models.ionosphere_residual_ppm},
                  {"ionosphere_residual_length_km", s.models.ionosphere_residual_length_km},

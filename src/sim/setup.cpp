@@ -422,6 +422,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.path_search.max_reflection_order = s.models.multipath_order;
   g.path_search.diffraction = s.models.diffraction;
   g.path_search.scattering_coefficient = s.models.scattering_coefficient;
+  g.path_search.scattering_lobe_exponent = s.models.scattering_lobe_exponent;
   g.path_search.scattering_radius_m = s.models.scattering_radius_m;
   if (resources.precise_coverage) g.broadcast_truth = resources.precise_coverage->broadcast_truth();
   auto phase_centre = load_antenna_phase_centre(s, rx, g.signals, g.profile.antenna_rinex_type);

@@ -50,6 +50,36 @@ struct KeyHash {
   }
 };
 
+// For the directive scattering lobe ((1 + cos psi) / 2)^n around the specular direction: its
+// integral over the hemisphere in front of the surface, per incidence angle 0..90 deg (psi is the
+// angle from the specular direction, which leans away from the normal as the incidence does).
+// Computed once per exponent, on a 1 deg grid.
+const std::array<double, 91>& directive_lobe_integrals(int exponent) {
+  static std::mutex mutex;
+  static std::map<int, std::array<double, 91>> tables;
+  const std::lock_guard lock(mutex);
+  auto [it, inserted] = tables.try_emplace(exponent);
+  if (!inserted) return it->second;
+  constexpr int kSteps = 90;  // polar angle steps over 90 deg
+  const double d_theta = 0.5 * std::numbers::pi / kSteps, d_phi = 2.0 * std::numbers::pi / (4 * kSteps);
+  for (int incidence = 0; incidence <= 90; ++incidence) {
+    const double ti = incidence * std::numbers::pi / 180.0;
+    // Normal along z; the specular direction in the x-z plane.
+    const Eigen::Vector3d specular(std::sin(ti), 0.0, std::cos(ti));
+    double sum = 0.0;
+    for (int a = 0; a < kSteps; ++a) {
+      const double theta = (a + 0.5) * d_theta;
+      for (int b = 0; b < 4 * kSteps; ++b) {
+        const double phi = (b + 0.5) * d_phi;
+        const Eigen::Vector3d w(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+        sum += std::pow(0.5 * (1.0 + specular.dot(w)), exponent) * std::sin(theta) * d_theta * d_phi;
+      }
+    }
+    it->second[static_cast<std::size_t>(incidence)] = sum;
+  }
+  return it->second;
+}
+
 // The direct path first, then the others strongest first.
 void sort_indirect_paths_by_power(std::vector<PathSet>& sets) {
   for (PathSet& set : sets) {
@@ -467,6 +497,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   };
   std::vector<Sum> sums(near_facets.size());
   std::vector<Eigen::Vector3d> one(1);
+  const std::array<double, 91>* lobe =
+      settings.scattering_lobe_exponent > 0 ? &directive_lobe_integrals(settings.scattering_lobe_exponent) : nullptr;
   for (const std::size_t i : blocked) {
     const Eigen::Vector3d& s = directions[i];
     std::fill(sums.begin(), sums.end(), Sum{});
@@ -476,8 +508,16 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
       const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
       const double reradiated = 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm));
-      double power = s2 * reradiated * patch.area_m2 * cos_incidence * patch.cos_receiver /
-                     (std::numbers::pi * patch.distance_m * patch.distance_m);
+      // The scattering pattern towards the receiver over its integral on the hemisphere.
+      double pattern = patch.cos_receiver / std::numbers::pi;
+      if (lobe != nullptr) {
+        const Eigen::Vector3d specular = -s + 2.0 * cos_incidence * nf.normal;
+        const Eigen::Vector3d to_receiver = (r - patch.point_m) / patch.distance_m;
+        const double incidence_deg = std::acos(std::clamp(cos_incidence, 0.0, 1.0)) * 180.0 / std::numbers::pi;
+        pattern = std::pow(0.5 * (1.0 + specular.dot(to_receiver)), settings.scattering_lobe_exponent) /
+                  (*lobe)[static_cast<std::size_t>(std::lround(incidence_deg))];
+      }
+      double power = s2 * reradiated * patch.area_m2 * cos_incidence * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
       one[0] = s;
       const RayOutcome lit = scene_->trace(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();

@@ -391,6 +391,14 @@ TEST(Propagation, DiffuseScatteringOffALitWallMatchesTheLambertianIntegral) {
   EXPECT_NEAR(scattered->excess_delay_m, weighted_excess / power, 1.0);
   EXPECT_GT(scattered->arrival_direction.y(), 0.5);  // from the wall
 
+  // The directive lobe (n = 4) sends more towards the receiver here, which sees the wall's patches
+  // near their specular direction, and less far from it (a receiver 20 m east sees them obliquely).
+  PathSearchSettings directive = settings;
+  directive.scattering_lobe_exponent = 4;
+  const SignalPath* lobe = find_path(scene->paths(rx, {s}, directive)[0], PathType::kScattered);
+  ASSERT_NE(lobe, nullptr);
+  EXPECT_GT(lobe->power_linear(), 1.2 * scattered->power_linear());  // 1.4x here
+
   // Without scattering: no such path, and the specular reflection keeps sqrt(1 - S^2) of its amplitude.
   settings.scattering_coefficient = 0.0;
   const PathSet plain = scene->paths(rx, {s}, settings)[0];

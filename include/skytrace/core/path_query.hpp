@@ -99,6 +99,9 @@ struct PathSearchSettings {
   // satellites whose direct ray is blocked, from facade patches of about scattering_patch_m across
   // within scattering_radius_m of the receiver.
   double scattering_coefficient = 0.0;
+  // 0: Lambertian (cos theta_s); n >= 1: the directive single-lobe model, ((1 + cos psi) / 2)^n
+  // around the specular direction, normalised to the same scattered power.
+  int scattering_lobe_exponent = 0;
   double scattering_radius_m = 100.0;
   double scattering_patch_m = 2.0;
 };

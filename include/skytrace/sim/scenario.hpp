@@ -95,6 +95,7 @@ struct ModelSettings {
   // Diffuse scattering off rough facades for blocked satellites (effective roughness; 0: none), and
   // the distance from the antenna within which facades scatter (docs/multipath.md).
   double scattering_coefficient = 0.0;
+  int scattering_lobe_exponent = 0;  // 0: Lambertian; n: directive lobe ((1 + cos psi) / 2)^n
   double scattering_radius_m = 100.0;
   // Residual fields the models leave, shared by the receivers (docs/models/atmosphere-residuals.md):
   // gradients in parts per million of the distance (0: none), correlation lengths.
