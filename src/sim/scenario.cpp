@@ -331,7 +331,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
 
   if (auto models = root.child("models")) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
-                         "multipath_radius_m", "multipath_order", "diffraction", "scattering_coefficient",
+                         "multipath_radius_m", "multipath_order", "multipath_order2_radius_m", "diffraction", "scattering_coefficient",
                          "scattering_lobe_exponent", "scattering_radius_m", "ionosphere_residual_ppm",
                          "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
@@ -350,6 +350,9 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
       const double order = c->as_double_in(0.0, 2.0);
       if (order != std::floor(order)) c->fail("must be 0, 1 or 2");
       s.models.multipath_order = static_cast<int>(order);
+    }
+    if (auto c = models->child("multipath_order2_radius_m")) {
+      s.models.multipath_order2_radius_m = c->as_double_in(1.0, 5000.0);
     }
     if (auto c = models->child("diffraction")) s.models.diffraction = c->as_bool();
     if (auto c = models->child("scattering_coefficient")) s.models.scattering_coefficient = c->as_double_in(0.0, 1.0);
@@ -558,6 +561,7 @@ std::string scenario_to_json(const Scenario& s) {
                  {"multipath", s.models.multipath},
                  {"multipath_radius_m", s.models.multipath_radius_m},
                  {"multipath_order", s.models.multipath_order},
+                 {"multipath_order2_radius_m", s.models.multipath_order2_radius_m},
                  {"diffraction", s.models.diffraction},
                  {"scattering_coefficient", s.models.scattering_coefficient},
                  {"scattering_lobe_exponent", s.models.scattering_lobe_exponent},

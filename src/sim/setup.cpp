@@ -420,6 +420,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.multipath = s.models.multipath;
   g.path_search.radius_m = s.models.multipath_radius_m;
   g.path_search.max_reflection_order = s.models.multipath_order;
+  g.path_search.second_order_radius_m = s.models.multipath_order2_radius_m;
   g.path_search.diffraction = s.models.diffraction;
   g.path_search.scattering_coefficient = s.models.scattering_coefficient;
   g.path_search.scattering_lobe_exponent = s.models.scattering_lobe_exponent;

@@ -598,6 +598,15 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     if (std::abs(h) < 1e-6) continue;  // in the plane: no reflection
     near_facets.push_back(NearFacet{c.index, h >= 0.0 ? c.normal : Eigen::Vector3d(-c.normal), std::abs(h), c.eta});
   }
+  // Double bounces between the facets within second_order_radius_m (their number grows as its square).
+  std::vector<NearFacet> second_order_facets;
+  if (settings.max_reflection_order >= 2) {
+    const double radius2_m = settings.second_order_radius_m > 0.0 ? settings.second_order_radius_m : settings.radius_m;
+    for (const NearFacet& nf : near_facets) {
+      const Facet& f = facets_[nf.index];
+      if ((r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm() <= radius2_m) second_order_facets.push_back(nf);
+    }
+  }
   const double wavelength_m = kSpeedOfLight_mps / settings.frequency_hz;
   const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
   // What a rough facade keeps for its specular reflection: the rest is scattered (power balance of
@@ -672,12 +681,12 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A
     // taken in B gives the point on B, the line from there to the first image the point on A.
     if (settings.max_reflection_order >= 2) {
-      for (const NearFacet& a : near_facets) {
+      for (const NearFacet& a : second_order_facets) {
         const Facet& fa = facets_[a.index];
         const Eigen::Vector3d& na = a.normal;
         const double ca = na.dot(r) - a.height_m;  // plane of A: na . x = ca
         const Eigen::Vector3d image_a = r - 2.0 * a.height_m * na;
-        for (const NearFacet& b : near_facets) {
+        for (const NearFacet& b : second_order_facets) {
           if (b.index == a.index) continue;
           const Facet& fb = facets_[b.index];
           const double hb = fb.normal.dot(image_a) - fb.offset_m;

@@ -238,6 +238,12 @@ TEST(Propagation, SecondOrderReflectionInTheCanyon) {
   EXPECT_EQ(twice->object, "north");
   // RHCP -> LHCP -> RHCP: two reflections near normal incidence return mostly co-polar.
   EXPECT_GT(std::abs(twice->rhcp_amplitude), std::abs(twice->lhcp_amplitude));
+  // Double bounces only between facets within second_order_radius_m: the south wall (19.5 m) is
+  // beyond 15 m, inside 20 m.
+  settings.second_order_radius_m = 15.0;
+  EXPECT_EQ(find_path(scene->paths(rx, {enu_direction(0.0, el)}, settings)[0], PathType::kReflected, 2), nullptr);
+  settings.second_order_radius_m = 20.0;
+  EXPECT_NE(find_path(scene->paths(rx, {enu_direction(0.0, el)}, settings)[0], PathType::kReflected, 2), nullptr);
   // Without the second order only the single bounce remains.
   settings.max_reflection_order = 1;
   EXPECT_EQ(find_path(scene->paths(rx, {enu_direction(0.0, el)}, settings)[0], PathType::kReflected, 2), nullptr);

@@ -83,6 +83,9 @@ struct PathSearchSettings {
   // Reflecting facets whose closest point is within this distance of the receiver.
   double radius_m = 150.0;
   int max_reflection_order = 1;  // 0: none, 1: single bounce, 2: also double bounce
+  // Double bounces only between facets within this distance (0: radius_m); their cost grows as the
+  // square of the facets within it.
+  double second_order_radius_m = 0.0;
   bool diffraction = true;       // knife-edge diffraction over building edges
   // Diffraction is for satellites just below an edge: the knife-edge model holds for small angles
   // into the shadow (25 dB: about 14 deg behind an edge 30 m away at L1).

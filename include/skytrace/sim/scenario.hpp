@@ -91,6 +91,7 @@ struct ModelSettings {
   // With multipath: reflectors within this radius, reflection order (0-2), knife-edge diffraction.
   double multipath_radius_m = 150.0;
   int multipath_order = 1;
+  double multipath_order2_radius_m = 0.0;  // double bounces between facets this close (0: multipath_radius_m)
   bool diffraction = true;
   // Diffuse scattering off rough facades for blocked satellites (effective roughness; 0: none), and
   // the distance from the antenna within which facades scatter (docs/multipath.md).
