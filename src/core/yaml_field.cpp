@@ -160,4 +160,15 @@ std::vector<double> YamlField::as_doubles_in(double low, double high) const {
   return out;
 }
 
+Result<YAML::Node> load_yaml_document(const std::string& text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    return make_error(ErrorCode::kParse, file + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+  if (auto duplicate = find_duplicate_key(root, file)) return make_error(ErrorCode::kParse, *duplicate);
+  return root;
+}
+
 }  // namespace skytrace

@@ -464,13 +464,9 @@ Status apply_override(YAML::Node& root, const std::string& assignment) {
 
 Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
                                 const std::vector<std::string>& overrides) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
-  }
-  if (auto duplicate = find_duplicate_key(root, name)) return make_error(ErrorCode::kParse, *duplicate);
+  auto document = load_yaml_document(text, name);
+  if (!document) return document.error();
+  YAML::Node root = std::move(*document);
   for (const std::string& assignment : overrides) {
     if (auto st = apply_override(root, assignment); !st) return st.error().with_context(name);
   }

@@ -229,13 +229,9 @@ nlohmann::json SweepPlan::parameters(std::uint64_t index) const {
 
 Result<SweepPlan> parse_sweep(const std::string& text, const std::filesystem::path& file) {
   const std::string name = file.string();
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    return make_error(ErrorCode::kParse, name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
-  }
-  if (auto duplicate = find_duplicate_key(root, name)) return make_error(ErrorCode::kParse, *duplicate);
+  auto document = load_yaml_document(text, name);
+  if (!document) return document.error();
+  YAML::Node root = std::move(*document);
   SweepPlan plan;
   plan.file = file;
   plan.name = file.stem().string();

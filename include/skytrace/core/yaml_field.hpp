@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "skytrace/core/error.hpp"
+
 namespace skytrace {
 
 struct YamlFieldError {
@@ -22,6 +24,9 @@ struct YamlFieldError {
 // "file:LINE: duplicate key 'k' (first at line N)" for the first mapping anywhere in `root` that
 // holds a key twice (YAML forbids it; yaml-cpp would keep the first value silently), else nullopt.
 [[nodiscard]] std::optional<std::string> find_duplicate_key(const YAML::Node& root, const std::string& file);
+
+// A YAML document parsed, or the error "file:LINE: YAML syntax error: ..." / a duplicate key (kParse).
+[[nodiscard]] Result<YAML::Node> load_yaml_document(const std::string& text, const std::string& file);
 
 class YamlField {
  public:
