@@ -401,7 +401,8 @@ TEST(Propagation, DiffuseScatteringOffALitWallMatchesTheLambertianIntegral) {
   // near their specular direction, and less far from it (a receiver 20 m east sees them obliquely).
   PathSearchSettings directive = settings;
   directive.scattering_lobe_exponent = 4;
-  const SignalPath* lobe = find_path(scene->paths(rx, {s}, directive)[0], PathType::kScattered);
+  const PathSet directive_set = scene->paths(rx, {s}, directive)[0];  // kept: find_path points into it
+  const SignalPath* lobe = find_path(directive_set, PathType::kScattered);
   ASSERT_NE(lobe, nullptr);
   EXPECT_GT(lobe->power_linear(), 1.2 * scattered->power_linear());  // 1.4x here
 
