@@ -81,14 +81,22 @@ std::vector<Eigen::Vector3d> directions_at(const City& city, long k) {
   return d;
 }
 
-void run_paths(benchmark::State& state, bool moving, int order, bool diffraction) {
+// nlos_models: also double bounces between facets within 40 m and directive diffuse scattering
+// (S = 0.4, n = 4), as the Berlin validation scenarios take them (docs/validation.md).
+void run_paths(benchmark::State& state, bool moving, int order, bool diffraction, bool nlos_models = false) {
   const City& city = citysim();
   if (!city.scene) return state.SkipWithError("citysim world absent or not loadable (set SKYTRACE_SHARED_DATA)");
   PathSearchSettings settings;
   settings.max_reflection_order = order;
   settings.diffraction = diffraction;
+  if (nlos_models) {
+    settings.max_reflection_order = 2;
+    settings.second_order_radius_m = 40.0;
+    settings.scattering_coefficient = 0.4;
+    settings.scattering_lobe_exponent = 4;
+  }
   long k = 0;
-  double paths = 0.0, reflected = 0.0, diffracted = 0.0, nlos = 0.0, sets = 0.0;
+  double paths = 0.0, reflected = 0.0, diffracted = 0.0, scattered = 0.0, nlos = 0.0, sets = 0.0;
   for (auto _ : state) {
     // A static antenna stays at one point of a street; a moving one advances 1 m per epoch.
     const std::size_t receiver = moving ? static_cast<std::size_t>(k / 50) % city.origins.size()
@@ -102,6 +110,7 @@ void run_paths(benchmark::State& state, bool moving, int order, bool diffraction
       for (const SignalPath& p : set.paths) {
         reflected += p.type == PathType::kReflected ? 1.0 : 0.0;
         diffracted += p.type == PathType::kDiffracted ? 1.0 : 0.0;
+        scattered += p.type == PathType::kScattered ? 1.0 : 0.0;
       }
       nlos += set.direct.blocked && !set.paths.empty() ? 1.0 : 0.0;
     }
@@ -128,6 +137,7 @@ void run_paths(benchmark::State& state, bool moving, int order, bool diffraction
   state.counters["paths_per_sat"] = paths / std::max(sets, 1.0);
   state.counters["reflected_per_sat"] = reflected / std::max(sets, 1.0);
   state.counters["diffracted_per_sat"] = diffracted / std::max(sets, 1.0);
+  state.counters["scattered_per_sat"] = scattered / std::max(sets, 1.0);
   state.counters["nlos_share"] = nlos / std::max(sets, 1.0);
 }
 
@@ -147,6 +157,12 @@ BENCHMARK(BM_CitysimPathsMoving)->Unit(benchmark::kMicrosecond)->Arg(0);
 
 void BM_CitysimPathsSecondOrder(benchmark::State& state) { run_paths(state, false, 2, true); }
 BENCHMARK(BM_CitysimPathsSecondOrder)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1);
+
+// With the NLOS models of the Berlin validation: double bounces within 40 m, diffuse scattering.
+void BM_CitysimPathsNlosModelsStatic(benchmark::State& state) { run_paths(state, false, 1, true, true); }
+BENCHMARK(BM_CitysimPathsNlosModelsStatic)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1);
+void BM_CitysimPathsNlosModelsMoving(benchmark::State& state) { run_paths(state, true, 1, true, true); }
+BENCHMARK(BM_CitysimPathsNlosModelsMoving)->Unit(benchmark::kMicrosecond)->Arg(0);
 
 // Receiver side: 40 satellites x 4 signals (BPSK(1), BOC(1,1), BPSK(2), BPSK(10)) from the paths
 // the static antenna sees.
