@@ -72,7 +72,9 @@ int surface_depth(const std::string& type) {
 
 }  // namespace
 
-Result<WorldModel> load_cityjson_world(const std::filesystem::path& path, const CityJsonLoadOptions& options) {
+namespace {
+
+Result<WorldModel> read_cityjson_world(const std::filesystem::path& path, const CityJsonLoadOptions& options) {
   const std::string where = path.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return make_error(ErrorCode::kIo, where + ": CityJSON file not found");
@@ -293,6 +295,18 @@ Result<WorldModel> load_cityjson_world(const std::filesystem::path& path, const 
     return make_error(ErrorCode::kNotFound, where + ": no city object with surfaces (Solid, MultiSurface, ...) in the file");
   }
   return world;
+}
+
+}  // namespace
+
+Result<WorldModel> load_cityjson_world(const std::filesystem::path& path, const CityJsonLoadOptions& options) {
+  // A member of an unexpected JSON type ("type": 9999999999, found by the cityjson fuzz target) makes
+  // nlohmann's accessors throw wherever it is read: one message for all of them.
+  try {
+    return read_cityjson_world(path, options);
+  } catch (const json::exception& e) {
+    return make_error(ErrorCode::kParse, path.string() + ": malformed CityJSON: " + e.what());
+  }
 }
 
 }  // namespace skytrace::world

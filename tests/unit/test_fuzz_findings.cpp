@@ -13,6 +13,10 @@
 #include "skytrace/io/rtcm3.hpp"
 #include "skytrace/orbits/fetch.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
+#include "skytrace/world/loaders.hpp"
+#include "test_support.hpp"
+
+#include <fstream>
 
 namespace skytrace {
 namespace {
@@ -156,6 +160,26 @@ TEST(FuzzFindings, RtcmBitReaderFieldsOfAnyWidthAreDefined) {
   EXPECT_EQ(high.get_signed(63), -(std::int64_t{1} << 62));
   io::BitReader magnitude(ones);
   EXPECT_EQ(magnitude.get_sign_magnitude(64), -std::numeric_limits<std::int64_t>::max());
+}
+
+// The cityjson fuzz target's smoke run in CI (2026-11-27): a member of another JSON type than the
+// loader reads ("type": 9999999999) made nlohmann's value() throw out of the loader (terminate).
+TEST(FuzzFindings, CityJsonMemberOfAnotherTypeIsAParseErrorNamingTheFile) {
+  const auto dir = test::make_temp_dir("fuzz_cityjson");
+  const auto path = dir / "typed.json";
+  std::ofstream(path) << R"({"type":9999999999,"version":"2.0","transform":{"scale":[0.001,0.001,0.001],"translate":[13.3723,52.5086,0]},
+"metadata":{"referenceSystem":"https://www.opengis.net/def/crs/EPSG/0/4326"},
+"CityObjects":{"house":{"type":"Building","geometry":[{"type":"Solid","lod":"2.2","blod":1,"boundaries":[[[[[0,1,2]]]]]}]}},
+"vertices":[[390000.0,5800000.0,30.0],[390010.0,58000000]]})";
+  auto world = world::load_cityjson_world(path, {});
+  ASSERT_FALSE(world);
+  EXPECT_EQ(world.error().code, ErrorCode::kParse);
+  EXPECT_NE(world.error().message.find("typed.json: malformed CityJSON"), std::string::npos) << world.error().message;
+  // The same with a geometry type of another JSON type, deeper in the file.
+  std::ofstream(path) << R"({"type":"CityJSON","version":"2.0","CityObjects":{"house":{"type":"Building","geometry":[{"type":7,"lod":"2"}]}},"vertices":[[0,0,0]]})";
+  auto deeper = world::load_cityjson_world(path, {});
+  ASSERT_FALSE(deeper);
+  EXPECT_EQ(deeper.error().code, ErrorCode::kParse);
 }
 
 }  // namespace
