@@ -506,9 +506,11 @@ Result<bool> wait_for_job(const sim::SweepPlan& plan, const sim::SweepLayout& la
       failures = 0;
       if (states->empty()) return true;
     }
+    // Progress: which records exist (reading them is for the manifest at the end).
     size_t done = 0;
+    std::error_code ec;
     for (const auto& task : s.tasks) {
-      for (const auto& id : task) done += sim::read_point_record(layout, id) ? 1 : 0;
+      for (const auto& id : task) done += std::filesystem::exists(layout.point_record(id), ec) ? 1 : 0;
     }
     if (done != last_done) {
       std::cerr << fmt::format("skytrace sweep: Slurm job {}: {} of {} points recorded\n", s.job_id, done, points);

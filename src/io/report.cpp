@@ -1114,10 +1114,10 @@ std::string ReportBuilder::html(const ReportMeta& meta) const {
   std::string receivers;
   for (const SatelliteView& view : views_) {
     for (const auto& [satellite, track] : view.tracks) {
-      for (const auto& p : drawn_points(track)) {
-        data_t0_s = std::min(data_t0_s, p.time_s);
-        data_t1_s = std::max(data_t1_s, p.time_s);
-      }
+      // Points are in time order; the newest sample may not be among them.
+      if (track.samples_seen == 0) continue;
+      data_t0_s = std::min(data_t0_s, track.points.empty() ? track.latest.time_s : track.points.front().time_s);
+      data_t1_s = std::max(data_t1_s, track.latest.time_s);
     }
     satellites_seen = std::max(satellites_seen, view.tracks.size());
     receivers += (receivers.empty() ? "" : ", ") + (view.receiver.empty() ? meta.receiver_name : view.receiver);

@@ -374,9 +374,12 @@ std::map<std::uint64_t, PointRecord> read_point_records(const SweepPlan& plan, c
   return records;
 }
 
+bool record_of_this_sweep(const SweepPlan& plan, const PointRecord& record, std::uint64_t index) {
+  return record.overrides == plan.overrides(index) && record.scenario == plan.scenario.string();
+}
+
 bool point_done(const SweepPlan& plan, const std::optional<PointRecord>& record, std::uint64_t index) {
-  return record && record->status == "done" && record->overrides == plan.overrides(index) &&
-         record->scenario == plan.scenario.string();
+  return record && record->status == "done" && record_of_this_sweep(plan, *record, index);
 }
 
 namespace {
@@ -438,7 +441,7 @@ Result<SweepCounts> write_sweep_manifest(const SweepPlan& plan, const SweepLayou
     const nlohmann::json parameters = plan.parameters(i);
     const auto found = records.find(i);
     std::optional<PointRecord> record = found == records.end() ? kNoRecord : std::optional<PointRecord>(found->second);
-    if (record && (record->overrides != plan.overrides(i) || record->scenario != plan.scenario.string())) record.reset();
+    if (record && !record_of_this_sweep(plan, *record, i)) record.reset();
     std::string status = record ? record->status : "pending";
     std::string error = record ? record->error : "";
     while (next_reason < sorted_reasons.size() && sorted_reasons[next_reason].first < i) ++next_reason;

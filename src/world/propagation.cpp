@@ -499,25 +499,39 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   std::vector<Eigen::Vector3d> one(1);
   const std::array<double, 91>* lobe =
       settings.scattering_lobe_exponent > 0 ? &directive_lobe_integrals(settings.scattering_lobe_exponent) : nullptr;
+  // What depends on the facet and the satellite only (a plane wave lights every patch of a facet
+  // alike): S^2 |Gamma|^2 cos(theta_i), and the directive lobe's normalisation; 0 when unlit.
+  struct Lighting {
+    double factor = 0.0, lobe_integral = 1.0;
+  };
+  std::vector<Lighting> lighting(near_facets.size());
   for (const std::size_t i : blocked) {
     const Eigen::Vector3d& s = directions[i];
     std::fill(sums.begin(), sums.end(), Sum{});
-    for (const Patch& patch : visible) {
-      const NearFacet& nf = near_facets[patch.facet];
+    for (std::size_t k = 0; k < near_facets.size(); ++k) {
+      const NearFacet& nf = near_facets[k];
       const double cos_incidence = nf.normal.dot(s);
+      lighting[k] = Lighting{};
       if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
       const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
-      const double reradiated = 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm));
+      lighting[k].factor = s2 * 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm)) * cos_incidence;
+      if (lobe != nullptr) {
+        const double incidence_deg = std::acos(std::clamp(cos_incidence, 0.0, 1.0)) * 180.0 / std::numbers::pi;
+        lighting[k].lobe_integral = (*lobe)[static_cast<std::size_t>(std::lround(incidence_deg))];
+      }
+    }
+    for (const Patch& patch : visible) {
+      const NearFacet& nf = near_facets[patch.facet];
+      const Lighting& light = lighting[patch.facet];
+      if (light.factor <= 0.0) continue;
       // The scattering pattern towards the receiver over its integral on the hemisphere.
       double pattern = patch.cos_receiver / std::numbers::pi;
       if (lobe != nullptr) {
-        const Eigen::Vector3d specular = -s + 2.0 * cos_incidence * nf.normal;
+        const Eigen::Vector3d specular = -s + 2.0 * nf.normal.dot(s) * nf.normal;
         const Eigen::Vector3d to_receiver = (r - patch.point_m) / patch.distance_m;
-        const double incidence_deg = std::acos(std::clamp(cos_incidence, 0.0, 1.0)) * 180.0 / std::numbers::pi;
-        pattern = std::pow(0.5 * (1.0 + specular.dot(to_receiver)), settings.scattering_lobe_exponent) /
-                  (*lobe)[static_cast<std::size_t>(std::lround(incidence_deg))];
+        pattern = std::pow(0.5 * (1.0 + specular.dot(to_receiver)), settings.scattering_lobe_exponent) / light.lobe_integral;
       }
-      double power = s2 * reradiated * patch.area_m2 * cos_incidence * pattern / (patch.distance_m * patch.distance_m);
+      double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
       one[0] = s;
       const RayOutcome lit = scene_->trace(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();

@@ -83,6 +83,8 @@ struct PointRecord {
 // that has run few of them does not look for 10^5 files.
 [[nodiscard]] std::map<std::uint64_t, PointRecord> read_point_records(const SweepPlan& plan, const SweepLayout& layout);
 
+// A record made for this point's overrides and base scenario (not by an earlier definition of the sweep).
+[[nodiscard]] bool record_of_this_sweep(const SweepPlan& plan, const PointRecord& record, std::uint64_t index);
 // A point counts as done when its record says so for the same overrides and base scenario.
 [[nodiscard]] bool point_done(const SweepPlan& plan, const std::optional<PointRecord>& record, std::uint64_t index);
 
