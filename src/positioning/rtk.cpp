@@ -231,12 +231,17 @@ Result<IntegerSolution> lambda_search(const Eigen::VectorXd& float_ambiguities, 
   return out;
 }
 
-DoubleDifferenceGroup form_double_differences(const std::vector<SingleDifference>& group) {
+DoubleDifferenceGroup form_double_differences(const std::vector<SingleDifference>& group, bool reference_by_variance) {
   DoubleDifferenceGroup out;
   const auto n = static_cast<Eigen::Index>(group.size());
   if (group.empty()) return out;
   for (size_t i = 1; i < group.size(); ++i) {
-    if (group[i].elevation_deg > group[out.reference].elevation_deg) out.reference = i;
+    const SingleDifference& a = group[i];
+    const SingleDifference& best = group[out.reference];
+    const bool better = reference_by_variance ? a.variance_m2 < best.variance_m2 ||
+                                                    (a.variance_m2 == best.variance_m2 && a.elevation_deg > best.elevation_deg)
+                                              : a.elevation_deg > best.elevation_deg;
+    if (better) out.reference = i;
   }
   for (size_t i = 0; i < group.size(); ++i) {
     if (i != out.reference) out.others.push_back(i);
@@ -523,7 +528,12 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
       return settings_.sigma_phase_zenith_m * settings_.sigma_phase_zenith_m +
              std::pow(settings_.sigma_phase_elevation_m / sin_el, 2);
     };
-    row.variance_phase_m2 = phase_sigma2(rover_el) + phase_sigma2(base_el);
+    // C/N0 weighting: the weaker signal's tracking jitter (variance as 1 / (C/N0)).
+    const auto cn0_factor = [&](const SignalMeasurement* m) {
+      if (settings_.cn0_weighting_dbhz <= 0.0 || m->cn0_dbhz <= 0.0) return 1.0;
+      return std::max(1.0, std::pow(10.0, (settings_.cn0_weighting_dbhz - m->cn0_dbhz) / 10.0));
+    };
+    row.variance_phase_m2 = phase_sigma2(rover_el) * cn0_factor(any_r) + phase_sigma2(base_el) * cn0_factor(any_b);
     if (r.code != nullptr && b->second.code != nullptr) {
       row.code_m = (r.code->pseudorange_m - model_r) - (b->second.code->pseudorange_m - model_b);
     }
@@ -582,6 +592,7 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
     Key reference;
     std::vector<Key> others;
     std::vector<double> elevations_deg;
+    std::vector<double> variances_m2;
   };
   std::vector<PhaseGroup> phase_groups;
   for (const auto& [group_key, members] : groups) {
@@ -603,7 +614,7 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
         index.push_back(i);
       }
       if (sds.size() < 2) continue;
-      const DoubleDifferenceGroup dd = form_double_differences(sds);
+      const DoubleDifferenceGroup dd = form_double_differences(sds, settings_.cn0_weighting_dbhz > 0.0);
       // Single-difference design rows: d(observed - model)/d(state) with the sign of the model.
       const auto m = static_cast<Eigen::Index>(sds.size());
       Eigen::MatrixXd h_sd = Eigen::MatrixXd::Zero(m, n);
@@ -642,6 +653,7 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
           const SingleDifference& sd = sds[dd.others[static_cast<size_t>(r)]];
           pg.others.emplace_back(sd.satellite, sd.band);
           pg.elevations_deg.push_back(sd.elevation_deg);
+          pg.variances_m2.push_back(sd.variance_m2);
         }
         phase_groups.push_back(std::move(pg));
       }
@@ -683,7 +695,7 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
     // Double-differenced ambiguities that may be fixed, with the elevation of their satellite.
     struct Candidate {
       Eigen::Index plus, minus;
-      double elevation_deg;
+      double drop_key;  // smallest left out first
       SatelliteId satellite;
     };
     std::vector<Candidate> candidates;
@@ -693,12 +705,14 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
       for (size_t i = 0; i < pg.others.size(); ++i) {
         const Ambiguity& amb = ambiguities_.at(pg.others[i]);
         if (!amb.fixable) continue;
-        candidates.push_back(Candidate{amb.index, ref.index, pg.elevations_deg[i], pg.others[i].first});
+        // The order of leaving out: lowest first, or (C/N0 weighting) largest variance first.
+        const double drop_key = settings_.cn0_weighting_dbhz > 0.0 ? -pg.variances_m2[i] : pg.elevations_deg[i];
+        candidates.push_back(Candidate{amb.index, ref.index, drop_key, pg.others[i].first});
       }
     }
-    // Satellites from lowest to highest: the partial sets leave the lowest out first.
+    // Satellites in the order the partial sets leave them out.
     std::vector<std::pair<double, SatelliteId>> by_elevation;
-    for (const Candidate& c : candidates) by_elevation.emplace_back(c.elevation_deg, c.satellite);
+    for (const Candidate& c : candidates) by_elevation.emplace_back(c.drop_key, c.satellite);
     std::sort(by_elevation.begin(), by_elevation.end());
     by_elevation.erase(std::unique(by_elevation.begin(), by_elevation.end(),
                                    [](const auto& a, const auto& b) { return a.second == b.second; }),

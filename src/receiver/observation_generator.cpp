@@ -1,6 +1,8 @@
 #include "skytrace/receiver/observation_generator.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include "skytrace/core/constants.hpp"
@@ -49,7 +51,8 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
       clock_(settings_.profile.oscillator, settings_.ideal_clock,
              stream_key(settings_.seed, {hash_name("receiver-clock"), static_cast<std::uint64_t>(settings_.receiver_index)})),
       tracking_(settings_.seed, settings_.receiver_index, settings_.noise),
-      loop_noise_(settings_.seed, settings_.receiver_index) {
+      loop_noise_(settings_.seed, settings_.receiver_index),
+      foliage_fading_(settings_.seed, settings_.receiver_index, settings_.foliage) {
   // The scenario's signals the receiver can track; the others are left out (run: a warning).
   std::vector<Signal> trackable;
   for (const Signal& signal : settings_.signals) {
@@ -191,6 +194,40 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   return epoch;
 }
 
+namespace {
+
+Eigen::Vector3d enu_unit_vector(const AzimuthElevation& direction) {
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const double horizontal = std::cos(direction.elevation_deg * kDeg);
+  return {horizontal * std::sin(direction.azimuth_deg * kDeg), horizontal * std::cos(direction.azimuth_deg * kDeg),
+          std::sin(direction.elevation_deg * kDeg)};
+}
+
+// A phase lock survives a fade below its threshold shorter than two coherent integrations or the
+// loop's time constant (1 / noise bandwidth), whichever is longer.
+double fade_hold_s(const ReceiverProfile& profile) {
+  const double loop_s = profile.pll_bandwidth_hz > 0.0 ? 1.0 / profile.pll_bandwidth_hz : 0.0;
+  return std::max(2.0 * profile.integration_time_s, loop_s);
+}
+
+}  // namespace
+
+const stages::FoliageComposite& ObservationGenerator::band_field(const SatelliteId& sat, const Signal& signal,
+                                                                 const SatelliteObservation& obs,
+                                                                 const Eigen::Vector3d& velocity_enu_mps,
+                                                                 const Eigen::Vector3d& satellite_enu,
+                                                                 const GnssTime& tag) {
+  for (const auto& [band, field] : band_fields_) {
+    if (band == signal.band) return *field;
+  }
+  const double carrier_hz = signal_info_.at(signal)->carrier_frequency_hz(obs.glonass_channel);
+  const stages::FoliageComposite& field =
+      foliage_fading_.composite(sat, signal.band, carrier_hz, obs.vegetation_attenuation_db, obs.vegetation_path_m,
+                                velocity_enu_mps, satellite_enu, tag, last_tag_);
+  band_fields_.emplace_back(signal.band, &field);
+  return field;
+}
+
 const AntennaPattern* ObservationGenerator::signal_antenna(const TrackedSignal* tracked) const {
   return tracked != nullptr && tracked->antenna ? tracked->antenna.get() : &settings_.profile.antenna;
 }
@@ -264,6 +301,16 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
   // satellite transmits healthy, and their C/N0 from the link budget.
   candidates_.clear();
   bool acquirable = false;
+  // Foliage fading: the direct ray crosses vegetation (and is not blocked); one field per band.
+  const bool fading = settings_.foliage.enabled && settings_.noise && obs.vegetation_attenuation_db > 0.0 &&
+                      !direct_blocked;
+  band_fields_.clear();
+  Eigen::Vector3d velocity_enu_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d satellite_enu = Eigen::Vector3d::Zero();
+  if (fading) {
+    velocity_enu_mps = rx_to_enu * epoch.receiver.velocity_mps;
+    satellite_enu = enu_unit_vector(obs.direction);
+  }
   for (const Signal& signal : settings_.signals) {
     // A receiver records only what the satellite transmits; the answer is kept for the GPST day.
     if (signal.system != sat.system || !satellite_signals_.transmitted(sat, signal, tag)) continue;
@@ -286,10 +333,17 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
                                                     obs.direction, attenuation_db,
                                                     satellite_signals_.power_offset_db(sat, signal, tag),
                                                     multipath.power_db);
-    candidates_.push_back(stages::Candidate{&signal, cn0_dbhz, multipath, std::move(signal_record)});
-    if (cn0_dbhz >= profile.acquisition_threshold_dbhz || tracking_.tracked_at(sat, signal, last_tag_)) {
+    stages::Candidate candidate{&signal, cn0_dbhz, multipath, std::move(signal_record), nullptr, {}};
+    if (fading) {
+      candidate.foliage = &band_field(sat, signal, obs, velocity_enu_mps, satellite_enu, tag);
+      candidate.fade = candidate.foliage->for_signal(cn0_dbhz, profile.tracking_threshold_dbhz, fade_hold_s(profile));
+      candidate.cn0_dbhz += candidate.fade.cn0_change_db;
+    }
+    if ((candidate.cn0_dbhz >= profile.acquisition_threshold_dbhz && !candidate.fade.faded_out) ||
+        tracking_.tracked_at(sat, signal, last_tag_)) {
       acquirable = true;
     }
+    candidates_.push_back(std::move(candidate));
   }
 
   const stages::SatelliteTerms terms{p.light_time.range_m,
@@ -307,7 +361,12 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
   for (const stages::Candidate& candidate : candidates_) {
     const Signal& signal = *candidate.signal;
     const double cn0_dbhz = candidate.cn0_dbhz;
-    // Stage 4: channel, acquisition, lock.
+    // Stage 4: channel, acquisition, lock; a foliage fade lasting at the epoch loses the signal.
+    if (candidate.fade.faded_out) {
+      tracking_.drop(sat, signal);
+      acquisition.not_tracked_because = "below the tracking threshold in a foliage fade";
+      continue;
+    }
     const std::optional<double> aided_threshold_dbhz =
         aiding_locked && is_semicodeless(signal) ? profile.semicodeless_threshold_dbhz : std::nullopt;
     const auto lock =
@@ -346,9 +405,17 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     m.phase_multipath_m = candidate.multipath.phase_m;
     m.range_rate_multipath_mps = candidate.multipath.range_rate_mps;
     m.multipath_power_db = candidate.multipath.power_db;
+    if (candidate.foliage != nullptr) {
+      m.foliage_code_m = candidate.foliage->code_error_m;
+      m.foliage_phase_m = candidate.foliage->phase_error_m;
+      m.foliage_range_rate_mps = candidate.foliage->range_rate_error_mps;
+      m.foliage_power_db = candidate.fade.cn0_change_db;
+    }
 
-    // Stage 4: the carrier arc (acquisition or slip set the loss-of-lock flag and restart the lock time).
-    const auto arc = tracking_.carrier_arc(profile, sat, signal, lock == stages::TrackingState::Lock::kNewArc,
+    // Stage 4: the carrier arc (acquisition or slip set the loss-of-lock flag and restart the lock
+    // time; a foliage fade that broke the phase lock since the last epoch starts a new arc).
+    const bool new_arc = lock == stages::TrackingState::Lock::kNewArc || candidate.fade.slipped;
+    const auto arc = tracking_.carrier_arc(profile, sat, signal, new_arc,
                                            cn0_dbhz, aided, data_modulated_.at(signal), tag, last_tag_);
     m.loss_of_lock = arc.loss_of_lock;
     m.ambiguity_cycles = arc.ambiguity_cycles;

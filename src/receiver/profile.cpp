@@ -152,7 +152,7 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
   if (auto rtk = root.child("rtk")) {
     rtk->expect_keys({"elevation_mask_deg", "min_cn0_dbhz", "ratio_threshold", "ambiguity_mode", "dynamics",
                       "estimate_velocity", "sigma_phase_m", "code_phase_ratio", "acceleration_noise_mps2",
-                      "ambiguity_noise_cycles"});
+                      "ambiguity_noise_cycles", "cn0_weighting_dbhz"});
     RtkProfile& r = p.rtk;
     if (auto c = rtk->child("elevation_mask_deg")) r.elevation_mask_deg = c->as_double_in(0.0, 60.0);
     if (auto c = rtk->child("min_cn0_dbhz")) r.min_cn0_dbhz = c->as_double_in(0.0, 60.0);
@@ -164,6 +164,7 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
     if (auto c = rtk->child("code_phase_ratio")) r.code_phase_ratio = c->as_double_in(1.0, 10000.0);
     if (auto c = rtk->child("acceleration_noise_mps2")) r.acceleration_noise_mps2 = c->as_double_in(0.0, 100.0);
     if (auto c = rtk->child("ambiguity_noise_cycles")) r.ambiguity_noise_cycles = c->as_double_in(0.0, 10.0);
+    if (auto c = rtk->child("cn0_weighting_dbhz")) r.cn0_weighting_dbhz = c->as_double_in(0.0, 60.0);
   }
   return p;
 }

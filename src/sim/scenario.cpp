@@ -333,7 +333,8 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
                          "multipath_radius_m", "multipath_order", "multipath_order2_radius_m", "diffraction", "scattering_coefficient",
                          "scattering_lobe_exponent", "scattering_radius_m", "ionosphere_residual_ppm",
-                         "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km"});
+                         "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km",
+                         "foliage_fading", "foliage_diffuse_db", "foliage_wind_spread_hz"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
     if (auto c = models->child("ionex_file")) s.models.ionex_file = existing_file(*c, base);
     if (s.models.ionosphere == "ionex" && !s.models.ionex_file) {
@@ -366,6 +367,9 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (auto c = models->child("troposphere_residual_length_km")) {
       s.models.troposphere_residual_length_km = c->as_double_in(1.0, 1000.0);
     }
+    if (auto c = models->child("foliage_fading")) s.models.foliage_fading = c->as_bool();
+    if (auto c = models->child("foliage_diffuse_db")) s.models.foliage_diffuse_db = c->as_double_in(-40.0, -3.0);
+    if (auto c = models->child("foliage_wind_spread_hz")) s.models.foliage_wind_spread_hz = c->as_double_in(0.0, 20.0);
   }
 
   if (auto world = root.child("world")) parse_world(*world, base, s.world);
@@ -565,7 +569,10 @@ std::string scenario_to_json(const Scenario& s) {
                  {"ionosphere_residual_ppm", s.models.ionosphere_residual_ppm},
                  {"ionosphere_residual_length_km", s.models.ionosphere_residual_length_km},
                  {"troposphere_residual_ppm", s.models.troposphere_residual_ppm},
-                 {"troposphere_residual_length_km", s.models.troposphere_residual_length_km}};
+                 {"troposphere_residual_length_km", s.models.troposphere_residual_length_km},
+                 {"foliage_fading", s.models.foliage_fading},
+                 {"foliage_diffuse_db", s.models.foliage_diffuse_db},
+                 {"foliage_wind_spread_hz", s.models.foliage_wind_spread_hz}};
   json w;
   if (s.world.sdf) w["sdf"] = s.world.sdf->string();
   w["model_paths"] = paths(s.world.model_paths);

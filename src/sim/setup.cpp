@@ -425,6 +425,9 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.path_search.scattering_coefficient = s.models.scattering_coefficient;
   g.path_search.scattering_lobe_exponent = s.models.scattering_lobe_exponent;
   g.path_search.scattering_radius_m = s.models.scattering_radius_m;
+  g.foliage.enabled = s.models.foliage_fading;
+  g.foliage.diffuse_db = s.models.foliage_diffuse_db;
+  g.foliage.wind_spread_hz = s.models.foliage_wind_spread_hz;
   if (resources.precise_coverage) g.broadcast_truth = resources.precise_coverage->broadcast_truth();
   auto phase_centre = load_antenna_phase_centre(s, rx, g.signals, g.profile.antenna_rinex_type);
   if (!phase_centre) return phase_centre.error();

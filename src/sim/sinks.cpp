@@ -80,7 +80,7 @@ constexpr const char* kTruthHeader =
     "group_delay_m,iono_m,tropo_m,rx_clock_m,code_noise_m,phase_noise_m,doppler_noise_mps,ambiguity_cycles,"
     "pseudorange_m,carrier_phase_cycles,doppler_hz,cn0_dbhz,rx_x_m,rx_y_m,rx_z_m,rx_vx_mps,rx_vy_mps,rx_vz_mps,"
     "rx_clock_drift_mps,vegetation_attenuation_db,detail,path_type,code_multipath_m,phase_multipath_m,"
-    "multipath_power_db,antenna_pc_m\n";
+    "multipath_power_db,antenna_pc_m,foliage_code_m,foliage_phase_m,foliage_power_db\n";
 
 // paths.csv (models.multipath): every path of every satellite-epoch with any path.
 constexpr const char* kPathsHeader =
@@ -194,7 +194,7 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
       CsvRow row(out);
       row.text(time).text(receiver_name).text(sat_name).text(unhealthy.signal.to_string()).text("unhealthy").raw(geometry);
       row.empty(2).fixed(sat.troposphere_m, 4).text(rx_clock).empty(kSignalValueCells).raw(receiver_part);
-      row.fixed(sat.vegetation_attenuation_db, 2).text(csv_text(unhealthy.reason)).text(path_kind).empty(4).end();
+      row.fixed(sat.vegetation_attenuation_db, 2).text(csv_text(unhealthy.reason)).text(path_kind).empty(7).end();
     }
     if (sat.signals.empty() && sat.status == receiver::SatelliteStatus::kUnhealthy) continue;  // said above
     if (sat.signals.empty()) {
@@ -208,7 +208,7 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
         row.empty(2);
       }
       row.text(rx_clock).empty(kSignalValueCells).raw(receiver_part);
-      row.fixed(sat.vegetation_attenuation_db, 2).text(csv_text(sat.detail)).text(path_kind).empty(4).end();
+      row.fixed(sat.vegetation_attenuation_db, 2).text(csv_text(sat.detail)).text(path_kind).empty(7).end();
       continue;
     }
     for (const auto& m : sat.signals) {
@@ -222,7 +222,8 @@ void append_truth(std::string& out, const receiver::EpochObservations& epoch, co
       row.fixed(m.pseudorange_m, 4).fixed(m.carrier_phase_cycles, 4).fixed(m.doppler_hz, 4).fixed(m.cn0_dbhz, 3);
       row.raw(receiver_part).fixed(sat.vegetation_attenuation_db, 2).empty().text(path_kind);
       row.fixed(m.code_multipath_m, 4).fixed(m.phase_multipath_m, 4).fixed(m.multipath_power_db, 2);
-      row.fixed(m.antenna_phase_centre_m, 4).end();
+      row.fixed(m.antenna_phase_centre_m, 4);
+      row.fixed(m.foliage_code_m, 4).fixed(m.foliage_phase_m, 4).fixed(m.foliage_power_db, 2).end();
     }
   }
 }

@@ -104,6 +104,7 @@ positioning::RtkSettings rtk_settings_of(const ReceiverSettings& rover, const re
   out.code_phase_ratio = p.code_phase_ratio;
   out.acceleration_noise_mps2 = p.acceleration_noise_mps2;
   out.ambiguity_noise_cycles = p.ambiguity_noise_cycles;
+  out.cn0_weighting_dbhz = p.cn0_weighting_dbhz;
   return out;
 }
 }  // namespace

@@ -349,6 +349,54 @@ TEST(RtkEngineEndToEnd, LateSparseAndInterruptedCorrectionsShowInAgeAndSolutionT
   EXPECT_GE(fixed_after, 95u);
 }
 
+// The yard example's rover under the lime tree's crown (examples/rtk/rtk-yard.yaml, 10 minutes):
+// the crown's fades (models.foliage_fading) break the phase lock and the fix; without them the
+// mean attenuation alone leaves it fixed; 10 m from the trunk, where few rays cross the crown, the
+// C/N0-weighted engine keeps its fix. The report shows the solution types.
+TEST(RtkEngineEndToEnd, UnderATreeCrownTheFoliageFadesBreakTheFix) {
+  if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+  const auto dir = test::make_temp_dir("rtk_tree");
+  const auto fixed_share = [&](const std::string& name, const std::string& where, const std::string& sets) {
+    const auto out = dir / name;
+    const auto r = test::run_command(
+        test::shell_quote(test::skytrace_executable().string()) + " run " +
+        test::shell_quote((test::source_dir() / "examples/rtk/rtk-yard.yaml").string()) + " --out " +
+        test::shell_quote(out.string()) + " --quiet --no-truth --set time.duration_s=600 --set " +
+        test::shell_quote("receivers.1.position.world_enu_m=" + where) + " " + sets + " 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const auto rows = read_fix_csv(out / "fix_ROVR.csv");
+    EXPECT_EQ(rows.size(), 601u);
+    size_t fixed = 0, slips = 0;
+    for (const FixRow& row : rows) fixed += row.fix == "rtk_fixed";
+    // Loss-of-lock flags of the rover (RINEX LLI bit 0).
+    std::ifstream obs(out / "obs_ROVR.rnx");
+    std::string line;
+    bool header = true;
+    while (std::getline(obs, line)) {
+      if (header) {
+        header = line.find("END OF HEADER") == std::string::npos;
+        continue;
+      }
+      if (line.starts_with(">")) continue;
+      for (size_t field = 3; field + 15 <= line.size(); field += 16) {
+        const char lli = line[field + 14];
+        slips += lli == '1' || lli == '3' || lli == '5' || lli == '7';
+      }
+    }
+    const double share = static_cast<double>(fixed) / static_cast<double>(rows.size());
+    std::printf("[ figures ] rtk-yard %s: %.1f %% rtk_fixed, %zu loss-of-lock flags\n", name.c_str(), 100.0 * share, slips);
+    EXPECT_NE(test::run_command("grep -c 'Solution type' " + test::shell_quote((out / "report.html").string())).output, "0\n");
+    return std::make_pair(share, slips);
+  };
+  const auto [faded, faded_slips] = fixed_share("crown", "[-30.0, 12.0, 1.5]", "");
+  const auto [still, still_slips] = fixed_share("crown_without_fading", "[-30.0, 12.0, 1.5]", "--set models.foliage_fading=false");
+  const auto [near, near_slips] = fixed_share("ten_metres_away", "[-20.0, 12.0, 1.5]", "");
+  EXPECT_LT(faded, 0.2);
+  EXPECT_GT(still, 0.9);
+  EXPECT_GT(near, 0.9);
+  EXPECT_GT(faded_slips, 10 * still_slips + 100);
+}
+
 }  // namespace
 }  // namespace skytrace
 

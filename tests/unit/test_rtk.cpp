@@ -110,6 +110,21 @@ TEST(DoubleDifferences, HighestSatelliteIsTheReferenceAndTheCovarianceIsCorrelat
   EXPECT_NEAR(dd.covariance_m2(1, 0), 2e-5, 1e-15);
 }
 
+// C/N0 weighting: the reference is the satellite of least variance, not the highest (a high
+// satellite seen through a tree crown weighs little).
+TEST(DoubleDifferences, WithCn0WeightingTheLeastVarianceIsTheReference) {
+  std::vector<SingleDifference> sds(3);
+  sds[0] = {SatelliteId{GnssSystem::kGps, 1}, '1', 0.19, 10.0, 1e-4, 30.0};
+  sds[1] = {SatelliteId{GnssSystem::kGps, 2}, '1', 0.19, 4.0, 2e-3, 70.0};  // faded: 100 times the variance
+  sds[2] = {SatelliteId{GnssSystem::kGps, 3}, '1', 0.19, -3.0, 5e-5, 45.0};
+  EXPECT_EQ(form_double_differences(sds).reference, 1u);
+  const DoubleDifferenceGroup dd = form_double_differences(sds, true);
+  EXPECT_EQ(dd.reference, 2u);
+  ASSERT_EQ(dd.others, (std::vector<size_t>{0, 1}));
+  EXPECT_NEAR(dd.values_m(1), 7.0, 1e-12);
+  EXPECT_NEAR(dd.covariance_m2(1, 1), 2.05e-3, 1e-15);
+}
+
 // ---- Slips ----
 
 EpochMeasurements slip_epoch(double t_s, double clock_jump_m, double l1_extra_cycles, bool lli, double l5_extra_cycles) {

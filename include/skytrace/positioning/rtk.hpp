@@ -50,7 +50,8 @@ struct SingleDifference {
 };
 
 // Double differences of single differences within one group (one system and band): every
-// satellite minus the reference, the satellite of highest elevation. `difference` is the operator
+// satellite minus the reference, the satellite of highest elevation (`reference_by_variance`: of
+// least variance). `difference` is the operator
 // D (rows: double differences, columns: the group's single differences), so that the double
 // differences are D y and their covariance D diag(variances) D^T.
 struct DoubleDifferenceGroup {
@@ -60,7 +61,8 @@ struct DoubleDifferenceGroup {
   Eigen::VectorXd values_m;      // D y
   Eigen::MatrixXd covariance_m2; // D diag(variance) D^T
 };
-[[nodiscard]] DoubleDifferenceGroup form_double_differences(const std::vector<SingleDifference>& group);
+[[nodiscard]] DoubleDifferenceGroup form_double_differences(const std::vector<SingleDifference>& group,
+                                                            bool reference_by_variance = false);
 
 // ---- Cycle slips -----------------------------------------------------------------------------
 
@@ -109,6 +111,11 @@ struct RtkSettings {
   double ratio_threshold = 3.0;
   int min_fixed_ambiguities = 4;
   int max_partial_drops = 6;       // satellites left out, lowest first, when the full set fails
+  // C/N0 weighting (0: off, elevation only, as RTKLIB): below this C/N0 a signal's variance grows
+  // as 10^((cn0_weighting_dbhz - C/N0) / 10) (tracking jitter goes as 1 / (C/N0)), the reference
+  // of each double-difference group is its signal of least variance, and the partial sets leave
+  // the satellites of largest variance out first. Faded or reflected signals then weigh little.
+  double cn0_weighting_dbhz = 0.0;
   // GLONASS FDMA: receivers of different make have inter-frequency biases, so its ambiguities
   // stay float unless both receivers are known to be of one design.
   bool fix_glonass = false;

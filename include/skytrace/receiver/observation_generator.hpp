@@ -81,6 +81,8 @@ struct GeneratorSettings {
   // The receiver antenna's phase centre offsets and variations per frequency (receiver.antex;
   // nullptr: the phase centre is the antenna reference point).
   std::shared_ptr<const AntennaPhaseCentre> antenna_phase_centre;
+  // Fast fading of direct rays through vegetation (models.foliage_fading; applies with noise).
+  stages::FoliageFadingSettings foliage;
 };
 
 // Generates one receiver's observations epoch by epoch (in increasing time), keeping the carrier
@@ -144,6 +146,7 @@ class ObservationGenerator {
   stages::SatelliteSignals satellite_signals_;
   stages::TrackingState tracking_;
   stages::LoopNoise loop_noise_;
+  stages::FoliageFading foliage_fading_;
   stages::EphemerisDecoding ephemeris_decoding_;
   orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
   // Scratch of one epoch and one satellite, kept to avoid allocations per epoch.
@@ -160,6 +163,12 @@ class ObservationGenerator {
   [[nodiscard]] const std::vector<ReceivedPath>& received_through(const AntennaPattern* antenna,
                                                                   const std::vector<ReceivedPath>& received,
                                                                   const SatelliteObservation& obs);
+  // Foliage fading: a satellite's composite field per band this epoch (advanced once per band).
+  std::vector<std::pair<char, const stages::FoliageComposite*>> band_fields_;
+  [[nodiscard]] const stages::FoliageComposite& band_field(const SatelliteId& sat, const Signal& signal,
+                                                           const SatelliteObservation& obs,
+                                                           const Eigen::Vector3d& velocity_enu_mps,
+                                                           const Eigen::Vector3d& satellite_enu, const GnssTime& tag);
   // The records a satellite's signals used this epoch, entered into used_* once it is output.
   std::vector<std::tuple<const orbits::KeplerEphemeris*, const orbits::GlonassEphemeris*, const orbits::SbasEphemeris*>>
       records_used_;

@@ -62,6 +62,13 @@ struct SignalMeasurement {
   double phase_multipath_m = 0.0;
   double range_rate_multipath_mps = 0.0;
   double multipath_power_db = 0.0;
+  // Foliage fading (models.foliage_fading) of a direct ray through vegetation: the diffuse field's
+  // code, carrier phase (range units) and range-rate errors, and the reported C/N0's change from
+  // the mean.
+  double foliage_code_m = 0.0;
+  double foliage_phase_m = 0.0;
+  double foliage_range_rate_mps = 0.0;
+  double foliage_power_db = 0.0;
 };
 
 // How a satellite's signals arrive (models.multipath): only the direct path, the direct path and

@@ -73,6 +73,7 @@ struct RtkProfile {
   double code_phase_ratio = 100.0;
   double acceleration_noise_mps2 = 1.0; // with estimate_velocity
   double ambiguity_noise_cycles = 1e-4; // per sqrt(s)
+  double cn0_weighting_dbhz = 0.0;      // 0: elevation weighting only (positioning::RtkSettings)
 };
 
 struct ReceiverProfile {

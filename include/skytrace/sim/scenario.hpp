@@ -104,6 +104,11 @@ struct ModelSettings {
   double ionosphere_residual_length_km = 300.0;
   double troposphere_residual_ppm = 0.0;
   double troposphere_residual_length_km = 50.0;
+  // Fast fading of direct rays through vegetation, with noise (docs/models/foliage-fading.md): the
+  // canopy's diffuse power at full extinction and the wind's Doppler spread at L1.
+  bool foliage_fading = true;
+  double foliage_diffuse_db = -12.0;
+  double foliage_wind_spread_hz = 0.5;
 };
 
 // A mesh file placed in the world frame (world.meshes).

@@ -32,18 +32,19 @@ struct SatelliteTerms {
 
 // Pseudorange, carrier phase and Doppler of `m` from the satellite's terms and the signal's own
 // (m.carrier_hz, m.satellite_clock_m, m.group_delay_m, m.ionosphere_code_m, m.antenna_phase_centre_m,
-// noise, multipath and m.ambiguity_cycles). The ionosphere delays the code and advances the phase by the same amount.
+// noise, multipath, foliage fading and m.ambiguity_cycles). The ionosphere delays the code and advances the phase by the same amount.
 inline void form_observables(const SatelliteTerms& t, SignalMeasurement& m) {
   const double wavelength_m = constants::kSpeedOfLight_mps / m.carrier_hz;
   const double satellite_clock_total_m = m.satellite_clock_m + t.relativistic_m;
   const double range_m = t.range_m + m.antenna_phase_centre_m;
   m.pseudorange_m = range_m + t.receiver_clock_m - (satellite_clock_total_m - m.group_delay_m) + m.ionosphere_code_m +
-                    t.troposphere_m + m.code_noise_m + m.code_multipath_m;
+                    t.troposphere_m + m.code_noise_m + m.code_multipath_m + m.foliage_code_m;
   const double phase_range_m = range_m + t.receiver_clock_m - satellite_clock_total_m - m.ionosphere_code_m +
-                               t.troposphere_m + m.phase_noise_m + m.phase_multipath_m;
+                               t.troposphere_m + m.phase_noise_m + m.phase_multipath_m + m.foliage_phase_m;
   m.carrier_phase_cycles = phase_range_m / wavelength_m + static_cast<double>(m.ambiguity_cycles);
   const double phase_range_rate_mps = t.range_rate_mps + t.receiver_clock_rate_mps - t.satellite_clock_rate_mps +
-                                      m.doppler_noise_mps + m.range_rate_multipath_mps;
+                                      m.doppler_noise_mps + m.range_rate_multipath_mps +
+                                      m.foliage_range_rate_mps;
   m.doppler_hz = -phase_range_rate_mps / wavelength_m;
 }
 

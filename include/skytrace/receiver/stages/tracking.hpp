@@ -19,6 +19,7 @@
 #include "skytrace/receiver/multipath.hpp"
 #include "skytrace/receiver/observations.hpp"
 #include "skytrace/receiver/profile.hpp"
+#include "skytrace/receiver/stages/foliage_fading.hpp"
 #include "skytrace/receiver/stages/records.hpp"
 #include "skytrace/receiver/stages/signal_key.hpp"
 
@@ -30,6 +31,10 @@ struct Candidate {
   double cn0_dbhz = 0.0;
   MultipathErrors multipath;
   RecordState record;  // the receiver's record for the signal (record_for_signal)
+  // Foliage fading (foliage_fading.hpp) of a direct ray through vegetation: the band's composite
+  // field and this signal's fades (nullptr: none).
+  const FoliageComposite* foliage = nullptr;
+  FoliageFade fade;
 };
 
 // Why a satellite's signals are not tracked at an epoch (the last reason met), and when its new
