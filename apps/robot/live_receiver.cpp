@@ -118,6 +118,16 @@ std::string Receiver::set_antenna_pose_world(double time_s, const Vec3& position
   return st ? std::string() : st.error().message;
 }
 
+std::string Receiver::set_base_antenna_pose_world(double time_s, const Vec3& position_m,
+                                                  const std::optional<Vec3>& velocity_mps) {
+  std::optional<Eigen::Vector3d> velocity;
+  if (velocity_mps) velocity = to_eigen(*velocity_mps);
+  auto st = impl_->session->set_base_antenna_pose_world(impl_->start + time_s, to_eigen(position_m), velocity);
+  return st ? std::string() : st.error().message;
+}
+
+bool Receiver::has_moving_base() const { return impl_->session->has_moving_base(); }
+
 std::string Receiver::set_object_pose(const std::string& name, const Vec3& position_m, const std::array<double, 4>& rotation_wxyz) {
   const Eigen::Quaterniond q(rotation_wxyz[0], rotation_wxyz[1], rotation_wxyz[2], rotation_wxyz[3]);
   if (!q.coeffs().allFinite() || q.norm() < 1e-6) return "pose of '" + name + "' without a valid rotation ignored";

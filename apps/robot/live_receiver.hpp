@@ -122,6 +122,12 @@ class Receiver {
   // Thread-safe with respect to step().
   [[nodiscard]] std::string set_antenna_pose_world(double time_s, const Vec3& position_m,
                                                    const std::optional<Vec3>& velocity_mps = std::nullopt);
+  // A moving base's antenna (the receiver's rtk.moving_base: two antennas on one body, the fix
+  // then carries the heading of the baseline), as set_antenna_pose_world. An error message when
+  // the receiver has no moving base.
+  [[nodiscard]] std::string set_base_antenna_pose_world(double time_s, const Vec3& position_m,
+                                                        const std::optional<Vec3>& velocity_mps = std::nullopt);
+  [[nodiscard]] bool has_moving_base() const;
   // A movable model of the world; quaternion w, x, y, z. Returns an error message, empty when used.
   [[nodiscard]] std::string set_object_pose(const std::string& name, const Vec3& position_m,
                                             const std::array<double, 4>& rotation_wxyz);

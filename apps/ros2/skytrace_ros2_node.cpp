@@ -52,7 +52,7 @@ constexpr const char* kUsage = R"(usage: skytrace_ros2_node [--ros-args] [--para
 
 A simulated GNSS receiver on ROS 2 (DDS, no ROS 2 install needed). Parameters (docs/ros2.md):
   scenario (required), pose_source (scenario|tf|odometry|pose), world_frame, antenna_frame,
-  frame_id, pose_topic, odom_topic, antenna_offset_m, rate_hz, start_time, start_time_scale,
+  frame_id, pose_topic, odom_topic, antenna_offset_m, base_antenna_offset_m, rate_hz, start_time, start_time_scale,
   pose_timeout_s, ray_length_m, moving_models, rinex_out, nmea_out, fix_csv_out, rtcm_out, bag_out,
   bag_compression (lz4|zstd|none),
   latency_report, use_sim_time, ros_distro (humble|jazzy), rtcm3, gnss_comm, receiver, rtk_base_topic,
@@ -73,6 +73,9 @@ struct Config {
   std::string pose_topic = "/antenna_pose";
   std::string odom_topic = "/odom";
   Eigen::Vector3d antenna_offset_m = Eigen::Vector3d::Zero();  // in the body frame of pose/odometry
+  // A moving base's antenna (the receiver's rtk.moving_base), in the same body frame (tf: the
+  // antenna frame's); none: it follows the antenna at the scenario's baseline.
+  std::optional<Eigen::Vector3d> base_antenna_offset_m;
   double rate_hz = 1.0;
   std::string start_time;
   std::string start_time_scale = "GPST";
@@ -146,6 +149,15 @@ Result<Config> read_config(const Parameters& p) {
                    "parameter antenna_offset_m: expected [x, y, z] in metres in the robot's body frame"};
     }
     c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
+  }
+  std::vector<double> base_offset;
+  SKYTRACE_READ(p.get_doubles("base_antenna_offset_m"), base_offset);
+  if (p.has("base_antenna_offset_m")) {
+    if (base_offset.size() != 3) {
+      return Error{ErrorCode::kInvalidArgument,
+                   "parameter base_antenna_offset_m: expected [x, y, z] in metres in the robot's body frame"};
+    }
+    c.base_antenna_offset_m = Eigen::Vector3d(base_offset[0], base_offset[1], base_offset[2]);
   }
   SKYTRACE_READ(p.get_strings("moving_models"), c.moving_models);
   for (const auto& [parameter, description] : live::Receiver::file_parameters()) {
@@ -526,9 +538,32 @@ class Node {
     }
   }
 
+  // A moving base's antenna on the body (base_antenna_offset_m), from the body's position and attitude.
+  void set_base_pose(std::int64_t stamp_ns, const Eigen::Vector3d& body_m, const Eigen::Quaterniond& attitude,
+                     const std::optional<Eigen::Vector3d>& velocity_world_mps, const std::string& source) {
+    if (!config_.base_antenna_offset_m) return;
+    if (!attitude.coeffs().allFinite() || attitude.norm() < 1e-6) {
+      log_.throttled(LogLevel::kWarn, 5.0, source + "/base", fmt::format("{}: orientation missing; base_antenna_offset_m needs it", source));
+      return;
+    }
+    const Eigen::Vector3d p = body_m + attitude.normalized() * *config_.base_antenna_offset_m;
+    std::optional<live::Vec3> velocity;
+    if (velocity_world_mps) velocity = live::Vec3{velocity_world_mps->x(), velocity_world_mps->y(), velocity_world_mps->z()};
+    const std::int64_t when_ns = stamp_ns == 0 ? ros_now_ns() : stamp_ns;
+    if (auto problem = receiver_->set_base_antenna_pose_world(receiver_time_s(when_ns), {p.x(), p.y(), p.z()}, velocity);
+        !problem.empty()) {
+      log_.throttled(LogLevel::kWarn, 5.0, source + "/base", fmt::format("{}: moving base: {}", source, problem));
+    }
+  }
+
   void on_pose(const ros2::PoseStamped& msg) {
     check_frame(msg.header.frame_id, pose_.topic);
-    if (auto p = antenna_point(msg.pose, pose_.topic)) set_pose(to_ns(msg.header.stamp), *p, std::nullopt, pose_.topic);
+    auto p = antenna_point(msg.pose, pose_.topic);
+    if (!p) return;
+    set_pose(to_ns(msg.header.stamp), *p, std::nullopt, pose_.topic);
+    const auto& b = msg.pose.position;
+    set_base_pose(to_ns(msg.header.stamp), Eigen::Vector3d(b.x, b.y, b.z), to_eigen(msg.pose.orientation), std::nullopt,
+                  pose_.topic);
   }
 
   void on_odometry(const ros2::Odometry& msg) {
@@ -541,6 +576,8 @@ class Node {
     std::optional<Eigen::Vector3d> v_world;
     if (q.coeffs().allFinite() && q.norm() > 1e-6) v_world = q.normalized() * Eigen::Vector3d(v.x, v.y, v.z);
     set_pose(to_ns(msg.header.stamp), *p, v_world, pose_.topic);
+    const auto& b = msg.pose.pose.position;
+    set_base_pose(to_ns(msg.header.stamp), Eigen::Vector3d(b.x, b.y, b.z), q, v_world, pose_.topic);
   }
 
   // world_frame <- frame, if tf has it and it is usable.
@@ -565,6 +602,7 @@ class Node {
                          fmt::format("tf {} -> {} is {:.1f} s old (stale)", config_.world_frame, config_.antenna_frame, age_s));
         }
         set_pose(stamp_ns, t->transform.translation(), std::nullopt, "tf");
+        set_base_pose(stamp_ns, t->transform.translation(), Eigen::Quaterniond(t->transform.rotation()), std::nullopt, "tf");
       }
     }
     for (const auto& model : config_.moving_models) {
@@ -740,6 +778,10 @@ int run(int argc, char** argv) {
     return kExitInput;
   }
   for (const auto& warning : receiver->warnings()) log.warn("skytrace: {}", warning);
+  if (config->base_antenna_offset_m && !receiver->has_moving_base()) {
+    log.fatal("parameter base_antenna_offset_m: the receiver has no moving base (rtk.moving_base with rtk.base in the scenario)");
+    return kExitUsage;
+  }
   Node node(*config, *command_line, std::move(receiver), log);
   if (auto st = node.make_builder(); !st) {
     log.fatal("{} (from parameter scenario)", st.error().message);

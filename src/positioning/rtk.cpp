@@ -779,4 +779,23 @@ Result<PositionFix> RtkEngine::solve(const EpochMeasurements& rover, const BaseE
   return fix;
 }
 
+void add_baseline_heading(PositionFix& fix) {
+  if (fix.type != FixType::kRtkFixed || !fix.relative || !fix.relative->baseline_valid) return;
+  auto& r = *fix.relative;
+  const double e = r.baseline_enu_m.x(), n = r.baseline_enu_m.y(), u = r.baseline_enu_m.z();
+  const double h2 = e * e + n * n, h = std::sqrt(h2);
+  if (h < 0.05) return;  // antennas on top of each other: no direction
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  double heading = std::atan2(e, n) * kDeg;
+  if (heading < 0.0) heading += 360.0;
+  r.heading_deg = heading;
+  r.pitch_deg = std::atan2(u, h) * kDeg;
+  const Eigen::Matrix3d& c = fix.covariance_enu_m2;
+  const Eigen::RowVector3d dh(n / h2, -e / h2, 0.0);
+  const double l2 = h2 + u * u;
+  const Eigen::RowVector3d dp(-u * e / (h * l2), -u * n / (h * l2), h / l2);
+  r.heading_sigma_deg = std::sqrt(std::max(0.0, (dh * c * dh.transpose())(0, 0))) * kDeg;
+  r.pitch_sigma_deg = std::sqrt(std::max(0.0, (dp * c * dp.transpose())(0, 0))) * kDeg;
+}
+
 }  // namespace skytrace::positioning

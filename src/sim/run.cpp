@@ -229,26 +229,6 @@ struct ReceiverRun {
   bool is_base = false;
 };
 
-// Heading and pitch of a moving-base rover's fixed baseline (base antenna to rover antenna), with
-// their 1-sigma from the baseline's covariance.
-void add_heading(positioning::PositionFix& fix) {
-  if (fix.type != positioning::FixType::kRtkFixed || !fix.relative || !fix.relative->baseline_valid) return;
-  auto& r = *fix.relative;
-  const double e = r.baseline_enu_m.x(), n = r.baseline_enu_m.y(), u = r.baseline_enu_m.z();
-  const double h2 = e * e + n * n, h = std::sqrt(h2);
-  if (h < 0.05) return;  // antennas on top of each other: no direction
-  constexpr double kDeg = 180.0 / M_PI;
-  double heading = std::atan2(e, n) * kDeg;
-  if (heading < 0.0) heading += 360.0;
-  r.heading_deg = heading;
-  r.pitch_deg = std::atan2(u, h) * kDeg;
-  const Eigen::Matrix3d& c = fix.covariance_enu_m2;
-  const Eigen::RowVector3d dh(n / h2, -e / h2, 0.0);
-  const double l2 = h2 + u * u;
-  const Eigen::RowVector3d dp(-u * e / (h * l2), -u * n / (h * l2), h / l2);
-  r.heading_sigma_deg = std::sqrt(std::max(0.0, (dh * c * dh.transpose())(0, 0))) * kDeg;
-  r.pitch_sigma_deg = std::sqrt(std::max(0.0, (dp * c * dp.transpose())(0, 0))) * kDeg;
-}
 
 orbits::NavigationData used_navigation(const orbits::NavigationData& all, const std::vector<ReceiverRun>& receivers) {
   orbits::NavigationData used;
@@ -431,7 +411,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         }
         auto fix = rx.fixes->solve(epochs[i], base);
         if (!fix) return fix.error();
-        if (moving) add_heading(*fix);
+        if (moving) positioning::add_baseline_heading(*fix);
         instant.fixes[i] = std::move(*fix);
       }
       if (rovers) break;

@@ -232,3 +232,74 @@ TEST_F(LiveSessionTest, OutputFilesThatCannotBeWrittenNameTheirParameterAndLeave
 
 }  // namespace
 }  // namespace skytrace
+
+namespace skytrace {
+namespace {
+
+// Two antennas on one body in a live session (the receiver's rtk.moving_base): the base antenna is
+// simulated beside the rover and the fix carries the heading of the fixed baseline. As given the
+// body stands with the baseline at 30 degrees; then the node turns the body to 120 degrees by
+// placing both antennas (set_antenna_pose_world, set_base_antenna_pose_world) and the heading
+// follows; a receiver without a moving base refuses a base pose.
+TEST(LiveSessionMovingBase, HeadingOfTheBaselineFollowsTheBody) {
+  const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
+  if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
+  const auto dir = test::make_temp_dir("live_heading");
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  std::ofstream(dir / "heading.yaml")
+      << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n  interval_s: 1\n"
+         "receivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
+      << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.7, 1.2124356, 1.5]\n" << antenna
+      << "    rtk:\n      base: ANT1\n      moving_base: true\n"
+         "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+         "ephemeris:\n  navigation:\n    - "
+      << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  auto scenario = sim::load_scenario(dir / "heading.yaml");
+  ASSERT_TRUE(scenario.ok()) << scenario.error().message;
+  sim::LiveOptions options;
+  options.receiver_index = 1;
+  auto session = sim::LiveSession::create(*scenario, options);
+  ASSERT_TRUE(session.ok()) << session.error().message;
+  sim::LiveSession& live = **session;
+  ASSERT_TRUE(live.has_moving_base());
+  const auto heading_at = [&](int from_s, int to_s, const std::optional<double>& body_heading_deg) {
+    std::vector<double> headings;
+    for (int k = from_s; k < to_s; ++k) {
+      const GnssTime t = scenario->time.start + static_cast<double>(k);
+      if (body_heading_deg) {
+        // Body at the world origin, 1.5 m up; the base antenna at its centre, the rover 1.4 m ahead.
+        const double a = *body_heading_deg * M_PI / 180.0;
+        EXPECT_TRUE(live.set_base_antenna_pose_world(t, Eigen::Vector3d(0.0, 0.0, 1.5), Eigen::Vector3d::Zero()).ok());
+        EXPECT_TRUE(live.set_antenna_pose_world(t, Eigen::Vector3d(1.4 * std::sin(a), 1.4 * std::cos(a), 1.5),
+                                                Eigen::Vector3d::Zero()).ok());
+      }
+      auto epoch = live.step(t);
+      EXPECT_TRUE(epoch.ok()) << epoch.error().message;
+      if (!epoch.ok() || !epoch->fix || !epoch->fix->relative || !epoch->fix->relative->heading_deg) continue;
+      EXPECT_EQ(epoch->fix->type, positioning::FixType::kRtkFixed);
+      headings.push_back(*epoch->fix->relative->heading_deg);
+    }
+    return headings;
+  };
+  const auto as_given = heading_at(0, 60, std::nullopt);
+  ASSERT_GT(as_given.size(), 40u);
+  for (const double h : as_given) EXPECT_NEAR(h, 30.0, 0.5);
+  const auto turned = heading_at(60, 180, 120.0);
+  ASSERT_GT(turned.size(), 30u);
+  EXPECT_NEAR(turned.back(), 120.0, 0.5);
+  std::printf("[ figures ] live moving base: %zu headings at 30 deg, %zu after turning to 120 deg (last %.3f)\n",
+              as_given.size(), turned.size(), turned.back());
+
+  sim::LiveOptions rover_only;
+  rover_only.receiver_index = 0;
+  auto plain = sim::LiveSession::create(*scenario, rover_only);
+  ASSERT_TRUE(plain.ok()) << plain.error().message;
+  EXPECT_FALSE((*plain)->has_moving_base());
+  const auto refused = (*plain)->set_base_antenna_pose_world(scenario->time.start, Eigen::Vector3d::Zero());
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("has no moving base"), std::string::npos) << refused.error().message;
+}
+
+}  // namespace
+}  // namespace skytrace

@@ -186,4 +186,9 @@ class RtkEngine {
   Eigen::Vector3d last_base_position_m_ = Eigen::Vector3d::Zero();
 };
 
+// A moving-base rover (two antennas on one body): heading (clockwise from true north) and pitch of
+// its fixed baseline (base antenna to rover antenna), with their 1-sigma from the baseline's
+// covariance, into fix.relative. Nothing for a fix that is not RTK fixed or a baseline under 5 cm.
+void add_baseline_heading(PositionFix& fix);
+
 }  // namespace skytrace::positioning

@@ -70,6 +70,17 @@ class LiveSession {
   // The same in world_frame() coordinates (the Gazebo world frame).
   [[nodiscard]] Status set_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
                                               const std::optional<Eigen::Vector3d>& velocity_world_mps = std::nullopt);
+  // A moving base (the receiver's rtk.moving_base with rtk.base naming another receiver of the
+  // scenario: two antennas on one body) is simulated beside the receiver; each epoch's fix then
+  // carries the heading and pitch of the fixed baseline (fix.relative; NMEA HDT/THS). Its antenna
+  // is put here; until it is, it follows the receiver's external pose at the scenario's baseline
+  // (a body that translates), and before any pose it keeps its scenario position. Same checks as
+  // set_antenna_pose_ecef; an error when the receiver has no moving base.
+  [[nodiscard]] Status set_base_antenna_pose_ecef(const GnssTime& time, const Eigen::Vector3d& position_ecef_m,
+                                                  const std::optional<Eigen::Vector3d>& velocity_ecef_mps = std::nullopt);
+  [[nodiscard]] Status set_base_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
+                                                   const std::optional<Eigen::Vector3d>& velocity_world_mps = std::nullopt);
+  [[nodiscard]] bool has_moving_base() const;
   // A base station's epoch (its observations and antenna reference point) for RTK (LiveOptions::rtk):
   // each step uses the latest one at or before its tag. Not while step() runs.
   void add_base_epoch(positioning::BaseEpoch base);

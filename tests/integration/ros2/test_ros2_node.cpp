@@ -613,6 +613,51 @@ TEST_F(Ros2NodeTest, OdometryPlacesTheAntennaByItsLeverArm) {
   EXPECT_GT(horizontal_distance_m(got, without_rotation), 30.0);
 }
 
+// Two antennas on one body (a moving base, the scenario's rtk.moving_base): odometry places both
+// by their lever arms, and the heading of the baseline comes as NMEA HDT/THS on the nmea topic.
+// The scenario's body faces north; the odometry turns it to face east (yaw 0): the rover antenna
+// 1.4 m ahead of the base antenna, heading 90 deg.
+TEST_F(Ros2NodeTest, MovingBaseGivesTheHeadingOfTheBody) {
+  const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
+  if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  const auto scenario = dir_ / "heading.yaml";
+  std::ofstream(scenario) << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n"
+                             "  interval_s: 1\nreceivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
+                          << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.0, 1.4, 1.5]\n" << antenna
+                          << "    rtk:\n      base: ANT1\n      moving_base: true\n"
+                             "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+                             "ephemeris:\n  navigation:\n    - "
+                          << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  Subscription& nmea = peer_->subscribe(topic("nmea"), dds_type("nmea_msgs", "Sentence"), Qos::default_profile());
+  auto& odom = peer_->advertise("rt/odom", dds_type("nav_msgs", "Odometry"), Qos::default_profile());
+  start_node({"-p", "scenario:=" + scenario.string(), "-p", "receiver:=ANT2", "-p", "pose_source:=odometry", "-p",
+              "antenna_offset_m:=[1.4, 0.0, 0.0]", "-p", "base_antenna_offset_m:=[0.0, 0.0, 0.0]", "-p", "rate_hz:=5"});
+  const wire::Quaternion facing_east{0.0, 0.0, 0.0, 1.0};
+  std::optional<double> heading;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        odom.write(wire::encode_odometry({ros_time(now_s()), "world"}, "base_link", {0.0, 0.0, 1.5}, facing_east, {}));
+        for (const auto& sample : nmea.samples()) {
+          size_t left = 0;
+          const auto s = wire::decode_sentence(sample, left);
+          if (s.sentence.size() > 7 && s.sentence.compare(3, 4, "HDT,") == 0) heading = std::stod(s.sentence.substr(7));
+        }
+        // The scenario's baseline points north (0 deg) until the odometry turns the body.
+        return heading.has_value() && std::abs(*heading - 90.0) < 1.0;
+      },
+      40s))
+      << "last heading " << heading.value_or(-1.0) << "; log:\n"
+      << log_text();
+  node_->stop(SIGINT);
+  // A receiver without a moving base refuses the parameter at start (exit 2).
+  start_node({"-p", "base_antenna_offset_m:=[0.0, 0.0, 0.0]"});
+  EXPECT_TRUE(wait_until([&] { return !node_->running(); }, 20s));
+  EXPECT_EQ(node_->stop(SIGINT), 2) << log_text();
+  EXPECT_TRUE(log_has("parameter base_antenna_offset_m: the receiver has no moving base")) << log_text();
+}
+
 TEST_F(Ros2NodeTest, IncompatibleQosIsLoggedBothWays) {
   // A transient-local subscription to the volatile fix, a best-effort publisher to the reliable /tf.
   Qos latched = Qos::default_profile();
