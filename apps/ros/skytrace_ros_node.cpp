@@ -49,6 +49,9 @@ struct Config {
   std::string pose_topic = "antenna_pose";
   std::string odom_topic = "odom";
   Eigen::Vector3d antenna_offset_m = Eigen::Vector3d::Zero();  // in the body frame of pose/odometry
+  // A moving base's antenna (the receiver's rtk.moving_base), in the same body frame (tf: the
+  // antenna frame's); none: it follows the antenna at the scenario's baseline.
+  std::optional<Eigen::Vector3d> base_antenna_offset_m;
   double rate_hz = 1.0;
   std::string start_time;  // ISO 8601 in start_time_scale; empty: the scenario's start
   std::string start_time_scale = "GPST";
@@ -95,11 +98,22 @@ std::optional<std::string> read_config(const ros::NodeHandle& pnh, Config& c) {
   if (!(c.ray_length_m > 0.0)) return fmt::format("~ray_length_m {}: expected a positive length", c.ray_length_m);
   pnh.param<std::string>("start_time", c.start_time, c.start_time);
   pnh.param<std::string>("start_time_scale", c.start_time_scale, c.start_time_scale);
-  std::vector<double> offset;
-  if (pnh.getParam("antenna_offset_m", offset)) {
-    if (offset.size() != 3) return "~antenna_offset_m: expected [x, y, z] in metres in the robot's body frame";
-    c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
+  // A lever arm: a list of three numbers (rosparam or a launch file: `_name:=[..]` on the command
+  // line is a string in ROS 1, refused here rather than ignored).
+  const auto lever_arm = [&](const char* name) -> std::optional<std::optional<Eigen::Vector3d>> {
+    if (!pnh.hasParam(name)) return std::optional<Eigen::Vector3d>{};
+    std::vector<double> v;
+    if (!pnh.getParam(name, v) || v.size() != 3) return std::nullopt;
+    return std::optional<Eigen::Vector3d>(Eigen::Vector3d(v[0], v[1], v[2]));
+  };
+  const auto offset = lever_arm("antenna_offset_m");
+  if (!offset) return "~antenna_offset_m: expected a list [x, y, z] in metres in the robot's body frame (rosparam or launch file)";
+  if (*offset) c.antenna_offset_m = **offset;
+  const auto base_offset = lever_arm("base_antenna_offset_m");
+  if (!base_offset) {
+    return "~base_antenna_offset_m: expected a list [x, y, z] in metres in the robot's body frame (rosparam or launch file)";
   }
+  c.base_antenna_offset_m = *base_offset;
   pnh.param("moving_models", c.moving_models, c.moving_models);
   for (const auto& [parameter, description] : live::Receiver::file_parameters()) {
     std::string path;
@@ -220,10 +234,31 @@ class Node {
     }
   }
 
+  // A moving base's antenna on the body (~base_antenna_offset_m), from the body's position and attitude.
+  void set_base_pose(const ros::Time& stamp, const Eigen::Vector3d& body_m, const Eigen::Quaterniond& attitude,
+                     const std::optional<Eigen::Vector3d>& velocity_world_mps, const char* source) {
+    if (!config_.base_antenna_offset_m) return;
+    if (!attitude.coeffs().allFinite() || attitude.norm() < 1e-6) {
+      ROS_WARN_THROTTLE(5.0, "%s: orientation missing; ~base_antenna_offset_m needs it", source);
+      return;
+    }
+    const Eigen::Vector3d p = body_m + attitude.normalized() * *config_.base_antenna_offset_m;
+    std::optional<live::Vec3> velocity;
+    if (velocity_world_mps) velocity = live::Vec3{velocity_world_mps->x(), velocity_world_mps->y(), velocity_world_mps->z()};
+    const ros::Time when = stamp.isZero() ? ros::Time::now() : stamp;
+    if (auto problem = receiver_->set_base_antenna_pose_world(receiver_time_s(when), {p.x(), p.y(), p.z()}, velocity);
+        !problem.empty()) {
+      ROS_WARN_THROTTLE(5.0, "%s: moving base: %s", source, problem.c_str());
+    }
+  }
+
   void on_pose(const geometry_msgs::PoseStamped::ConstPtr& msg) {
     check_frame(msg->header.frame_id, config_.pose_topic.c_str());
     if (auto p = antenna_point(msg->pose, config_.pose_topic.c_str())) {
       set_pose(msg->header.stamp, *p, std::nullopt, config_.pose_topic.c_str());
+      const auto& b = msg->pose.position;
+      set_base_pose(msg->header.stamp, Eigen::Vector3d(b.x, b.y, b.z), to_eigen(msg->pose.orientation), std::nullopt,
+                    config_.pose_topic.c_str());
     }
   }
 
@@ -237,6 +272,8 @@ class Node {
     std::optional<Eigen::Vector3d> v_world;
     if (q.coeffs().allFinite() && q.norm() > 1e-6) v_world = q.normalized() * v_body;
     set_pose(msg->header.stamp, *p, v_world, config_.odom_topic.c_str());
+    const auto& b = msg->pose.pose.position;
+    set_base_pose(msg->header.stamp, Eigen::Vector3d(b.x, b.y, b.z), q, v_world, config_.odom_topic.c_str());
   }
 
   // A transform world_frame <- frame, if tf has it and it is usable.
@@ -266,6 +303,7 @@ class Node {
         }
         const auto& tr = t->transform.translation;
         set_pose(stamp, Eigen::Vector3d(tr.x, tr.y, tr.z), std::nullopt, "tf");
+        set_base_pose(stamp, Eigen::Vector3d(tr.x, tr.y, tr.z), to_eigen(t->transform.rotation), std::nullopt, "tf");
       }
     }
     for (const auto& model : config_.moving_models) {
@@ -380,6 +418,10 @@ int run(int argc, char** argv) {
     return kExitInput;
   }
   for (const auto& warning : receiver->warnings()) ROS_WARN("skytrace: %s", warning.c_str());
+  if (config.base_antenna_offset_m && !receiver->has_moving_base()) {
+    ROS_FATAL("~base_antenna_offset_m: the receiver has no moving base (rtk.moving_base with rtk.base in the scenario)");
+    return kExitUsage;
+  }
   Node node(config, std::move(receiver));
   if (!node.open_outputs()) return kExitOutput;
   ROS_INFO("skytrace: scenario %s, %.3g Hz, antenna pose from %s", config.scenario.c_str(), config.rate_hz,

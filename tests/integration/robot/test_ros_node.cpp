@@ -11,6 +11,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/NavSatFix.h>
+#include <std_msgs/String.h>
 #include <skytrace_msgs/Observations.h>
 #include <sys/prctl.h>
 
@@ -320,6 +321,59 @@ TEST_F(RosNodeTest, RoverNodeFixesFromABaseStreamOverTcp) {
     EXPECT_NEAR(m.longitude, 8.4880, 3e-5);
     EXPECT_NEAR(m.altitude, 75.0, 2.0);
   }
+}
+
+// Two antennas on one body on ROS 1 (the scenario's rtk.moving_base): the pose topic's attitude
+// places both antennas by ~antenna_offset_m and ~base_antenna_offset_m; the heading of the
+// baseline comes as NMEA HDT on ~nmea. The scenario's body faces north; the poses turn it east.
+TEST_F(RosNodeTest, MovingBaseGivesTheHeadingOfTheBody) {
+  const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
+  const auto dir = test::make_temp_dir("ros_node_heading");
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  const auto scenario = dir / "heading.yaml";
+  std::ofstream(scenario) << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n"
+                             "  interval_s: 1\nreceivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
+                          << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.0, 1.4, 1.5]\n" << antenna
+                          << "    rtk:\n      base: ANT1\n      moving_base: true\n"
+                             "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+                             "ephemeris:\n  navigation:\n    - "
+                          << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  ros::NodeHandle nh;
+  std::optional<double> heading;
+  std::string last_sentence;
+  auto nmea_sub = nh.subscribe<std_msgs::String>("/skytrace/nmea", 100, [&](const auto& m) {
+    last_sentence = m->data;
+    if (m->data.size() > 7 && m->data.compare(3, 4, "HDT,") == 0) heading = std::stod(m->data.substr(7));
+  });
+  ros::Publisher pose_pub = nh.advertise<geometry_msgs::PoseStamped>("/test/body_pose", 10);
+  // Lists go on the parameter server (a `_name:=[...]` argument is a string in ROS 1).
+  ros::param::set("/skytrace/antenna_offset_m", std::vector<double>{1.4, 0.0, 0.0});
+  ros::param::set("/skytrace/base_antenna_offset_m", std::vector<double>{0.0, 0.0, 0.0});
+  std::vector<std::string> args = {(test::binary_dir() / "bin" / "skytrace_ros_node").string(), "_scenario:=" + scenario.string(),
+                                   "_receiver:=ANT2", "_rate_hz:=5", "_pose_source:=pose", "_pose_topic:=/test/body_pose"};
+  ASSERT_TRUE(node_.start(args, RosMaster::instance().environment(), RosMaster::instance().home() / "node_heading.log"));
+  auto last_sent = std::chrono::steady_clock::now() - 1s;
+  const bool turned = test::wait_until(
+      [&] {
+        ros::spinOnce();
+        if (std::chrono::steady_clock::now() - last_sent > 100ms) {
+          geometry_msgs::PoseStamped pose;  // facing east: identity attitude
+          pose.header.stamp = ros::Time::now();
+          pose.header.frame_id = "world";
+          pose.pose.position.z = 1.5;
+          pose.pose.orientation.w = 1.0;
+          pose_pub.publish(pose);
+          last_sent = std::chrono::steady_clock::now();
+        }
+        return heading && std::abs(*heading - 90.0) < 1.0;
+      },
+      45s);
+  EXPECT_TRUE(turned) << "no HDT near 90 degrees: last heading " << heading.value_or(-1.0) << ", last sentence "
+                      << last_sentence << "; node log:\n"
+                      << node_.log_text();
+  ros::param::del("/skytrace/antenna_offset_m");
+  ros::param::del("/skytrace/base_antenna_offset_m");
 }
 
 }  // namespace
