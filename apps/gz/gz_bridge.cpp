@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -192,24 +193,33 @@ class Bridge {
     // The model's pose is in the world frame; its links follow it in the message (depth-first),
     // with poses relative to the model.
     std::optional<Eigen::Isometry3d> antenna;
+    std::optional<Eigen::Isometry3d> base_antenna;  // a moving base's link (options_.base_link)
     std::map<std::string, Eigen::Isometry3d> others;
+    // A link of the model at index i: its pose follows the model's in the message.
+    const auto link_pose = [&](int i, const Eigen::Isometry3d& model, const std::string& link) -> std::optional<Eigen::Isometry3d> {
+      for (int j = i + 1; j < msg.pose_size(); ++j) {
+        if (msg.pose(j).name() == link) return model * to_isometry(msg.pose(j));
+      }
+      return std::nullopt;
+    };
     for (int i = 0; i < msg.pose_size(); ++i) {
       const im::Pose& p = msg.pose(i);
       if (p.name() == options_.model && !antenna) {
-        antenna = to_isometry(p);
+        const Eigen::Isometry3d model = to_isometry(p);
+        antenna = model;
         if (!options_.link.empty()) {
-          bool found = false;
-          for (int j = i + 1; j < msg.pose_size() && !found; ++j) {
-            if (msg.pose(j).name() == options_.link) {
-              antenna = *antenna * to_isometry(msg.pose(j));
-              found = true;
-            }
+          if (auto link = link_pose(i, model, options_.link)) {
+            antenna = *link;
+          } else if (throttle_.allow("link")) {
+            spdlog::warn("{}: model '{}' has no link '{}' after it; its origin is used", pose_topic(options_),
+                         options_.model, options_.link);
           }
-          if (!found) {
-            if (throttle_.allow("link")) {
-              spdlog::warn("{}: model '{}' has no link '{}' after it; its origin is used", pose_topic(options_),
-                           options_.model, options_.link);
-            }
+        }
+        if (!options_.base_link.empty()) {
+          base_antenna = link_pose(i, model, options_.base_link);
+          if (!base_antenna && throttle_.allow("base_link")) {
+            spdlog::warn("{}: model '{}' has no link '{}' after it; the base antenna keeps the scenario's baseline",
+                         pose_topic(options_), options_.model, options_.base_link);
           }
         }
       } else if (!p.name().empty()) {
@@ -238,6 +248,12 @@ class Bridge {
     const double time_s = stamped ? stamp_s : now_s.value_or(0.0);
     if (auto st = session_->set_antenna_pose_world(start_ + time_s, position); !st && throttle_.allow("pose")) {
       spdlog::warn("{}: {}", pose_topic(options_), st.error().message);
+    }
+    if (base_antenna) {
+      if (auto st = session_->set_base_antenna_pose_world(start_ + time_s, base_antenna->translation());
+          !st && throttle_.allow("base_pose")) {
+        spdlog::warn("{}: moving base: {}", pose_topic(options_), st.error().message);
+      }
     }
   }
 
@@ -328,8 +344,22 @@ Status run_bridge(const BridgeOptions& options) {
   }
   sim::LiveOptions live_options;
   live_options.pose_timeout_s = options.pose_timeout_s;
+  if (!options.receiver.empty()) {
+    const auto& receivers = scenario->receivers;
+    const auto it = std::find_if(receivers.begin(), receivers.end(),
+                                 [&](const sim::ReceiverSettings& r) { return r.name == options.receiver; });
+    if (it == receivers.end()) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "--receiver " + options.receiver + ": no such receiver in " + options.scenario.string());
+    }
+    live_options.receiver_index = static_cast<size_t>(it - receivers.begin());
+  }
   auto session = sim::LiveSession::create(*scenario, live_options);
   if (!session) return session.error();
+  if (!options.base_link.empty() && !(*session)->has_moving_base()) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "--base-link " + options.base_link + ": the receiver has no moving base (rtk.moving_base with rtk.base)");
+  }
   for (const auto& warning : (*session)->resources().warnings) spdlog::warn("skytrace gz: {}", warning);
   Bridge bridge(options, std::move(*session), start);
   if (auto st = bridge.open_outputs(); !st) return st;

@@ -18,6 +18,10 @@ struct BridgeOptions {
   std::string world_name;  // the <world name> Gazebo runs
   std::string model;       // the robot carrying the antenna
   std::string link;        // its link with the antenna; empty: the model's origin
+  std::string receiver;    // one receiver of a scenario with several, by name; empty: the first
+  // A moving base (the receiver's rtk.moving_base): the model's link with the base antenna; empty:
+  // the base antenna follows the antenna at the scenario's baseline.
+  std::string base_link;
   double rate_hz = 1.0;    // receiver epochs per second of simulation time
   std::optional<std::string> start_time;  // GPST ISO 8601 of simulation time zero; default the scenario's start
   double pose_timeout_s = 1.0;

@@ -28,6 +28,8 @@ struct GzArgs {
   std::string world_name;
   std::string model;
   std::string link;
+  std::string receiver;
+  std::string base_link;
   double rate_hz = 1.0;
   std::string start_time;
   double pose_timeout_s = 1.0;
@@ -42,6 +44,8 @@ int run_gz(const GzArgs& args) {
   options.world_name = args.world_name;
   options.model = args.model;
   options.link = args.link;
+  options.receiver = args.receiver;
+  options.base_link = args.base_link;
   options.rate_hz = args.rate_hz;
   if (!args.start_time.empty()) options.start_time = args.start_time;
   options.pose_timeout_s = args.pose_timeout_s;
@@ -69,6 +73,10 @@ void register_gz_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--world-name", args->world_name, "Name of the Gazebo world (<world name=...>)")->required();
   cmd->add_option("--model", args->model, "Model carrying the antenna")->required();
   cmd->add_option("--link", args->link, "Link of the model with the antenna (default: the model's origin)");
+  cmd->add_option("--receiver", args->receiver, "The receiver of a scenario with several, by name (default: the first)");
+  cmd->add_option("--base-link", args->base_link,
+                  "A moving-base receiver (rtk.moving_base): the model's link with the base antenna; the heading of "
+                  "the baseline then comes as NMEA HDT/THS (default: the base antenna keeps the scenario's baseline)");
   cmd->add_option("--rate-hz", args->rate_hz, "Receiver epochs per second of simulation time")->capture_default_str();
   cmd->add_option("--start-time", args->start_time,
                   "GPST date and time of simulation time zero, YYYY-MM-DDThh:mm:ss (default: the scenario's start)");

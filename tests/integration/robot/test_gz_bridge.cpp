@@ -192,6 +192,82 @@ TEST(GzBridgeTest, PosesMoveTheReceiverAndNavSatComesBack) {
   EXPECT_GE(gga, 1) << bridge.log_text();
 }
 
+// A robot with two GNSS antennas (the scenario's rover has rtk.moving_base): --link and --base-link
+// name the model's two antenna links; the bridge places both, and the heading of the baseline comes
+// as NMEA HDT. The scenario's baseline points at 30 degrees; the robot faces east (yaw 0) with its
+// antennas 0.7 m ahead of and behind its origin: 90 degrees.
+TEST(GzBridgeTest, MovingBaseHeadingFromTheModelsTwoAntennaLinks) {
+  const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
+  if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
+  std::random_device seed;
+  const std::string partition = "skytrace_test_" + std::to_string(getpid()) + "_" + std::to_string(seed());
+  setenv("IGN_IP", "127.0.0.1", 1);
+  setenv("IGN_PARTITION", partition.c_str(), 1);
+  const std::map<std::string, std::string> env = {{"IGN_IP", "127.0.0.1"}, {"IGN_PARTITION", partition}};
+  const auto dir = test::make_temp_dir("gz_bridge_heading");
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  std::ofstream(dir / "heading.yaml")
+      << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n  interval_s: 1\n"
+         "receivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
+      << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.7, 1.2124356, 1.5]\n" << antenna
+      << "    rtk:\n      base: ANT1\n      moving_base: true\n"
+         "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+         "ephemeris:\n  navigation:\n    - "
+      << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  const std::string world = "skytrace_heading_world";
+  const std::string prefix = "/world/" + world;
+  ignition::transport::Node node;
+  auto clock_pub = node.Advertise<im::Clock>(prefix + "/clock");
+  auto pose_pub = node.Advertise<im::Pose_V>(prefix + "/pose/info");
+  ASSERT_TRUE(clock_pub && pose_pub);
+  test::ChildProcess bridge;
+  ASSERT_TRUE(bridge.start({test::skytrace_executable().string(), "gz", "--scenario", (dir / "heading.yaml").string(),
+                            "--world-name", world, "--model", "robot", "--receiver", "ANT2", "--link", "gnss_front",
+                            "--base-link", "gnss_rear", "--rate-hz", "5", "--nmea-out", (dir / "robot.nmea").string()},
+                           env, dir / "bridge.log"));
+  // Gazebo's part: 40 s of simulation time at 20 poses a second, as fast as the bridge takes them.
+  for (int k = 1; k <= 800 && bridge.running(); ++k) {
+    const double t = 0.05 * k;
+    im::Clock clock;
+    clock.mutable_sim()->set_sec(static_cast<std::int64_t>(std::floor(t)));
+    clock.mutable_sim()->set_nsec(static_cast<std::int32_t>(std::lround((t - std::floor(t)) * 1e9)));
+    clock_pub.Publish(clock);
+    im::Pose_V poses;
+    *poses.mutable_header()->mutable_stamp() = clock.sim();
+    im::Pose* robot = poses.add_pose();
+    robot->set_name("robot");
+    robot->mutable_position()->set_z(1.0);
+    robot->mutable_orientation()->set_w(1.0);  // facing east (the world frame is east-north-up)
+    for (const auto& [name, x] : {std::pair{"gnss_front", 0.7}, std::pair{"gnss_rear", -0.7}}) {
+      im::Pose* link = poses.add_pose();
+      link->set_name(name);
+      link->mutable_position()->set_x(x);
+      link->mutable_position()->set_z(0.5);
+      link->mutable_orientation()->set_w(1.0);
+    }
+    pose_pub.Publish(poses);
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(bridge.running()) << bridge.log_text();
+  const int status = bridge.stop();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << bridge.log_text();
+  std::ifstream nmea(dir / "robot.nmea");
+  std::vector<double> headings;
+  for (std::string line; std::getline(nmea, line);) {
+    const auto at = line.find("HDT,");
+    if (at != std::string::npos) headings.push_back(std::stod(line.substr(at + 4)));
+  }
+  ASSERT_GT(headings.size(), 20u) << bridge.log_text();
+  EXPECT_NEAR(headings.back(), 90.0, 0.5) << bridge.log_text();
+  // A bridge whose receiver has no moving base refuses --base-link.
+  const auto refused = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " gz --scenario " +
+                                         test::shell_quote((dir / "heading.yaml").string()) + " --world-name " + world +
+                                         " --model robot --receiver ANT1 --base-link gnss_rear 2>&1");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.output.find("--base-link gnss_rear: the receiver has no moving base"), std::string::npos) << refused.output;
+}
+
 #else
 
 TEST(GzBridgeTest, PosesMoveTheReceiverAndNavSatComesBack) {
