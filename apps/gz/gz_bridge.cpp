@@ -193,31 +193,36 @@ class Bridge {
     // The model's pose is in the world frame; its links follow it in the message (depth-first),
     // with poses relative to the model.
     std::optional<Eigen::Isometry3d> antenna;
-    std::optional<Eigen::Isometry3d> base_antenna;  // a moving base's link (options_.base_link)
+    std::optional<Eigen::Vector3d> base_antenna_m;  // a moving base's link (options_.base_link)
     std::map<std::string, Eigen::Isometry3d> others;
-    // A link of the model at index i: its pose follows the model's in the message.
-    const auto link_pose = [&](int i, const Eigen::Isometry3d& model, const std::string& link) -> std::optional<Eigen::Isometry3d> {
+    // A link of the model at index i (its pose follows the model's in the message) into `pose`.
+    const auto link_pose = [&](int i, const Eigen::Isometry3d& model, const std::string& link, Eigen::Isometry3d& pose) {
       for (int j = i + 1; j < msg.pose_size(); ++j) {
-        if (msg.pose(j).name() == link) return model * to_isometry(msg.pose(j));
+        if (msg.pose(j).name() == link) {
+          pose = model * to_isometry(msg.pose(j));
+          return true;
+        }
       }
-      return std::nullopt;
+      return false;
     };
     for (int i = 0; i < msg.pose_size(); ++i) {
       const im::Pose& p = msg.pose(i);
       if (p.name() == options_.model && !antenna) {
         const Eigen::Isometry3d model = to_isometry(p);
         antenna = model;
+        Eigen::Isometry3d link = Eigen::Isometry3d::Identity();
         if (!options_.link.empty()) {
-          if (auto link = link_pose(i, model, options_.link)) {
-            antenna = *link;
+          if (link_pose(i, model, options_.link, link)) {
+            antenna = link;
           } else if (throttle_.allow("link")) {
             spdlog::warn("{}: model '{}' has no link '{}' after it; its origin is used", pose_topic(options_),
                          options_.model, options_.link);
           }
         }
         if (!options_.base_link.empty()) {
-          base_antenna = link_pose(i, model, options_.base_link);
-          if (!base_antenna && throttle_.allow("base_link")) {
+          if (link_pose(i, model, options_.base_link, link)) {
+            base_antenna_m = link.translation();
+          } else if (throttle_.allow("base_link")) {
             spdlog::warn("{}: model '{}' has no link '{}' after it; the base antenna keeps the scenario's baseline",
                          pose_topic(options_), options_.model, options_.base_link);
           }
@@ -249,8 +254,8 @@ class Bridge {
     if (auto st = session_->set_antenna_pose_world(start_ + time_s, position); !st && throttle_.allow("pose")) {
       spdlog::warn("{}: {}", pose_topic(options_), st.error().message);
     }
-    if (base_antenna) {
-      if (auto st = session_->set_base_antenna_pose_world(start_ + time_s, base_antenna->translation());
+    if (base_antenna_m) {
+      if (auto st = session_->set_base_antenna_pose_world(start_ + time_s, *base_antenna_m);
           !st && throttle_.allow("base_pose")) {
         spdlog::warn("{}: moving base: {}", pose_topic(options_), st.error().message);
       }

@@ -141,6 +141,16 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     if (!city) return city.error();
     append_enu_world(std::move(*city));
   }
+  if (w.citygml) {
+    world::CityGmlLoadOptions options;
+    if (frame) options.origin = frame->origin;
+    options.height_offset_m = w.citygml_height_offset_m;
+    options.material_rules = rules;
+    options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
+    auto city = world::load_citygml_world(*w.citygml, options);
+    if (!city) return city.error();
+    append_enu_world(std::move(*city));
+  }
   if (!frame) {
     return make_error(ErrorCode::kParse,
                       s.source.string() + ": world.meshes need a geographic origin: give world.latitude_deg and "
@@ -220,7 +230,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
   // (models.multipath) and blocks what is below the horizon, as Gazebo worlds' ground planes do.
   const bool has_ground = std::any_of(model.objects.begin(), model.objects.end(),
                                       [](const world::WorldObject& o) { return o.kind == world::ObjectKind::kGround; });
-  if (!has_ground && !model.objects.empty() && (w.osm || w.footprints || w.cityjson)) {
+  if (!has_ground && !model.objects.empty() && (w.osm || w.footprints || w.cityjson || w.citygml)) {
     const auto [low, high] = world::world_bounds(model);
     constexpr double kBeyond_m = 200.0;
     world::WorldObject ground;

@@ -157,6 +157,56 @@ TEST_F(WorldSetup, OsmAndMeshPlacedWithHeadingAndMaterialRules) {
   EXPECT_NEAR(tree.vegetation_attenuation_db, 0.7 * tree.vegetation_path_m, 1e-9);
 }
 
+// world.citygml: the OSM test's building (20 x 20 m, 20 m high, 40..60 m north) as a CityGML LoD1
+// solid in WGS84 (latitude first), its heights 0..20 m above a datum 520 m above the ellipsoid
+// (citygml_height_offset_m), in the scenario's frame turned by its heading.
+TEST_F(WorldSetup, CityGmlBuildingBlocksWhereItStands) {
+  const LocalFrame enu{Geodetic{kLatitudeDeg, kLongitudeDeg, kElevationM}, 0.0};
+  const auto corner = [&](double east_m, double north_m, double z_m) {
+    const Geodetic g = ecef_to_geodetic(enu.to_ecef(Eigen::Vector3d(east_m, north_m, 0.0)));
+    char b[96];
+    std::snprintf(b, sizeof b, "%.10f %.10f %.3f ", g.latitude_deg, g.longitude_deg, z_m);
+    return std::string(b);
+  };
+  const auto face = [&](const std::vector<std::array<double, 3>>& c) {
+    std::string ring;
+    for (size_t i = 0; i <= c.size(); ++i) ring += corner(c[i % c.size()][0], c[i % c.size()][1], c[i % c.size()][2]);
+    return "<gml:surfaceMember><gml:Polygon><gml:exterior><gml:LinearRing><gml:posList>" + ring +
+           "</gml:posList></gml:LinearRing></gml:exterior></gml:Polygon></gml:surfaceMember>";
+  };
+  std::string faces;
+  const double w = -10, e = 10, s0 = 40, n = 60, top = 20;
+  for (const auto& f : std::vector<std::vector<std::array<double, 3>>>{
+           {{w, s0, 0}, {w, n, 0}, {e, n, 0}, {e, s0, 0}}, {{w, s0, top}, {e, s0, top}, {e, n, top}, {w, n, top}},
+           {{w, s0, 0}, {e, s0, 0}, {e, s0, top}, {w, s0, top}}, {{e, s0, 0}, {e, n, 0}, {e, n, top}, {e, s0, top}},
+           {{e, n, 0}, {w, n, 0}, {w, n, top}, {e, n, top}}, {{w, n, 0}, {w, s0, 0}, {w, s0, top}, {w, n, top}}}) {
+    faces += face(f);
+  }
+  write_file(dir_ / "city.gml",
+             "<core:CityModel xmlns:core=\"http://www.opengis.net/citygml/2.0\" xmlns:bldg=\"http://www.opengis.net/citygml/building/2.0\" "
+             "xmlns:gml=\"http://www.opengis.net/gml\"><core:cityObjectMember><bldg:Building gml:id=\"b1\"><bldg:lod1Solid>"
+             "<gml:Solid srsName=\"EPSG:4326\" srsDimension=\"3\"><gml:exterior><gml:CompositeSurface>" +
+                 faces + "</gml:CompositeSurface></gml:exterior></gml:Solid></bldg:lod1Solid></bldg:Building></core:cityObjectMember></core:CityModel>\n");
+  auto s = parse(origin() + "  citygml: city.gml\n  citygml_height_offset_m: 520\n");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  auto loaded = load_world(*s);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  ASSERT_TRUE(loaded->has_value());
+  const LoadedWorld& world = **loaded;
+  EXPECT_EQ(world.buildings, 1u);
+  const Eigen::Vector3d antenna(0, 0, 1.5);
+  const RayOutcome building = trace_towards(world, antenna, enu_to_world(0, 50, 10));
+  ASSERT_TRUE(building.blocked);
+  EXPECT_EQ(building.blocking_object, "city.gml/b1");
+  EXPECT_NEAR(building.blocking_point_m.dot(enu_to_world(0, 1, 0)), 40.0, 0.01);  // its south face
+  EXPECT_FALSE(trace_towards(world, antenna, enu_to_world(0, 40, 21.6)).blocked);  // above the 20 m roof
+  EXPECT_FALSE(trace_towards(world, antenna, enu_to_world(0, -50, 10)).blocked);
+  // The key needs its model.
+  auto orphan = parse(origin() + "  citygml_height_offset_m: 520\n");
+  ASSERT_FALSE(orphan.ok());
+  EXPECT_NE(orphan.error().message.find("needs world.citygml"), std::string::npos) << orphan.error().message;
+}
+
 TEST_F(WorldSetup, OsmOriginIsTheExtractCentreWithoutOriginKeys) {
   auto s = parse("  osm: town.osm\n");
   ASSERT_TRUE(s.ok()) << s.error().message;

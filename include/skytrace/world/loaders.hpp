@@ -321,7 +321,7 @@ inline constexpr const char* kFootprintLevelFields[] = {"building:levels", "stor
 // the highest LoD it has (Solid, CompositeSolid, MultiSolid, MultiSurface, CompositeSurface), each
 // surface polygon (holes included) triangulated on its own plane, roofs as modelled.
 
-struct CityJsonLoadOptions {
+struct CityModelLoadOptions {
   // The world origin; default: the centre of the model's extent, at the height of its lowest point.
   std::optional<Geodetic> origin;
   // Ellipsoidal height of the model's z = 0. Default (nullopt): the model's heights are above mean
@@ -331,6 +331,7 @@ struct CityJsonLoadOptions {
   std::vector<MaterialRule> material_rules;
   double vegetation_attenuation_db_per_m = kDefaultVegetationAttenuationDbPerM;
 };
+using CityJsonLoadOptions = CityModelLoadOptions;
 
 // Loads a CityJSON file. Coordinates are transformed from metadata.referenceSystem (an EPSG URL or
 // "urn:ogc:def:crs:EPSG::N"; absent: WGS84 longitude/latitude) to WGS84 by PROJ through GDAL and
@@ -340,6 +341,20 @@ struct CityJsonLoadOptions {
 // CRS PROJ cannot transform).
 [[nodiscard]] Result<WorldModel> load_cityjson_world(const std::filesystem::path& path,
                                                      const CityJsonLoadOptions& options = {});
+
+// CityGML city models (citygml_loader.cpp): CityGML 1.0, 2.0 and 3.0 (GML 2 and 3 geometry), read
+// as a stream. Each city object (a cityObjectMember's feature, its parts and boundary surfaces
+// included) keeps the polygons (gml:Polygon, Triangle, PolygonPatch, Rectangle; holes included)
+// of its highest LoD (lodNSolid, lodNMultiSurface, lodNGeometry ...; a TIN relief's triangles when
+// it has no lodN geometry); implicit geometries (library objects placed by a matrix) are left out.
+// Coordinates are transformed from the first srsName of the file (EPSG in any of its spellings,
+// in the CRS's own axis order) to WGS84 and placed as CityJSON's are (options; heights above mean
+// sea level unless height_offset_m). Objects are named "FILE/gml:id"; types as CityJSON's.
+// Errors name the file and line: malformed XML, not a CityModel, coordinates that are not numbers
+// or not whole points, no srsName, a CRS PROJ does not know, no surface at all.
+using CityGmlLoadOptions = CityModelLoadOptions;
+[[nodiscard]] Result<WorldModel> load_citygml_world(const std::filesystem::path& path,
+                                                    const CityGmlLoadOptions& options = {});
 
 // An OSM length ("12", "12 m", "12.5m", "40 ft", "40'", "12'6\"") in metres.
 [[nodiscard]] Result<double> parse_osm_length_m(std::string_view text);
