@@ -193,7 +193,7 @@ MaterialRuleSetting parse_material_rule(const Node& node) {
 
 void parse_world(const Node& world, const std::filesystem::path& base, WorldSettings& w) {
   world.expect_keys({"sdf", "model_paths", "osm", "footprints", "footprint_height_field", "cityjson",
-                     "cityjson_height_offset_m", "citygml", "citygml_height_offset_m", "meshes", "materials", "moving",
+                     "cityjson_height_offset_m", "citygml", "citygml_height_offset_m", "dem", "dem_height_offset_m", "meshes", "materials", "moving",
                      "vegetation_attenuation_db_per_m", "vegetation_hull_tolerance_m",
                      "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
   if (auto c = world.child("sdf")) w.sdf = existing_file(*c, base);
@@ -211,6 +211,11 @@ void parse_world(const Node& world, const std::filesystem::path& base, WorldSett
   if (auto c = world.child("citygml_height_offset_m")) {
     if (!w.citygml) c->fail("needs world.citygml");
     w.citygml_height_offset_m = c->as_double_in(-500.0, 10000.0);
+  }
+  if (auto c = world.child("dem")) w.dem = existing_file(*c, base);
+  if (auto c = world.child("dem_height_offset_m")) {
+    if (!w.dem) c->fail("needs world.dem");
+    w.dem_height_offset_m = c->as_double_in(-500.0, 10000.0);
   }
   if (auto c = world.child("footprint_height_field")) {
     if (!w.footprints) c->fail("needs world.footprints");
@@ -236,7 +241,7 @@ void parse_world(const Node& world, const std::filesystem::path& base, WorldSett
   if (w.latitude_deg.has_value() != w.longitude_deg.has_value()) {
     world.fail("give both world.latitude_deg and world.longitude_deg, or neither");
   }
-  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.footprints && !w.cityjson && !w.citygml && !w.latitude_deg) {
+  if (!w.meshes.empty() && !w.sdf && !w.osm && !w.footprints && !w.cityjson && !w.citygml && !w.dem && !w.latitude_deg) {
     world.required("meshes").fail("meshes are placed in the world frame: give world.latitude_deg and world.longitude_deg "
                                   "(and elevation_m, heading_deg), or a world.sdf / world.osm that has an origin");
   }
@@ -381,7 +386,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   for (const auto& r : s.receivers) {
     const bool needs_world = (r.position && r.position->kind == PositionSetting::Kind::kWorldEnu) ||
                              (r.trajectory && r.trajectory->frame == PositionSetting::Kind::kWorldEnu);
-    if (needs_world && !s.world.sdf && !s.world.osm && !s.world.footprints && !s.world.cityjson && !s.world.citygml &&
+    if (needs_world && !s.world.sdf && !s.world.osm && !s.world.footprints && !s.world.cityjson && !s.world.citygml && !s.world.dem &&
         !(s.world.latitude_deg && s.world.longitude_deg)) {
       root.fail("receiver '" + r.name +
                 "' uses world_enu_m coordinates: give world.sdf, world.osm, world.footprints or "
@@ -592,6 +597,8 @@ std::string scenario_to_json(const Scenario& s) {
   if (s.world.cityjson_height_offset_m) w["cityjson_height_offset_m"] = *s.world.cityjson_height_offset_m;
   if (s.world.citygml) w["citygml"] = s.world.citygml->string();
   if (s.world.citygml_height_offset_m) w["citygml_height_offset_m"] = *s.world.citygml_height_offset_m;
+  if (s.world.dem) w["dem"] = s.world.dem->string();
+  if (s.world.dem_height_offset_m) w["dem_height_offset_m"] = *s.world.dem_height_offset_m;
   if (s.world.vegetation_attenuation_db_per_m) w["vegetation_attenuation_db_per_m"] = *s.world.vegetation_attenuation_db_per_m;
   if (s.world.vegetation_hull_tolerance_m) w["vegetation_hull_tolerance_m"] = *s.world.vegetation_hull_tolerance_m;
   w["meshes"] = json::array();

@@ -83,7 +83,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     frame = sdf->geo_origin;
     model = std::move(*sdf);
   }
-  // OpenStreetMap, footprints and CityJSON load east-north-up around an origin (the world's when it
+  // OpenStreetMap, footprints, CityJSON, CityGML and elevation models load east-north-up around an origin (the world's when it
   // has one already, else theirs); the world x axis is `heading` counter-clockwise from east.
   const auto append_enu_world = [&](world::WorldModel&& part) {
     if (!frame) frame = part.geo_origin;
@@ -150,6 +150,14 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     auto city = world::load_citygml_world(*w.citygml, options);
     if (!city) return city.error();
     append_enu_world(std::move(*city));
+  }
+  if (w.dem) {
+    world::DemLoadOptions options;
+    if (frame) options.origin = frame->origin;
+    options.height_offset_m = w.dem_height_offset_m;
+    auto terrain = world::load_dem_world(*w.dem, options);
+    if (!terrain) return terrain.error();
+    append_enu_world(std::move(*terrain));
   }
   if (!frame) {
     return make_error(ErrorCode::kParse,

@@ -207,6 +207,50 @@ TEST_F(WorldSetup, CityGmlBuildingBlocksWhereItStands) {
   EXPECT_NE(orphan.error().message.find("needs world.citygml"), std::string::npos) << orphan.error().message;
 }
 
+// world.dem: an ESRI ASCII grid (WGS84 in its .prj) whose ground rises 0.2 m per metre northward
+// through the origin: a level ray north meets it 7.5 m away (1.5 m up), one south does not.
+TEST_F(WorldSetup, ElevationModelIsTheGround) {
+  const LocalFrame enu{Geodetic{kLatitudeDeg, kLongitudeDeg, kElevationM}, 0.0};
+  const int n = 41;
+  const double cell_deg = 0.0001, lower_left_lat = kLatitudeDeg - 20.5 * cell_deg, lower_left_lon = kLongitudeDeg - 20.5 * cell_deg;
+  std::string grid = "ncols 41\nnrows 41\nxllcorner " + std::to_string(lower_left_lon) + "\nyllcorner " +
+                     std::to_string(lower_left_lat) + "\ncellsize 0.0001\nNODATA_value -9999\n";
+  for (int r = 0; r < n; ++r) {  // the first row is the northernmost
+    const double lat = lower_left_lat + (n - r - 0.5) * cell_deg;
+    const Eigen::Vector3d local = enu.from_ecef(geodetic_to_ecef(Geodetic{lat, kLongitudeDeg, kElevationM}));
+    for (int c = 0; c < n; ++c) {
+      if (c > 0) grid += ' ';
+      grid += std::to_string(kElevationM + 0.2 * local.y());
+    }
+    grid += "\n";
+  }
+  write_file(dir_ / "dem.asc", grid);
+  write_file(dir_ / "dem.prj",
+             "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137,298.257223563]],"
+             "PRIMEM[\"Greenwich\",0],UNIT[\"Degree\",0.017453292519943295]]");
+  auto s = parse(origin() + "  dem: dem.asc\n  dem_height_offset_m: 0\n");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  auto loaded = load_world(*s);
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  ASSERT_TRUE(loaded->has_value());
+  const LoadedWorld& world = **loaded;
+  const Eigen::Vector3d antenna(0, 0, 1.5);
+  const RayOutcome north = trace_towards(world, antenna, antenna + enu_to_world(0, 100, 0));
+  ASSERT_TRUE(north.blocked);
+  EXPECT_EQ(north.blocking_object, "dem.asc");
+  EXPECT_NEAR(north.blocking_distance_m, 7.5, 0.05);
+  EXPECT_FALSE(trace_towards(world, antenna, antenna + enu_to_world(0, -100, 0)).blocked);
+  // Without its .prj the grid's cells are nowhere; a file that is no raster is named.
+  std::filesystem::remove(dir_ / "dem.prj");
+  auto no_crs = load_world(*s);
+  ASSERT_FALSE(no_crs.ok());
+  EXPECT_NE(no_crs.error().message.find("dem.asc: no coordinate reference system"), std::string::npos) << no_crs.error().message;
+  write_file(dir_ / "dem.asc", "not a raster\n");
+  auto garbage = load_world(*s);
+  ASSERT_FALSE(garbage.ok());
+  EXPECT_NE(garbage.error().message.find("dem.asc: GDAL cannot read it as a raster"), std::string::npos) << garbage.error().message;
+}
+
 TEST_F(WorldSetup, OsmOriginIsTheExtractCentreWithoutOriginKeys) {
   auto s = parse("  osm: town.osm\n");
   ASSERT_TRUE(s.ok()) << s.error().message;

@@ -152,6 +152,10 @@ struct WorldSettings {
   // A CityGML city model (1.0-3.0; its heights above mean sea level unless citygml_height_offset_m).
   std::optional<std::filesystem::path> citygml;
   std::optional<double> citygml_height_offset_m;
+  // A digital elevation model as the ground (any GDAL raster; heights above mean sea level unless
+  // dem_height_offset_m).
+  std::optional<std::filesystem::path> dem;
+  std::optional<double> dem_height_offset_m;
   std::vector<MeshSetting> meshes;
   std::vector<MaterialRuleSetting> materials;
   std::vector<MovingModelSetting> moving;
@@ -159,7 +163,7 @@ struct WorldSettings {
   std::optional<double> vegetation_hull_tolerance_m;      // simplification of vegetation hulls
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
-  [[nodiscard]] bool any() const { return sdf || osm || footprints || cityjson || citygml || !meshes.empty(); }
+  [[nodiscard]] bool any() const { return sdf || osm || footprints || cityjson || citygml || dem || !meshes.empty(); }
 };
 
 struct OutputSettings {

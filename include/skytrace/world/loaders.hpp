@@ -356,6 +356,25 @@ using CityGmlLoadOptions = CityModelLoadOptions;
 [[nodiscard]] Result<WorldModel> load_citygml_world(const std::filesystem::path& path,
                                                     const CityGmlLoadOptions& options = {});
 
+// ---------------------------------------------------------------------------------------------
+// Digital elevation models (dem_loader.cpp): any raster GDAL reads (GeoTIFF, ESRI ASCII grid with
+// its .prj, ...), band 1 the height (its scale and offset applied, no-data cells left out).
+
+struct DemLoadOptions {
+  // The world origin; default: the centre of the model's extent, at its lowest height.
+  std::optional<Geodetic> origin;
+  // Ellipsoidal height of the model's height 0. Default: its heights are above mean sea level and
+  // the EGM96 geoid at the model's centre gives the offset.
+  std::optional<double> height_offset_m;
+};
+
+// One ground object (named FILE) through the cell centres, two triangles per square of four cells
+// with heights, facing up, transformed from the raster's CRS to WGS84 (PROJ through GDAL) and
+// placed on the tangent plane of the origin. Errors name the file: not a raster GDAL reads, fewer
+// than 2 x 2 cells, more than the grid limit (SKYTRACE_MAX_GRID_POINTS), no georeferencing or CRS,
+// a height that is no terrain's.
+[[nodiscard]] Result<WorldModel> load_dem_world(const std::filesystem::path& path, const DemLoadOptions& options = {});
+
 // An OSM length ("12", "12 m", "12.5m", "40 ft", "40'", "12'6\"") in metres.
 [[nodiscard]] Result<double> parse_osm_length_m(std::string_view text);
 
