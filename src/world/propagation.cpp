@@ -534,7 +534,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
       one[0] = s;
-      const RayOutcome lit = scene_->trace(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();
+      // Lit or not: the occlusion test alone (free rays carry the vegetation they cross).
+      const RayOutcome lit = scene_->trace_line_of_sight(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();
       if (lit.blocked) continue;
       power *= std::pow(10.0, -(patch.vegetation_db + lit.vegetation_attenuation_db) / 10.0);
       Sum& sum = sums[patch.facet];
