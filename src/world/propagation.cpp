@@ -657,55 +657,43 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   const double blocked_excess_max_m = v_max * v_max * wavelength_m / 4.0;
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
 
-  for (std::size_t i = 0; i < n_sat; ++i) {
-    const Eigen::Vector3d& s = directions[i];
-    // First order: the image of the receiver in the facet's plane, the line from it towards the
-    // satellite meets the plane at the reflection point.
-    if (settings.max_reflection_order >= 1) {
-      for (const NearFacet& nf : near_facets) {
-        const double ns = nf.normal.dot(s);
-        if (ns <= 1e-6) continue;
-        const double t = nf.height_m / ns;  // receiver to reflection point
-        if (t > settings.radius_m) continue;
-        const Facet& f = facets_[nf.index];
-        const Eigen::Vector3d point = r - 2.0 * nf.height_m * nf.normal + t * s;
-        if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
-        Pending p;
-        p.satellite = i;
-        p.path.type = PathType::kReflected;
-        p.path.reflections = 1;
-        p.path.excess_delay_m = 2.0 * nf.height_m * ns;
-        p.path.rhcp_amplitude = 1.0;
-        p.path.lhcp_amplitude = 0.0;
-        reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(nf.eta, ns));
-        p.path.rhcp_amplitude *= specular_factor;
-        p.path.lhcp_amplitude *= specular_factor;
-        if (p.path.power_linear() < min_power) continue;
-        p.path.arrival_direction = (point - r) / t;
-        p.path.point_m = point;
-        p.path.material = f.material;
-        p.path.object = object_names_[f.object];
-        p.path.delay_gradient_origin = 2.0 * ns * nf.normal;
-        p.path.delay_gradient_direction = 2.0 * nf.height_m * nf.normal;
-        p.first_leg_m = t;
-        p.legs.push_back(Leg{point + kSurfaceOffset_m * nf.normal, s, kInf});
-        first_legs.push_back(p.path.arrival_direction);
-        pending.push_back(std::move(p));
+  // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A taken in
+  // B gives the point on B, the line from there to the first image the point on A. Pairs go facet
+  // A by facet A, each with the partners B that can face it whatever the satellite (B reaches A's
+  // receiver side, A reaches B's side of the first image): what depends on the pair alone is
+  // worked out once instead of once per satellite. Paths are kept per satellite in pair order.
+  std::vector<std::vector<Pending>> second_order(n_sat);
+  if (settings.max_reflection_order >= 2) {
+    struct Partner {
+      const NearFacet* b = nullptr;
+      double hb = 0.0;
+    };
+    std::vector<Partner> partners;
+    for (const NearFacet& a : second_order_facets) {
+      const Facet& fa = facets_[a.index];
+      const Eigen::Vector3d& na = a.normal;
+      const double ca = na.dot(r) - a.height_m;  // plane of A: na . x = ca
+      const Eigen::Vector3d image_a = r - 2.0 * a.height_m * na;
+      partners.clear();
+      for (const NearFacet& b : second_order_facets) {
+        if (b.index == a.index) continue;
+        const Facet& fb = facets_[b.index];
+        const double hb = fb.normal.dot(image_a) - fb.offset_m;
+        if (std::abs(hb) < 1e-6) continue;
+        // Necessary for any satellite (the point on B lies within B's bounding sphere, the point
+        // on A within A's): B reaches A's receiver side, A reaches B's side of the first image.
+        if (na.dot(fb.centre_m) + fb.radius_m <= ca) continue;
+        const double side = hb >= 0.0 ? 1.0 : -1.0;
+        if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) continue;
+        partners.push_back(Partner{&b, hb});
       }
-    }
-    // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A
-    // taken in B gives the point on B, the line from there to the first image the point on A.
-    if (settings.max_reflection_order >= 2) {
-      for (const NearFacet& a : second_order_facets) {
-        const Facet& fa = facets_[a.index];
-        const Eigen::Vector3d& na = a.normal;
-        const double ca = na.dot(r) - a.height_m;  // plane of A: na . x = ca
-        const Eigen::Vector3d image_a = r - 2.0 * a.height_m * na;
-        for (const NearFacet& b : second_order_facets) {
-          if (b.index == a.index) continue;
+      if (partners.empty()) continue;
+      for (std::size_t i = 0; i < n_sat; ++i) {
+        const Eigen::Vector3d& s = directions[i];
+        for (const Partner& partner : partners) {
+          const NearFacet& b = *partner.b;
           const Facet& fb = facets_[b.index];
-          const double hb = fb.normal.dot(image_a) - fb.offset_m;
-          if (std::abs(hb) < 1e-6) continue;
+          const double hb = partner.hb;
           const Eigen::Vector3d nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);  // side of image_a
           const double nbs = nb.dot(s);
           if (nbs <= 1e-6) continue;
@@ -749,10 +737,52 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           p.first_leg_m = d1;
           p.legs.push_back(Leg{p1 + kSurfaceOffset_m * na, u12, d12});
           p.legs.push_back(Leg{p2 + kSurfaceOffset_m * nb, s, kInf});
-          first_legs.push_back(p.path.arrival_direction);
-          pending.push_back(std::move(p));
+          second_order[i].push_back(std::move(p));
         }
       }
+    }
+  }
+
+  for (std::size_t i = 0; i < n_sat; ++i) {
+    const Eigen::Vector3d& s = directions[i];
+    // First order: the image of the receiver in the facet's plane, the line from it towards the
+    // satellite meets the plane at the reflection point.
+    if (settings.max_reflection_order >= 1) {
+      for (const NearFacet& nf : near_facets) {
+        const double ns = nf.normal.dot(s);
+        if (ns <= 1e-6) continue;
+        const double t = nf.height_m / ns;  // receiver to reflection point
+        if (t > settings.radius_m) continue;
+        const Facet& f = facets_[nf.index];
+        const Eigen::Vector3d point = r - 2.0 * nf.height_m * nf.normal + t * s;
+        if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
+        Pending p;
+        p.satellite = i;
+        p.path.type = PathType::kReflected;
+        p.path.reflections = 1;
+        p.path.excess_delay_m = 2.0 * nf.height_m * ns;
+        p.path.rhcp_amplitude = 1.0;
+        p.path.lhcp_amplitude = 0.0;
+        reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(nf.eta, ns));
+        p.path.rhcp_amplitude *= specular_factor;
+        p.path.lhcp_amplitude *= specular_factor;
+        if (p.path.power_linear() < min_power) continue;
+        p.path.arrival_direction = (point - r) / t;
+        p.path.point_m = point;
+        p.path.material = f.material;
+        p.path.object = object_names_[f.object];
+        p.path.delay_gradient_origin = 2.0 * ns * nf.normal;
+        p.path.delay_gradient_direction = 2.0 * nf.height_m * nf.normal;
+        p.first_leg_m = t;
+        p.legs.push_back(Leg{point + kSurfaceOffset_m * nf.normal, s, kInf});
+        first_legs.push_back(p.path.arrival_direction);
+        pending.push_back(std::move(p));
+      }
+    }
+    // Second order (found for every satellite before this loop, in the same order).
+    for (Pending& p : second_order[i]) {
+      first_legs.push_back(p.path.arrival_direction);
+      pending.push_back(std::move(p));
     }
     // Knife-edge diffraction: the point of the edge where the incident and diffracted rays make
     // equal angles with it (Keller's cone) is the stationary path over the edge.
