@@ -130,6 +130,20 @@ Result<std::vector<Eigen::Vector3d>> place(const std::vector<Eigen::Vector3d>& l
   return local;
 }
 
+WorldObject new_object(const std::string& name, const std::string& id, const std::string& type,
+                       const CityModelLoadOptions& options) {
+  WorldObject o;
+  o.name = name;
+  o.kind = kind_of(type);
+  if (o.kind == ObjectKind::kTree) o.material = Material{MaterialClass::kVegetation, options.vegetation_attenuation_db_per_m};
+  if (o.kind == ObjectKind::kGround) o.material.material_class = MaterialClass::kGround;
+  if (const MaterialRule* rule = match_material_rule(options.material_rules, {o.name, id}); rule != nullptr) {
+    o.material = rule->material;
+    if (rule->kind) o.kind = *rule->kind;
+  }
+  return o;
+}
+
 bool add_surface(const std::vector<std::vector<Eigen::Vector3d>>& rings, WorldObject& object) {
   if (rings.empty() || rings.front().size() < 3) return false;
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
@@ -168,6 +182,23 @@ bool add_surface(const std::vector<std::vector<Eigen::Vector3d>>& rings, WorldOb
     object.mesh.triangles.emplace_back(base + t[0], base + t[1], base + t[2]);
   }
   return true;
+}
+
+void keep(WorldObject&& object, WorldModel& world) {
+  if (object.mesh.triangles.empty()) return;
+  centre_mesh_horizontally(object);
+  world.objects.push_back(std::move(object));
+}
+
+Status finish(WorldModel& world, std::size_t skipped_surfaces, const std::string& where, const std::string& surfaces) {
+  if (skipped_surfaces > 0) {
+    world.warnings.push_back(fmt::format("{}: {} surface(s) without an area or that cannot be triangulated skipped", where,
+                                         skipped_surfaces));
+  }
+  if (world.objects.empty()) {
+    return make_error(ErrorCode::kNotFound, where + ": no city object with surfaces (" + surfaces + ") in the file");
+  }
+  return Ok{};
 }
 
 }  // namespace skytrace::world::city_model

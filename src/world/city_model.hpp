@@ -44,9 +44,23 @@ namespace skytrace::world::city_model {
                                                          const std::string& where, const std::string& points_name,
                                                          const std::string& hint);
 
+// An empty city object named `name` (rules also match its `id`) of CityGML/CityJSON type `type`:
+// its kind, and vegetation or ground material, before the material rules of `options`.
+[[nodiscard]] WorldObject new_object(const std::string& name, const std::string& id, const std::string& type,
+                                     const CityModelLoadOptions& options);
+
 // A planar surface (outer ring, then holes; world-frame points) triangulated on its own plane
 // (Newell's normal of the outer ring), counter-clockwise about that normal, into `object`'s mesh.
 // False for a surface without an area or that cannot be triangulated.
 [[nodiscard]] bool add_surface(const std::vector<std::vector<Eigen::Vector3d>>& rings, WorldObject& object);
+
+// An object with triangles centred (centre_mesh_horizontally) and added to `world`; nothing for
+// one without.
+void keep(WorldObject&& object, WorldModel& world);
+
+// The end of a load: one warning counting `skipped_surfaces`, and an error naming `where` when no
+// object has surfaces (`surfaces` says what was looked for).
+[[nodiscard]] Status finish(WorldModel& world, std::size_t skipped_surfaces, const std::string& where,
+                            const std::string& surfaces);
 
 }  // namespace skytrace::world::city_model

@@ -276,15 +276,8 @@ Result<WorldModel> read_citygml(const std::filesystem::path& path, const CityMod
 
   std::size_t next = 0, skipped_surfaces = 0, unnamed = 0;
   for (const CityObject& c : parser.objects) {
-    WorldObject o;
-    o.name = world.name + "/" + (c.id.empty() ? fmt::format("{}#{}", c.type, ++unnamed) : c.id);
-    o.kind = city_model::kind_of(c.type);
-    if (o.kind == ObjectKind::kTree) o.material = Material{MaterialClass::kVegetation, options.vegetation_attenuation_db_per_m};
-    if (o.kind == ObjectKind::kGround) o.material.material_class = MaterialClass::kGround;
-    if (const MaterialRule* rule = match_material_rule(options.material_rules, {o.name, c.id}); rule != nullptr) {
-      o.material = rule->material;
-      if (rule->kind) o.kind = *rule->kind;
-    }
+    const std::string name = world.name + "/" + (c.id.empty() ? fmt::format("{}#{}", c.type, ++unnamed) : c.id);
+    WorldObject o = city_model::new_object(name, c.id, c.type, options);
     for (const Surface& s : c.surfaces) {
       std::vector<std::vector<Eigen::Vector3d>> rings;
       for (const auto& r : s.rings) {
@@ -294,17 +287,9 @@ Result<WorldModel> read_citygml(const std::filesystem::path& path, const CityMod
       }
       if (!city_model::add_surface(rings, o)) ++skipped_surfaces;
     }
-    if (o.mesh.triangles.empty()) continue;
-    centre_mesh_horizontally(o);
-    world.objects.push_back(std::move(o));
+    city_model::keep(std::move(o), world);
   }
-  if (skipped_surfaces > 0) {
-    world.warnings.push_back(fmt::format("{}: {} surface(s) without an area or that cannot be triangulated skipped", where,
-                                         skipped_surfaces));
-  }
-  if (world.objects.empty()) {
-    return make_error(ErrorCode::kNotFound, where + ": no city object with surfaces that have an area in the file");
-  }
+  if (auto st = city_model::finish(world, skipped_surfaces, where, "polygons with an area"); !st) return st.error();
   return world;
 }
 

@@ -132,15 +132,7 @@ Result<WorldModel> read_cityjson_world(const std::filesystem::path& path, const 
     if (const auto b = best->find("boundaries"); b != best->end()) {
       collect_surfaces(*b, surface_depth(best->value("type", "")), surfaces);
     }
-    WorldObject o;
-    o.name = world.name + "/" + id;
-    o.kind = city_model::kind_of(type);
-    if (o.kind == ObjectKind::kTree) o.material = Material{MaterialClass::kVegetation, options.vegetation_attenuation_db_per_m};
-    if (o.kind == ObjectKind::kGround) o.material.material_class = MaterialClass::kGround;
-    if (const MaterialRule* rule = match_material_rule(options.material_rules, {o.name, id}); rule != nullptr) {
-      o.material = rule->material;
-      if (rule->kind) o.kind = *rule->kind;
-    }
+    WorldObject o = city_model::new_object(world.name + "/" + id, id, type, options);
     for (const json* surface : surfaces) {
       // Rings of indices; the plane from Newell's normal of the outer ring.
       std::vector<std::vector<int>> rings;
@@ -172,17 +164,9 @@ Result<WorldModel> read_cityjson_world(const std::filesystem::path& path, const 
       }
       if (!city_model::add_surface(points, o)) ++skipped_surfaces;
     }
-    if (o.mesh.triangles.empty()) continue;
-    centre_mesh_horizontally(o);
-    world.objects.push_back(std::move(o));
+    city_model::keep(std::move(o), world);
   }
-  if (skipped_surfaces > 0) {
-    world.warnings.push_back(fmt::format("{}: {} surface(s) without an area or that cannot be triangulated skipped", where,
-                                         skipped_surfaces));
-  }
-  if (world.objects.empty()) {
-    return make_error(ErrorCode::kNotFound, where + ": no city object with surfaces (Solid, MultiSurface, ...) in the file");
-  }
+  if (auto st = city_model::finish(world, skipped_surfaces, where, "Solid, MultiSurface, ..."); !st) return st.error();
   return world;
 }
 

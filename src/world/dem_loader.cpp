@@ -6,38 +6,23 @@
 
 #include <cmath>
 #include <memory>
-#include <mutex>
 
 #include <fmt/format.h>
 
 #include "city_model.hpp"
+#include "gdal_support.hpp"
 #include "skytrace/core/input_limits.hpp"
 #include "skytrace/world/loaders.hpp"
 
 namespace skytrace::world {
-namespace {
-
-struct DatasetCloser {
-  void operator()(GDALDataset* d) const { GDALClose(d); }
-};
-
-}  // namespace
-
 Result<WorldModel> load_dem_world(const std::filesystem::path& path, const DemLoadOptions& options) {
   const std::string where = path.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return make_error(ErrorCode::kIo, where + ": elevation model not found");
-  static std::once_flag registered;
-  std::call_once(registered, [] { GDALAllRegister(); });
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  struct PopHandler {
-    ~PopHandler() { CPLPopErrorHandler(); }
-  } pop_handler;
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset, DatasetCloser> dataset(
-      GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  const gdal::QuietErrors quiet;
+  std::string reason;
+  const gdal::Dataset dataset = gdal::open(path, GDAL_OF_RASTER, reason);
   if (!dataset) {
-    const std::string reason = CPLGetLastErrorMsg();
     return make_error(ErrorCode::kParse, where + ": GDAL cannot read it as a raster" + (reason.empty() ? "" : " (" + reason + ")"));
   }
   if (dataset->GetRasterCount() < 1) return make_error(ErrorCode::kParse, where + ": a raster without bands");

@@ -14,13 +14,11 @@
 #include <fmt/format.h>
 
 #include "skytrace/world/loaders.hpp"
+#include "gdal_support.hpp"
 
 namespace skytrace::world {
 namespace {
 
-struct DatasetCloser {
-  void operator()(GDALDataset* d) const { GDALClose(d); }
-};
 struct FeatureDeleter {
   void operator()(OGRFeature* f) const { OGRFeature::DestroyFeature(f); }
 };
@@ -81,19 +79,12 @@ Result<WorldModel> load_footprint_world(const std::filesystem::path& path, const
   if (!(options.level_height_m > 0.0) || !(options.default_building_height_m > 0.0)) {
     return make_error(ErrorCode::kInvalidArgument, path.string() + ": footprint options: heights must be positive");
   }
-  static std::once_flag registered;
-  std::call_once(registered, [] { GDALAllRegister(); });
   // GDAL's and GEOS's own messages ("Self-intersection at or near point ...") go to the warnings
   // below, not to stderr.
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  struct PopHandler {
-    ~PopHandler() { CPLPopErrorHandler(); }
-  } pop_handler;
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset, DatasetCloser> dataset(
-      GDALDataset::Open(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  const gdal::QuietErrors quiet;
+  std::string reason;
+  const gdal::Dataset dataset = gdal::open(path, GDAL_OF_VECTOR, reason);
   if (!dataset) {
-    const std::string reason = CPLGetLastErrorMsg();
     return make_error(ErrorCode::kParse, path.string() + ": GDAL cannot read it as a vector file" +
                                              (reason.empty() ? std::string() : " (" + reason + ")"));
   }

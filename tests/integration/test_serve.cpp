@@ -322,16 +322,7 @@ TEST(ServeRtk, MovingBaseRoverStreamsItsHeading) {
   const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
   if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
   const auto dir = test::make_temp_dir("serve_heading_" + std::to_string(getpid()));
-  const std::string antenna =
-      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
-  std::ofstream(dir / "heading.yaml")
-      << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n  interval_s: 1\n"
-         "receivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
-      << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.7, 1.2124356, 1.5]\n" << antenna
-      << "    rtk:\n      base: ANT1\n      moving_base: true\n"
-         "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
-         "ephemeris:\n  navigation:\n    - "
-      << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  std::ofstream(dir / "heading.yaml") << test::moving_base_scenario_yaml(nav, "0.7, 1.2124356, 1.5", 600);
   Background rover(test::shell_quote(test::skytrace_executable().string()) + " serve " +
                        test::shell_quote((dir / "heading.yaml").string()) +
                        " --receiver ANT2 --rate-hz 2 --duration-s 30 --nmea-tcp 127.0.0.1:0",

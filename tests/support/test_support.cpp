@@ -61,4 +61,23 @@ oscillator:
 )";
 }
 
+std::string moving_base_scenario_yaml(const std::filesystem::path& nav, const std::string& rover_enu_m, int duration_s) {
+  const std::string antenna =
+      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
+  std::string yaml = "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: ";
+  yaml += std::to_string(duration_s);
+  yaml += "\n  interval_s: 1\nreceivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n";
+  yaml += antenna;
+  yaml += "  - name: ANT2\n    position:\n      world_enu_m: [";
+  yaml += rover_enu_m;
+  yaml += "]\n";
+  yaml += antenna;
+  yaml += "    rtk:\n      base: ANT1\n      moving_base: true\n"
+          "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
+          "ephemeris:\n  navigation:\n    - ";
+  yaml += nav.string();
+  yaml += "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  return yaml;
+}
+
 }  // namespace skytrace::test

@@ -12,27 +12,14 @@
 
 #include "skytrace/world/loaders.hpp"
 #include "test_support.hpp"
+#include "world_objects.hpp"
 
 namespace skytrace::world {
 namespace {
 
-std::filesystem::path write(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path) << text;
-  return path;
-}
-
-const WorldObject* find(const WorldModel& world, const std::string& suffix) {
-  for (const auto& o : world.objects) {
-    if (o.name.size() >= suffix.size() && o.name.compare(o.name.size() - suffix.size(), suffix.size(), suffix) == 0) return &o;
-  }
-  return nullptr;
-}
-
-std::pair<Eigen::Vector3d, Eigen::Vector3d> bounds(const WorldObject& o) {
-  WorldModel one;
-  one.objects.push_back(o);
-  return world_bounds(one);
-}
+using test::find_object;
+using test::object_bounds;
+using test::write_text;
 
 // Area of the triangles facing down (floor) and up (roofs), m2.
 std::pair<double, double> down_and_up_m2(const WorldObject& o) {
@@ -116,30 +103,30 @@ TEST(WorldCityGml, Lod2HouseReliefAndVegetationInUtmAsCityJsonGivesThem) {
   bool north = true;
   double x = 0.0, y = 0.0;
   GeographicLib::UTMUPS::Forward(lat, lon, zone, north, x, y, 33);
-  const auto path = write(dir / "city.gml", house_citygml(x, y, "urn:ogc:def:crs,crs:EPSG::25833,crs:EPSG::7837"));
+  const auto path = write_text(dir / "city.gml", house_citygml(x, y, "urn:ogc:def:crs,crs:EPSG::25833,crs:EPSG::7837"));
   CityGmlLoadOptions options;
   options.height_offset_m = 39.6;
   options.origin = Geodetic{lat, lon, 73.6};
   auto world = load_citygml_world(path, options);
   ASSERT_TRUE(world) << world.error().message;
   ASSERT_EQ(world->objects.size(), 3U);
-  const WorldObject* house = find(*world, "/house");
+  const WorldObject* house = find_object(*world, "/house");
   ASSERT_NE(house, nullptr);
   EXPECT_EQ(house->name, "city.gml/house");
   EXPECT_EQ(house->kind, ObjectKind::kBuilding);
   // The figures of WorldCityJson.Lod2HouseGroundAndVegetationInUtm: the same geometry.
-  const auto [low, high] = bounds(*house);
+  const auto [low, high] = object_bounds(*house);
   EXPECT_NEAR(low.z(), 0.0, 0.01);
   EXPECT_NEAR(high.z(), 9.0, 0.01);  // LoD2's ridge, not LoD1's flat 6 m
   EXPECT_NEAR(down_and_up_m2(*house).first, 80.05, 0.03);
   EXPECT_NEAR(low.x(), 0.0, 0.2);
   EXPECT_NEAR(low.y(), 0.0, 0.2);
   EXPECT_EQ(house->mesh.triangles.size(), 16U);
-  const WorldObject* relief = find(*world, "/relief");
+  const WorldObject* relief = find_object(*world, "/relief");
   ASSERT_NE(relief, nullptr);
   EXPECT_EQ(relief->kind, ObjectKind::kGround);
   EXPECT_EQ(relief->mesh.triangles.size(), 1U);
-  const WorldObject* hedge = find(*world, "/hedge");
+  const WorldObject* hedge = find_object(*world, "/hedge");
   ASSERT_NE(hedge, nullptr);
   EXPECT_EQ(hedge->kind, ObjectKind::kTree);
   EXPECT_TRUE(hedge->material.is_vegetation());
@@ -182,19 +169,19 @@ TEST(WorldCityGml, Version3InLatitudeLongitudeOrderWithACourtyardAndGml2Coordina
 )";
   CityGmlLoadOptions options;
   options.height_offset_m = 36.7;
-  auto world = load_citygml_world(write(dir / "block.gml", text), options);
+  auto world = load_citygml_world(write_text(dir / "block.gml", text), options);
   ASSERT_TRUE(world) << world.error().message;
   ASSERT_TRUE(world->geo_origin.has_value());
   EXPECT_NEAR(world->geo_origin->origin.latitude_deg, lat0, 3e-4);  // not swapped with the longitude
   EXPECT_NEAR(world->geo_origin->origin.longitude_deg, lon0, 3e-4);
-  const WorldObject* block = find(*world, "/block");
+  const WorldObject* block = find_object(*world, "/block");
   ASSERT_NE(block, nullptr);
   const auto [down, up] = down_and_up_m2(*block);
   EXPECT_NEAR(down + up, 400.0 - 36.0, 1.0);  // the roof less its courtyard
-  const auto [low, high] = bounds(*block);
+  const auto [low, high] = object_bounds(*block);
   EXPECT_NEAR(high.x() - low.x(), 20.0, 0.05);
   EXPECT_NEAR(high.y() - low.y(), 20.0, 0.05);
-  const WorldObject* shed = find(*world, "/shed");
+  const WorldObject* shed = find_object(*world, "/shed");
   ASSERT_NE(shed, nullptr);
   EXPECT_EQ(shed->mesh.triangles.size(), 1U);
 }
@@ -206,28 +193,28 @@ TEST(WorldCityGml, BadFilesNameTheFileLineAndWhat) {
     return w ? std::string() : w.error().message;
   };
   EXPECT_NE(message(dir / "absent.gml").find("absent.gml: CityGML file not found"), std::string::npos);
-  EXPECT_NE(message(write(dir / "broken.gml", "<CityModel>\n<a></b>")).find("broken.gml:2:"), std::string::npos)
+  EXPECT_NE(message(write_text(dir / "broken.gml", "<CityModel>\n<a></b>")).find("broken.gml:2:"), std::string::npos)
       << message(dir / "broken.gml");
   EXPECT_NE(message(dir / "broken.gml").find("malformed XML"), std::string::npos);
-  EXPECT_NE(message(write(dir / "sdf.gml", "<sdf version=\"1.9\"/>")).find("sdf.gml:1: not a CityGML file (root element <sdf>"),
+  EXPECT_NE(message(write_text(dir / "sdf.gml", "<sdf version=\"1.9\"/>")).find("sdf.gml:1: not a CityGML file (root element <sdf>"),
             std::string::npos)
       << message(dir / "sdf.gml");
   const std::string house = house_citygml(390000, 5800000, "EPSG:25833");
   std::string odd = house;
   odd.replace(odd.find("<gml:posList srsDimension=\"3\">") + 30, 0, "1 ");
-  EXPECT_NE(message(write(dir / "odd.gml", odd)).find("numbers are not points of 3 coordinates"), std::string::npos)
+  EXPECT_NE(message(write_text(dir / "odd.gml", odd)).find("numbers are not points of 3 coordinates"), std::string::npos)
       << message(dir / "odd.gml");
   std::string letters = house;
   letters.replace(letters.find("<gml:posList srsDimension=\"3\">") + 30, 0, "x ");
-  EXPECT_NE(message(write(dir / "letters.gml", letters)).find("letters.gml:7: expected numbers in <posList>"), std::string::npos)
+  EXPECT_NE(message(write_text(dir / "letters.gml", letters)).find("letters.gml:7: expected numbers in <posList>"), std::string::npos)
       << message(dir / "letters.gml");
-  EXPECT_NE(message(write(dir / "crs.gml", house_citygml(390000, 5800000, "EPSG:999999"))).find("crs.gml: srsName: EPSG:999999 is unknown to PROJ"),
+  EXPECT_NE(message(write_text(dir / "crs.gml", house_citygml(390000, 5800000, "EPSG:999999"))).find("crs.gml: srsName: EPSG:999999 is unknown to PROJ"),
             std::string::npos)
       << message(dir / "crs.gml");
   std::string no_srs = house;
   no_srs.replace(no_srs.find("srsName=\"EPSG:25833\""), std::string("srsName=\"EPSG:25833\"").size(), "");
-  EXPECT_NE(message(write(dir / "nosrs.gml", no_srs)).find("nosrs.gml: no srsName"), std::string::npos) << message(dir / "nosrs.gml");
-  EXPECT_NE(message(write(dir / "empty.gml", "<CityModel><cityObjectMember><Building/></cityObjectMember></CityModel>"))
+  EXPECT_NE(message(write_text(dir / "nosrs.gml", no_srs)).find("nosrs.gml: no srsName"), std::string::npos) << message(dir / "nosrs.gml");
+  EXPECT_NE(message(write_text(dir / "empty.gml", "<CityModel><cityObjectMember><Building/></cityObjectMember></CityModel>"))
                 .find("empty.gml: no city object with surfaces"),
             std::string::npos)
       << message(dir / "empty.gml");

@@ -10,27 +10,14 @@
 
 #include "skytrace/world/loaders.hpp"
 #include "test_support.hpp"
+#include "world_objects.hpp"
 
 namespace skytrace::world {
 namespace {
 
-std::filesystem::path write(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path) << text;
-  return path;
-}
-
-const WorldObject* find(const WorldModel& world, const std::string& suffix) {
-  for (const auto& o : world.objects) {
-    if (o.name.size() >= suffix.size() && o.name.compare(o.name.size() - suffix.size(), suffix.size(), suffix) == 0) return &o;
-  }
-  return nullptr;
-}
-
-std::pair<Eigen::Vector3d, Eigen::Vector3d> bounds(const WorldObject& o) {
-  WorldModel one;
-  one.objects.push_back(o);
-  return world_bounds(one);
-}
+using test::find_object;
+using test::object_bounds;
+using test::write_text;
 
 // A house 10 m (east) x 8 m (north), walls 6 m, ridge at 9 m along x, standing on z = 34 m (above
 // mean sea level) at a point in Berlin, in EPSG:32633 with integer vertices in millimetres.
@@ -66,18 +53,18 @@ TEST(WorldCityJson, Lod2HouseGroundAndVegetationInUtm) {
   bool north = true;
   double x = 0.0, y = 0.0;
   GeographicLib::UTMUPS::Forward(lat, lon, zone, north, x, y, 33);
-  const auto path = write(dir / "city.json", house_cityjson(x, y, "https://www.opengis.net/def/crs/EPSG/0/32633"));
+  const auto path = write_text(dir / "city.json", house_cityjson(x, y, "https://www.opengis.net/def/crs/EPSG/0/32633"));
   CityJsonLoadOptions options;
   options.height_offset_m = 39.6;  // the geoid above the ellipsoid there
   options.origin = Geodetic{lat, lon, 73.6};
   auto world = load_cityjson_world(path, options);
   ASSERT_TRUE(world) << world.error().message;
   ASSERT_EQ(world->objects.size(), 3U);
-  const WorldObject* house = find(*world, "/house");
+  const WorldObject* house = find_object(*world, "/house");
   ASSERT_NE(house, nullptr);
   EXPECT_EQ(house->name, "city.json/house");
   EXPECT_EQ(house->kind, ObjectKind::kBuilding);
-  const auto [low, high] = bounds(*house);
+  const auto [low, high] = object_bounds(*house);
   // The house's south-west corner is the origin: z from 0 (34 m + 39.6 m = 73.6 m) to the ridge.
   EXPECT_NEAR(low.z(), 0.0, 0.01);
   EXPECT_NEAR(high.z(), 9.0, 0.01);  // LoD2's ridge, not LoD1's flat 6 m
@@ -94,10 +81,10 @@ TEST(WorldCityJson, Lod2HouseGroundAndVegetationInUtm) {
   EXPECT_NEAR(low.y(), 0.0, 0.2);
   // 7 surfaces: floor, 2 walls of 4 corners, 2 gable walls of 5, 2 roof planes: 2 + 2*2 + 2*3 + 2*2 triangles.
   EXPECT_EQ(house->mesh.triangles.size(), 16U);
-  const WorldObject* ground = find(*world, "/ground");
+  const WorldObject* ground = find_object(*world, "/ground");
   ASSERT_NE(ground, nullptr);
   EXPECT_EQ(ground->kind, ObjectKind::kGround);
-  const WorldObject* hedge = find(*world, "/hedge");
+  const WorldObject* hedge = find_object(*world, "/hedge");
   ASSERT_NE(hedge, nullptr);
   EXPECT_EQ(hedge->kind, ObjectKind::kTree);
   EXPECT_TRUE(hedge->material.is_vegetation());
@@ -110,20 +97,20 @@ TEST(WorldCityJson, BadFilesNameTheFileAndWhat) {
     return w ? std::string() : w.error().message;
   };
   EXPECT_NE(message(dir / "absent.json").find("absent.json: CityJSON file not found"), std::string::npos);
-  EXPECT_NE(message(write(dir / "text.json", "{not json")).find("text.json: not JSON"), std::string::npos);
-  EXPECT_NE(message(write(dir / "geo.json", R"({"type":"FeatureCollection","features":[]})")).find("geo.json: not a CityJSON file"),
+  EXPECT_NE(message(write_text(dir / "text.json", "{not json")).find("text.json: not JSON"), std::string::npos);
+  EXPECT_NE(message(write_text(dir / "geo.json", R"({"type":"FeatureCollection","features":[]})")).find("geo.json: not a CityJSON file"),
             std::string::npos);
   std::string house = house_cityjson(390000, 5800000, "EPSG:32633");
-  const auto bad_index = write(dir / "index.json", std::string(house).replace(house.find("[[[10,11,12]]]"), 14, "[[[10,11,99]]]"));
+  const auto bad_index = write_text(dir / "index.json", std::string(house).replace(house.find("[[[10,11,12]]]"), 14, "[[[10,11,99]]]"));
   EXPECT_NE(message(bad_index).find("index.json: CityObjects.ground: a vertex index out of range"), std::string::npos)
       << message(bad_index);
-  const auto unknown_crs = write(dir / "crs.json", house_cityjson(390000, 5800000, "urn:ogc:def:crs:EPSG::999999"));
+  const auto unknown_crs = write_text(dir / "crs.json", house_cityjson(390000, 5800000, "urn:ogc:def:crs:EPSG::999999"));
   EXPECT_NE(message(unknown_crs).find("crs.json: metadata.referenceSystem: EPSG:999999 is unknown to PROJ"), std::string::npos)
       << message(unknown_crs);
   // Projected metres without their CRS: not longitudes and latitudes.
   std::string no_crs = house_cityjson(390000, 5800000, "");
   no_crs.replace(no_crs.find(R"("metadata":{"referenceSystem":""},)"), std::string(R"("metadata":{"referenceSystem":""},)").size(), "");
-  EXPECT_NE(message(write(dir / "nocrs.json", no_crs)).find("is not at a longitude and latitude"), std::string::npos)
+  EXPECT_NE(message(write_text(dir / "nocrs.json", no_crs)).find("is not at a longitude and latitude"), std::string::npos)
       << message(dir / "nocrs.json");
 }
 

@@ -205,16 +205,7 @@ TEST(GzBridgeTest, MovingBaseHeadingFromTheModelsTwoAntennaLinks) {
   setenv("IGN_PARTITION", partition.c_str(), 1);
   const std::map<std::string, std::string> env = {{"IGN_IP", "127.0.0.1"}, {"IGN_PARTITION", partition}};
   const auto dir = test::make_temp_dir("gz_bridge_heading");
-  const std::string antenna =
-      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
-  std::ofstream(dir / "heading.yaml")
-      << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n  interval_s: 1\n"
-         "receivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
-      << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.7, 1.2124356, 1.5]\n" << antenna
-      << "    rtk:\n      base: ANT1\n      moving_base: true\n"
-         "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
-         "ephemeris:\n  navigation:\n    - "
-      << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  std::ofstream(dir / "heading.yaml") << test::moving_base_scenario_yaml(nav, "0.7, 1.2124356, 1.5", 600);
   const std::string world = "skytrace_heading_world";
   const std::string prefix = "/world/" + world;
   ignition::transport::Node node;

@@ -620,16 +620,8 @@ TEST_F(Ros2NodeTest, OdometryPlacesTheAntennaByItsLeverArm) {
 TEST_F(Ros2NodeTest, MovingBaseGivesTheHeadingOfTheBody) {
   const auto nav = test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx";
   if (!std::filesystem::exists(nav)) GTEST_SKIP() << "ESBC navigation file absent";
-  const std::string antenna =
-      "    elevation_mask_deg: 10\n    profile: ublox-f9p\n    signals: [G1C, G2L, E1C, E7Q, R1C, R2C, C2I, C7I]\n";
   const auto scenario = dir_ / "heading.yaml";
-  std::ofstream(scenario) << "name: heading\ntime:\n  start: 2020-06-25T06:00:00\n  scale: GPST\n  duration_s: 600\n"
-                             "  interval_s: 1\nreceivers:\n  - name: ANT1\n    position:\n      world_enu_m: [0.0, 0.0, 1.5]\n"
-                          << antenna << "  - name: ANT2\n    position:\n      world_enu_m: [0.0, 1.4, 1.5]\n" << antenna
-                          << "    rtk:\n      base: ANT1\n      moving_base: true\n"
-                             "world:\n  latitude_deg: 55.4935\n  longitude_deg: 8.4880\n  elevation_m: 73.5\n"
-                             "ephemeris:\n  navigation:\n    - "
-                          << nav.string() << "\nmodels:\n  receiver_clock: profile\n  noise: true\nseed: 3\n";
+  std::ofstream(scenario) << test::moving_base_scenario_yaml(nav, "0.0, 1.4, 1.5", 600);
   Subscription& nmea = peer_->subscribe(topic("nmea"), dds_type("nmea_msgs", "Sentence"), Qos::default_profile());
   auto& odom = peer_->advertise("rt/odom", dds_type("nav_msgs", "Odometry"), Qos::default_profile());
   start_node({"-p", "scenario:=" + scenario.string(), "-p", "receiver:=ANT2", "-p", "pose_source:=odometry", "-p",
