@@ -103,6 +103,18 @@ struct Config {
     target = *value_;               \
   } while (false)
 
+// A lever arm [x, y, z] in metres in the robot's body frame; nullopt when the parameter is absent.
+Result<std::optional<Eigen::Vector3d>> read_lever_arm(const Parameters& p, const std::string& name) {
+  auto values = p.get_doubles(name);
+  if (!values) return values.error();
+  if (!p.has(name)) return std::optional<Eigen::Vector3d>{};
+  if (values->size() != 3) {
+    return Error{ErrorCode::kInvalidArgument,
+                 "parameter " + name + ": expected [x, y, z] in metres in the robot's body frame"};
+  }
+  return std::optional<Eigen::Vector3d>(Eigen::Vector3d((*values)[0], (*values)[1], (*values)[2]));
+}
+
 Result<Config> read_config(const Parameters& p) {
   Config c;
   SKYTRACE_READ(p.get_string("scenario", ""), c.scenario);
@@ -141,24 +153,10 @@ Result<Config> read_config(const Parameters& p) {
   }
   SKYTRACE_READ(p.get_string("start_time", c.start_time), c.start_time);
   SKYTRACE_READ(p.get_string("start_time_scale", c.start_time_scale), c.start_time_scale);
-  std::vector<double> offset;
-  SKYTRACE_READ(p.get_doubles("antenna_offset_m"), offset);
-  if (p.has("antenna_offset_m")) {
-    if (offset.size() != 3) {
-      return Error{ErrorCode::kInvalidArgument,
-                   "parameter antenna_offset_m: expected [x, y, z] in metres in the robot's body frame"};
-    }
-    c.antenna_offset_m = Eigen::Vector3d(offset[0], offset[1], offset[2]);
-  }
-  std::vector<double> base_offset;
-  SKYTRACE_READ(p.get_doubles("base_antenna_offset_m"), base_offset);
-  if (p.has("base_antenna_offset_m")) {
-    if (base_offset.size() != 3) {
-      return Error{ErrorCode::kInvalidArgument,
-                   "parameter base_antenna_offset_m: expected [x, y, z] in metres in the robot's body frame"};
-    }
-    c.base_antenna_offset_m = Eigen::Vector3d(base_offset[0], base_offset[1], base_offset[2]);
-  }
+  std::optional<Eigen::Vector3d> offset;
+  SKYTRACE_READ(read_lever_arm(p, "antenna_offset_m"), offset);
+  if (offset) c.antenna_offset_m = *offset;
+  SKYTRACE_READ(read_lever_arm(p, "base_antenna_offset_m"), c.base_antenna_offset_m);
   SKYTRACE_READ(p.get_strings("moving_models"), c.moving_models);
   for (const auto& [parameter, description] : live::Receiver::file_parameters()) {
     std::string path;

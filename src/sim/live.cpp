@@ -235,14 +235,26 @@ Status LiveSession::set_antenna_pose_ecef(const GnssTime& time, const Eigen::Vec
   return Ok{};
 }
 
-Status LiveSession::set_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
-                                           const std::optional<Eigen::Vector3d>& velocity_world_mps) {
+namespace {
+
+// A pose in a world frame as ECEF position and velocity; an error for non-finite values.
+Result<std::pair<Eigen::Vector3d, std::optional<Eigen::Vector3d>>> world_pose_to_ecef(
+    const LocalFrame& frame, const Eigen::Vector3d& position_world_m, const std::optional<Eigen::Vector3d>& velocity_world_mps) {
   if (!position_world_m.allFinite() || (velocity_world_mps && !velocity_world_mps->allFinite())) {
     return make_error(ErrorCode::kInvalidArgument, "antenna pose with non-finite values ignored");
   }
   std::optional<Eigen::Vector3d> velocity_ecef;
-  if (velocity_world_mps) velocity_ecef = impl_->frame.ecef_to_local_rotation().transpose() * *velocity_world_mps;
-  return set_antenna_pose_ecef(time, impl_->frame.to_ecef(position_world_m), velocity_ecef);
+  if (velocity_world_mps) velocity_ecef = frame.ecef_to_local_rotation().transpose() * *velocity_world_mps;
+  return std::make_pair(frame.to_ecef(position_world_m), velocity_ecef);
+}
+
+}  // namespace
+
+Status LiveSession::set_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
+                                           const std::optional<Eigen::Vector3d>& velocity_world_mps) {
+  auto ecef = world_pose_to_ecef(impl_->frame, position_world_m, velocity_world_mps);
+  if (!ecef) return ecef.error();
+  return set_antenna_pose_ecef(time, ecef->first, ecef->second);
 }
 
 Status LiveSession::set_base_antenna_pose_ecef(const GnssTime& time, const Eigen::Vector3d& position_ecef_m,
@@ -257,12 +269,9 @@ Status LiveSession::set_base_antenna_pose_ecef(const GnssTime& time, const Eigen
 
 Status LiveSession::set_base_antenna_pose_world(const GnssTime& time, const Eigen::Vector3d& position_world_m,
                                                const std::optional<Eigen::Vector3d>& velocity_world_mps) {
-  if (!position_world_m.allFinite() || (velocity_world_mps && !velocity_world_mps->allFinite())) {
-    return make_error(ErrorCode::kInvalidArgument, "base antenna pose with non-finite values ignored");
-  }
-  std::optional<Eigen::Vector3d> velocity_ecef;
-  if (velocity_world_mps) velocity_ecef = impl_->frame.ecef_to_local_rotation().transpose() * *velocity_world_mps;
-  return set_base_antenna_pose_ecef(time, impl_->frame.to_ecef(position_world_m), velocity_ecef);
+  auto ecef = world_pose_to_ecef(impl_->frame, position_world_m, velocity_world_mps);
+  if (!ecef) return ecef.error();
+  return set_base_antenna_pose_ecef(time, ecef->first, ecef->second);
 }
 
 bool LiveSession::has_moving_base() const { return impl_->base_index.has_value(); }

@@ -131,25 +131,24 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     if (!footprints) return footprints.error();
     append_enu_world(std::move(*footprints));
   }
-  if (w.cityjson) {
-    world::CityJsonLoadOptions options;
+  // City models (CityJSON, CityGML): the same options, their own reader.
+  const auto append_city_model = [&](const std::filesystem::path& path, const std::optional<double>& height_offset_m,
+                                     auto load) -> Status {
+    world::CityModelLoadOptions options;
     if (frame) options.origin = frame->origin;
-    options.height_offset_m = w.cityjson_height_offset_m;
+    options.height_offset_m = height_offset_m;
     options.material_rules = rules;
     options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
-    auto city = world::load_cityjson_world(*w.cityjson, options);
+    auto city = load(path, options);
     if (!city) return city.error();
     append_enu_world(std::move(*city));
+    return Ok{};
+  };
+  if (w.cityjson) {
+    if (auto st = append_city_model(*w.cityjson, w.cityjson_height_offset_m, world::load_cityjson_world); !st) return st.error();
   }
   if (w.citygml) {
-    world::CityGmlLoadOptions options;
-    if (frame) options.origin = frame->origin;
-    options.height_offset_m = w.citygml_height_offset_m;
-    options.material_rules = rules;
-    options.vegetation_attenuation_db_per_m = vegetation_db_per_m;
-    auto city = world::load_citygml_world(*w.citygml, options);
-    if (!city) return city.error();
-    append_enu_world(std::move(*city));
+    if (auto st = append_city_model(*w.citygml, w.citygml_height_offset_m, world::load_citygml_world); !st) return st.error();
   }
   if (w.dem) {
     world::DemLoadOptions options;
