@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -339,7 +341,8 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       candidate.fade = candidate.foliage->for_signal(cn0_dbhz, profile.tracking_threshold_dbhz, fade_hold_s(profile));
       candidate.cn0_dbhz += candidate.fade.cn0_change_db;
     }
-    if ((candidate.cn0_dbhz >= profile.acquisition_threshold_dbhz && !candidate.fade.faded_out) ||
+    if ((candidate.cn0_dbhz >= stages::search_threshold_dbhz(profile, last_tag_.has_value()) &&
+         !candidate.fade.faded_out) ||
         tracking_.tracked_at(sat, signal, last_tag_)) {
       acquirable = true;
     }
@@ -353,7 +356,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
                                      obs.relativistic_m,
                                      kC * (p.truth.state.clock_drift_s_per_s + p.truth.state.relativistic_drift_s_per_s),
                                      obs.troposphere_m};
-  stages::SatelliteAcquisition acquisition = tracking_.begin_satellite(profile, acquirable);
+  stages::SatelliteAcquisition acquisition = tracking_.begin_satellite(profile, acquirable, last_tag_.has_value());
   records_used_.clear();
   // The errors of the satellite's L1 C/A loop at this epoch, which aided loops follow.
   std::optional<stages::AidingLoop> aiding_loop;
@@ -428,7 +431,18 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
   }
   if (obs.signals.empty() && direct_blocked) {
     obs.status = SatelliteStatus::kBlocked;  // its reflected and diffracted paths are too weak
-    obs.detail = std::string(world_outcomes_.direct[pending_index].blocking_object) + " (indirect paths too weak)";
+    // Say how weak: the strongest signal through its indirect paths and why it was not tracked.
+    double strongest_dbhz = -std::numeric_limits<double>::infinity();
+    for (const stages::Candidate& candidate : candidates_) strongest_dbhz = std::max(strongest_dbhz, candidate.cn0_dbhz);
+    obs.detail = std::string(world_outcomes_.direct[pending_index].blocking_object);
+    obs.detail += " (indirect paths too weak";
+    if (std::isfinite(strongest_dbhz)) {
+      char level[32];
+      std::snprintf(level, sizeof level, ": %.1f dB-Hz", strongest_dbhz);
+      obs.detail += level;
+      if (!acquisition.not_tracked_because.empty()) obs.detail += ", " + acquisition.not_tracked_because;
+    }
+    obs.detail += ")";
     obs.path_kind = PathKind::kNone;  // paths.csv still lists them
     tracking_.lost(sat, settings_.signals);
   } else if (obs.signals.empty() && candidates_.empty() && !obs.unhealthy_signals.empty()) {

@@ -120,7 +120,7 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
                         "integration_time_s", "acquisition_threshold_dbhz", "tracking_threshold_dbhz",
                         "acquisition_time_s", "half_cycle_resolution_s", "cn0_resolution_dbhz",
                         "output_requires_ephemeris", "semicodeless_aiding_bandwidth_hz",
-                        "semicodeless_threshold_dbhz"});
+                        "semicodeless_threshold_dbhz", "reacquisition_threshold_dbhz"});
   p.dll_bandwidth_hz = tracking.required("dll_bandwidth_hz").as_double_in(0.0, 50.0);
   p.pll_bandwidth_hz = tracking.required("pll_bandwidth_hz").as_double_in(0.0, 100.0);
   p.fll_bandwidth_hz = tracking.required("fll_bandwidth_hz").as_double_in(0.0, 50.0);
@@ -134,6 +134,14 @@ ReceiverProfile parse_root(const Field& root, const std::string& source) {
                             "signals than it can acquire)");
   }
   p.acquisition_time_s = tracking.required("acquisition_time_s").as_double_in(0.0, 600.0);
+  if (auto c = tracking.child("reacquisition_threshold_dbhz")) {
+    p.reacquisition_threshold_dbhz = c->as_double_in(0.0, 60.0);
+    if (*p.reacquisition_threshold_dbhz < p.tracking_threshold_dbhz ||
+        *p.reacquisition_threshold_dbhz > p.acquisition_threshold_dbhz) {
+      c->fail("must lie between tracking.tracking_threshold_dbhz and tracking.acquisition_threshold_dbhz (an aided "
+              "search finds weaker signals than a cold one, and a signal below the tracking threshold is not kept)");
+    }
+  }
   p.half_cycle_resolution_s = tracking.required("half_cycle_resolution_s").as_double_in(0.0, 600.0);
   p.cn0_resolution_dbhz = tracking.required("cn0_resolution_dbhz").as_double_in(0.0, 10.0);
   if (auto c = tracking.child("output_requires_ephemeris")) p.output_requires_ephemeris = c->as_bool();

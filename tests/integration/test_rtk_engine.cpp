@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -350,8 +351,9 @@ TEST(RtkEngineEndToEnd, LateSparseAndInterruptedCorrectionsShowInAgeAndSolutionT
 }
 
 // The yard example's rover under the lime tree's crown (examples/rtk/rtk-yard.yaml, 10 minutes):
-// the crown's fades (models.foliage_fading) break the phase lock and the fix; without them the
-// mean attenuation alone leaves it fixed; 10 m from the trunk, where few rays cross the crown, the
+// the crown's fades (models.foliage_fading) break the phase lock of most signals and the fix;
+// without them the mean attenuation alone leaves it fixed (a few weak signals, reacquired near the
+// threshold, lose lock all the same); 10 m from the trunk, where few rays cross the crown, the
 // C/N0-weighted engine keeps its fix. The report shows the solution types.
 TEST(RtkEngineEndToEnd, UnderATreeCrownTheFoliageFadesBreakTheFix) {
   if (!contract_available()) GTEST_SKIP() << "contract scenarios or ESBC data absent (set SKYTRACE_SHARED_DATA)";
@@ -366,25 +368,33 @@ TEST(RtkEngineEndToEnd, UnderATreeCrownTheFoliageFadesBreakTheFix) {
     EXPECT_EQ(r.exit_code, 0) << r.output;
     const auto rows = read_fix_csv(out / "fix_ROVR.csv");
     EXPECT_EQ(rows.size(), 601u);
-    size_t fixed = 0, slips = 0;
+    size_t fixed = 0;
     for (const FixRow& row : rows) fixed += row.fix == "rtk_fixed";
-    // Loss-of-lock flags of the rover (RINEX LLI bit 0).
+    // The rover's signals that lose lock after the first epoch (RINEX LLI bit 0), counted once
+    // each: a weak signal the receiver reacquires and loses again counts as one.
+    std::set<std::pair<std::string, size_t>> slipped;
     std::ifstream obs(out / "obs_ROVR.rnx");
     std::string line;
     bool header = true;
+    int epochs = 0;
     while (std::getline(obs, line)) {
       if (header) {
         header = line.find("END OF HEADER") == std::string::npos;
         continue;
       }
-      if (line.starts_with(">")) continue;
+      if (line.starts_with(">")) {
+        ++epochs;
+        continue;
+      }
+      if (epochs <= 1) continue;
       for (size_t field = 3; field + 15 <= line.size(); field += 16) {
         const char lli = line[field + 14];
-        slips += lli == '1' || lli == '3' || lli == '5' || lli == '7';
+        if (lli == '1' || lli == '3' || lli == '5' || lli == '7') slipped.emplace(line.substr(0, 3), field);
       }
     }
+    const size_t slips = slipped.size();
     const double share = static_cast<double>(fixed) / static_cast<double>(rows.size());
-    std::printf("[ figures ] rtk-yard %s: %.1f %% rtk_fixed, %zu loss-of-lock flags\n", name.c_str(), 100.0 * share, slips);
+    std::printf("[ figures ] rtk-yard %s: %.1f %% rtk_fixed, %zu signals lost lock\n", name.c_str(), 100.0 * share, slips);
     EXPECT_NE(test::run_command("grep -c 'Solution type' " + test::shell_quote((out / "report.html").string())).output, "0\n");
     return std::make_pair(share, slips);
   };
@@ -394,7 +404,7 @@ TEST(RtkEngineEndToEnd, UnderATreeCrownTheFoliageFadesBreakTheFix) {
   EXPECT_LT(faded, 0.2);
   EXPECT_GT(still, 0.9);
   EXPECT_GT(near, 0.9);
-  EXPECT_GT(faded_slips, 10 * still_slips + 100);
+  EXPECT_GT(faded_slips, 3 * still_slips);
 }
 
 }  // namespace

@@ -109,6 +109,14 @@ TEST(ReceiverProfiles, ErrorsNameFileLineAndField) {
   e = error_of(replaced(kValid, "tracking_threshold_dbhz: 22", "tracking_threshold_dbhz: 22\n  semicodeless_threshold_dbhz: 25"));
   EXPECT_NE(e.find("tracking.semicodeless_threshold_dbhz: must not exceed tracking.tracking_threshold_dbhz"),
             std::string::npos) << e;
+  for (const char* outside : {"20", "31"}) {
+    e = error_of(replaced(kValid, "tracking_threshold_dbhz: 22",
+                          std::string("tracking_threshold_dbhz: 22\n  reacquisition_threshold_dbhz: ") + outside));
+    EXPECT_NE(e.find("tracking.reacquisition_threshold_dbhz: must lie between tracking.tracking_threshold_dbhz and "
+                     "tracking.acquisition_threshold_dbhz"),
+              std::string::npos)
+        << e;
+  }
   e = error_of(replaced(kValid, "rhcp_gain_dbic: [-5, 5]", "rhcp_gain_dbic: [-5, 5, 6]"));
   EXPECT_NE(e.find("antenna.rhcp_gain_dbic: expected 2 gains"), std::string::npos) << e;
   e = error_of(replaced(kValid, "elevation_deg: [0, 90]", "elevation_deg: [90, 0]"));

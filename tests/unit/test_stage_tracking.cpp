@@ -60,7 +60,7 @@ class StageTracking : public ::testing::Test {
   Lock step(TrackingState& tracking, const Signal& signal, double cn0_dbhz, const GnssTime& tag,
             const std::optional<GnssTime>& last, std::string* why = nullptr) {
     int channels = 0;
-    SatelliteAcquisition a = tracking.begin_satellite(profile_, false);
+    SatelliteAcquisition a = tracking.begin_satellite(profile_, false, last.has_value());
     const Lock lock = tracking.lock(profile_, sat_, signal, cn0_dbhz, tag, last, channels, a);
     if (why != nullptr) *why = a.not_tracked_because;
     return lock;
@@ -86,18 +86,73 @@ TEST_F(StageTracking, AcquisitionTimeAfterASignalRises) {
     EXPECT_EQ(why, "acquiring");
   }
   int channels = 0;
-  SatelliteAcquisition a = tracking.begin_satellite(profile_, false);
+  SatelliteAcquisition a = tracking.begin_satellite(profile_, false, true);
   EXPECT_EQ(tracking.lock(profile_, sat_, l1_, strong, t0_ + 8.0, t0_ + 7.0, channels, a), Lock::kNewArc);
   ASSERT_TRUE(a.acquired.has_value());
   EXPECT_DOUBLE_EQ(*a.acquired - t0_, 7.5);
   EXPECT_EQ(channels, 1);
 }
 
+TEST_F(StageTracking, AidedSearchDwellFollowsSquareLawDetection) {
+  // K = 25 (1 + 2 rho) / rho^2 coherent blocks of 20 ms, rho = C/N0 T: independent numbers.
+  for (const double cn0_dbhz : {15.0, 24.0, 30.0, 45.0}) {
+    const double rho = std::pow(10.0, cn0_dbhz / 10.0) * 0.02;
+    EXPECT_NEAR(reacquisition_dwell_s(cn0_dbhz, 0.02), 0.02 * 25.0 * (1.0 + 2.0 * rho) / (rho * rho), 1e-12);
+  }
+  EXPECT_NEAR(reacquisition_dwell_s(15.0, 0.02), 2.83, 0.01);
+  EXPECT_NEAR(reacquisition_dwell_s(24.0, 0.02), 0.219, 0.001);
+  EXPECT_LT(reacquisition_dwell_s(40.0, 0.02), 0.01);  // a strong signal: within one epoch
+}
+
+TEST_F(StageTracking, RunningReceiverReacquiresFromItsAidedThreshold) {
+  profile_ = builtin_profile("ublox-m8t").value();
+  ASSERT_TRUE(profile_.reacquisition_threshold_dbhz.has_value());
+  const double aided_dbhz = *profile_.reacquisition_threshold_dbhz;
+  ASSERT_LT(aided_dbhz, profile_.acquisition_threshold_dbhz);
+  EXPECT_EQ(search_threshold_dbhz(profile_, false), profile_.acquisition_threshold_dbhz);
+  EXPECT_EQ(search_threshold_dbhz(profile_, true), aided_dbhz);
+  // A strong signal lost at 1 s comes back at 2 s: reacquired at once (its dwell is milliseconds),
+  // where a cold search would take acquisition_time_s.
+  TrackingState tracking(1, 0, false);
+  EXPECT_EQ(step(tracking, l1_, 45.0, t0_, std::nullopt), Lock::kNewArc);
+  (void)tracking.carrier_arc(profile_, sat_, l1_, true, 45.0, false, true, t0_, std::nullopt);
+  EXPECT_EQ(step(tracking, l1_, 5.0, t0_ + 1.0, t0_), Lock::kNone);
+  EXPECT_EQ(step(tracking, l1_, 45.0, t0_ + 2.0, t0_ + 1.0), Lock::kNewArc);
+  // A weak one (just above the aided threshold, below the cold one), at 0.1 s epochs: found after
+  // its dwell, counted from half an epoch before it first appeared.
+  TrackingState weak(1, 0, false);
+  const double cn0_dbhz = aided_dbhz + 1.0;
+  const double dwell_s = reacquisition_dwell_s(cn0_dbhz, profile_.integration_time_s);
+  ASSERT_GT(dwell_s, 1.0);
+  std::optional<GnssTime> last = t0_;
+  int epochs = 0;
+  std::string why;
+  while (step(weak, l1_, cn0_dbhz, *last + 0.1, last, &why) == Lock::kNone && epochs < 1000) {
+    EXPECT_EQ(why, "acquiring");
+    last = *last + 0.1;
+    ++epochs;
+  }
+  EXPECT_NEAR((epochs + 1) * 0.1, dwell_s + 0.05, 0.1);
+  // Below the aided threshold the search starts over.
+  TrackingState dips(1, 0, false);
+  last = t0_;
+  for (int k = 1; k <= 200; ++k) {
+    const double c = k % 10 == 0 ? aided_dbhz - 1.0 : cn0_dbhz;  // a dip every second
+    EXPECT_EQ(step(dips, l1_, c, t0_ + 0.1 * k, last), Lock::kNone) << k;
+    last = t0_ + 0.1 * k;
+  }
+  // A profile without an aided threshold keeps its cold acquisition after the first epoch.
+  profile_.reacquisition_threshold_dbhz.reset();
+  TrackingState cold(1, 0, false);
+  EXPECT_EQ(step(cold, l1_, cn0_dbhz, t0_ + 0.1, t0_, &why), Lock::kNone);
+  EXPECT_EQ(why, "below the acquisition threshold");
+}
+
 TEST_F(StageTracking, ChannelsRunOut) {
   profile_.channel_count = 1;
   TrackingState tracking(1, 0, false);
   int channels = 0;
-  SatelliteAcquisition a = tracking.begin_satellite(profile_, true);
+  SatelliteAcquisition a = tracking.begin_satellite(profile_, true, false);
   EXPECT_EQ(tracking.lock(profile_, sat_, l1_, 45.0, t0_, std::nullopt, channels, a), Lock::kNewArc);
   EXPECT_EQ(tracking.lock(profile_, sat_, l5_, 45.0, t0_, std::nullopt, channels, a), Lock::kNone);
   EXPECT_EQ(a.not_tracked_because, "no free channel");

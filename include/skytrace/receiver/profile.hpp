@@ -118,6 +118,13 @@ struct ReceiverProfile {
   // this C/N0 (as reported). Unset (nullopt): the acquisition and tracking thresholds above.
   std::optional<double> semicodeless_threshold_dbhz;
   double acquisition_time_s = 0.0;
+  // Aided reacquisition (the datasheets' reacquisition and hot-start sensitivities): once the
+  // receiver runs (after the run's first epoch) it predicts every satellite's code delay and
+  // Doppler from its fix and almanac, searches a few cells and integrates longer, so a signal is
+  // acquired from this C/N0 after the detection time of that narrow search (stages::
+  // reacquisition_dwell_s: shorter the stronger the signal) instead of the cold acquisition
+  // threshold and time. Unset (nullopt): cold acquisition throughout.
+  std::optional<double> reacquisition_threshold_dbhz;
   double half_cycle_resolution_s = 0.0;
   double cn0_resolution_dbhz = 0.25;
   // Outputs a satellite's measurements only once it holds a broadcast ephemeris for it (as the

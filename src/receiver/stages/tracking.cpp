@@ -6,6 +6,17 @@
 
 namespace skytrace::receiver::stages {
 
+double search_threshold_dbhz(const ReceiverProfile& profile, bool running) {
+  return running && profile.reacquisition_threshold_dbhz ? *profile.reacquisition_threshold_dbhz
+                                                         : profile.acquisition_threshold_dbhz;
+}
+
+double reacquisition_dwell_s(double cn0_dbhz, double coherent_s) {
+  constexpr double kDeflection = 5.0;  // Q^-1(1e-4) + Q^-1(1 - 0.9) = 3.72 + 1.28
+  const double rho = std::pow(10.0, cn0_dbhz / 10.0) * coherent_s;
+  return coherent_s * kDeflection * kDeflection * (1.0 + 2.0 * rho) / (rho * rho);
+}
+
 bool TrackingState::tracked_at(const SatelliteId& sat, const Signal& signal, const std::optional<GnssTime>& last_tag) {
   const Arc& arc = arcs_[SignalKey{sat, signal}];
   return arc.active && last_tag && arc.last_tag == *last_tag;
@@ -48,17 +59,34 @@ TrackingState::Lock TrackingState::lock(const ReceiverProfile& profile, const Sa
     return Lock::kNone;
   }
   ++channels_used;  // a channel searches for it
+  GnssTime searched_from;  // the part of the interval since the last epoch that the search had
   if (!arc.above_since || !last_tag || arc.acquiring_tag != *last_tag) {
     // Rose (or reappeared) since the last epoch: assume halfway. At the first epoch the receiver
     // has been running before the scenario starts and tracks already.
     arc.above_since = last_tag ? *last_tag + 0.5 * (tag - *last_tag) : tag - 1e9;
+    arc.detected = 0.0;
+    searched_from = *arc.above_since;
+  } else {
+    searched_from = *last_tag;
   }
   arc.acquiring_tag = tag;
-  if (tag - *arc.above_since < profile.acquisition_time_s) {
-    satellite.not_tracked_because = "acquiring";
-    return Lock::kNone;
+  GnssTime signal_acquired;
+  if (last_tag && profile.reacquisition_threshold_dbhz) {
+    // Aided search: the detection statistic builds up at the rate this C/N0 allows.
+    const double dwell_s = reacquisition_dwell_s(cn0_dbhz, profile.integration_time_s);
+    arc.detected += (tag - searched_from) / dwell_s;
+    if (arc.detected < 1.0) {
+      satellite.not_tracked_because = "acquiring";
+      return Lock::kNone;
+    }
+    signal_acquired = tag - (arc.detected - 1.0) * dwell_s;
+  } else {
+    if (tag - *arc.above_since < profile.acquisition_time_s) {
+      satellite.not_tracked_because = "acquiring";
+      return Lock::kNone;
+    }
+    signal_acquired = *arc.above_since + profile.acquisition_time_s;
   }
-  const GnssTime signal_acquired = *arc.above_since + profile.acquisition_time_s;
   if (!satellite.acquired || signal_acquired < *satellite.acquired) satellite.acquired = signal_acquired;
   return Lock::kNewArc;
 }
