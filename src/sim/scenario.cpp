@@ -194,7 +194,7 @@ MaterialRuleSetting parse_material_rule(const Node& node) {
 void parse_world(const Node& world, const std::filesystem::path& base, WorldSettings& w) {
   world.expect_keys({"sdf", "model_paths", "osm", "footprints", "footprint_height_field", "cityjson",
                      "cityjson_height_offset_m", "citygml", "citygml_height_offset_m", "dem", "dem_height_offset_m", "meshes", "materials", "moving",
-                     "vegetation_attenuation_db_per_m", "vegetation_hull_tolerance_m",
+                     "vegetation_attenuation_db_per_m", "vegetation_hull_tolerance_m", "surroundings_height_m",
                      "latitude_deg", "longitude_deg", "elevation_m", "heading_deg"});
   if (auto c = world.child("sdf")) w.sdf = existing_file(*c, base);
   if (auto c = world.child("model_paths")) {
@@ -234,6 +234,7 @@ void parse_world(const Node& world, const std::filesystem::path& base, WorldSett
   }
   if (auto c = world.child("vegetation_attenuation_db_per_m")) w.vegetation_attenuation_db_per_m = c->as_double_in(0.0, 1000.0);
   if (auto c = world.child("vegetation_hull_tolerance_m")) w.vegetation_hull_tolerance_m = c->as_double_in(0.0, 10.0);
+  if (auto c = world.child("surroundings_height_m")) w.surroundings_height_m = c->as_double_in(0.0, 1000.0);
   if (auto c = world.child("latitude_deg")) w.latitude_deg = c->as_double_in(-90.0, 90.0);
   if (auto c = world.child("longitude_deg")) w.longitude_deg = c->as_double_in(-360.0, 360.0);
   if (auto c = world.child("elevation_m")) w.elevation_m = c->as_double_in(-500.0, 10000.0);
@@ -601,6 +602,7 @@ std::string scenario_to_json(const Scenario& s) {
   if (s.world.dem_height_offset_m) w["dem_height_offset_m"] = *s.world.dem_height_offset_m;
   if (s.world.vegetation_attenuation_db_per_m) w["vegetation_attenuation_db_per_m"] = *s.world.vegetation_attenuation_db_per_m;
   if (s.world.vegetation_hull_tolerance_m) w["vegetation_hull_tolerance_m"] = *s.world.vegetation_hull_tolerance_m;
+  if (s.world.surroundings_height_m) w["surroundings_height_m"] = *s.world.surroundings_height_m;
   w["meshes"] = json::array();
   for (const auto& m : s.world.meshes) {
     w["meshes"].push_back({{"file", m.file.string()},

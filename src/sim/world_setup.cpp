@@ -235,6 +235,9 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
   // OpenStreetMap, footprints and CityJSON without a terrain have no ground: a plane at the world's
   // z = 0 (its ground height) under everything and 200 m beyond, so that the ground reflects
   // (models.multipath) and blocks what is below the horizon, as Gazebo worlds' ground planes do.
+  // The model's extent, before a ground plane or surroundings are added to it.
+  const auto model_bounds = model.objects.empty() ? std::pair<Eigen::Vector3d, Eigen::Vector3d>{}
+                                                  : world::world_bounds(model);
   const bool has_ground = std::any_of(model.objects.begin(), model.objects.end(),
                                       [](const world::WorldObject& o) { return o.kind == world::ObjectKind::kGround; });
   if (!has_ground && !model.objects.empty() && (w.osm || w.footprints || w.cityjson || w.citygml)) {
@@ -248,6 +251,33 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
                                     Eigen::Vector2d(high.x() - low.x() + 2.0 * kBeyond_m, high.y() - low.y() + 2.0 * kBeyond_m));
     ground.pose = Eigen::Translation3d(0.5 * (low.x() + high.x()), 0.5 * (low.y() + high.y()), 0.0);
     model.objects.push_back(std::move(ground));
+  }
+  // The city beyond the model (world.surroundings_height_m): four walls along the objects'
+  // horizontal bounds, from below their lowest base to the height above the ground, so that a
+  // receiver inside sees no open horizon where the model merely ends.
+  if (w.surroundings_height_m && !model.objects.empty()) {
+    const auto& [low, high] = model_bounds;
+    const double bottom_m = std::min(low.z(), 0.0) - 1.0;
+    const double top_m = *w.surroundings_height_m;
+    if (top_m > bottom_m) {
+      const Eigen::Vector3d corners[4] = {{low.x(), low.y(), 0.0}, {high.x(), low.y(), 0.0},
+                                          {high.x(), high.y(), 0.0}, {low.x(), high.y(), 0.0}};
+      world::WorldObject ring;
+      ring.name = "surroundings";
+      ring.kind = world::ObjectKind::kSurroundings;
+      for (int side = 0; side < 4; ++side) {
+        const Eigen::Vector3d& a = corners[side];
+        const Eigen::Vector3d& b = corners[(side + 1) % 4];
+        const int first = static_cast<int>(ring.mesh.vertices_m.size());
+        for (const Eigen::Vector3d& corner : {a, b}) {
+          ring.mesh.vertices_m.emplace_back(corner.x(), corner.y(), bottom_m);
+          ring.mesh.vertices_m.emplace_back(corner.x(), corner.y(), top_m);
+        }
+        ring.mesh.triangles.emplace_back(first, first + 2, first + 3);
+        ring.mesh.triangles.emplace_back(first, first + 3, first + 1);
+      }
+      model.objects.push_back(std::move(ring));
+    }
   }
   auto scene = world::EmbreeScene::build(model);
   if (!scene) {
@@ -265,7 +295,7 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
   {
     world::WorldModel above_ground;
     for (const auto& object : model.objects) {
-      if (object.kind == world::ObjectKind::kGround) continue;
+      if (object.kind == world::ObjectKind::kGround || object.kind == world::ObjectKind::kSurroundings) continue;
       if (auto f = world::footprint(object); f.outline_m.size() >= 3) loaded.footprints.push_back(std::move(f));
       above_ground.objects.push_back(world::WorldObject{object.name, object.kind, object.material, object.mesh, object.pose,
                                                         object.is_static});

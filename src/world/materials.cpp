@@ -126,6 +126,8 @@ std::string_view object_kind_name(ObjectKind kind) {
       return "ground";
     case ObjectKind::kOther:
       return "other";
+    case ObjectKind::kSurroundings:
+      return "surroundings";
   }
   return "other";
 }
@@ -207,6 +209,8 @@ WorldSummary summarize_world(const WorldModel& world) {
       case ObjectKind::kOther:
         ++summary.other;
         break;
+      case ObjectKind::kSurroundings:
+        break;  // not part of the model
     }
   }
   return summary;

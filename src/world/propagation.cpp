@@ -30,7 +30,8 @@ constexpr double kCandidateMargin_m = 10.0;
 double leg_tolerance_m(double length_m) { return std::max(0.02, 1e-4 * length_m); }
 
 bool is_reflecting(const WorldObject& object) {
-  return object.is_static && !object.material.is_vegetation() && !object.mesh.triangles.empty();
+  return object.is_static && !object.material.is_vegetation() && !object.mesh.triangles.empty() &&
+         object.kind != ObjectKind::kSurroundings;
 }
 bool is_diffracting(const WorldObject& object) {
   return is_reflecting(object) && object.kind != ObjectKind::kGround &&

@@ -6,11 +6,14 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "process.hpp"
 #include "skytrace/io/rinex_obs.hpp"
@@ -39,17 +42,26 @@ bool ray_hits_box(const Eigen::Vector3d& origin, double azimuth_deg, double elev
   return t_near <= t_far;
 }
 
-TEST(WorldWall, SatellitesBehindTheWallAreAbsentAndAllOthersPresent) {
+struct Box {
+  Eigen::Vector3d low, high;
+};
+
+// Runs wall.yaml with `sets` and checks every satellite above the mask against `boxes` (the
+// world's blocking geometry): absent when its ray crosses one, present otherwise.
+void expect_blocking_by(const std::string& name, const std::string& sets, const std::vector<Box>& boxes) {
   const auto scenario = test::shared_data_dir().parent_path() / "contract" / "wall.yaml";
   if (!std::filesystem::exists(scenario)) GTEST_SKIP() << "contract scenario absent: " << scenario;
-  const auto out = test::make_temp_dir("world_wall");
+  const auto out = test::make_temp_dir(name);
   const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
                                    test::shell_quote(scenario.string()) + " --out " + test::shell_quote(out.string()) +
-                                   " --quiet");
+                                   " --quiet " + sets);
   ASSERT_EQ(r.exit_code, 0) << r.output;
 
-  // worlds/wall.sdf: a 40 x 1 x 30 m box centred at (0, 10, 15); antenna at (0, 0, 1.5).
-  const Eigen::Vector3d low(-20.0, 9.5, 0.0), high(20.0, 10.5, 30.0), antenna(0.0, 0.0, 1.5);
+  const Eigen::Vector3d antenna(0.0, 0.0, 1.5);
+  const auto ray_hits = [&](double az, double el) {
+    return std::any_of(boxes.begin(), boxes.end(),
+                       [&](const Box& b) { return ray_hits_box(antenna, az, el, b.low, b.high); });
+  };
   // Directions within this angle of the wall's edges are left out: the satellite's direction in
   // truth.csv is rounded to 1e-4 degrees.
   constexpr double kEdgeMargin_deg = 0.01;
@@ -67,11 +79,11 @@ TEST(WorldWall, SatellitesBehindTheWallAreAbsentAndAllOthersPresent) {
     const std::string& status = c[4];
     if (status == "below_mask" || status == "no_ephemeris") continue;
     const double az = std::stod(c[5]), el = std::stod(c[6]);
-    const bool hits = ray_hits_box(antenna, az, el, low, high);
+    const bool hits = ray_hits(az, el);
     bool ambiguous = false;
     for (double daz : {-kEdgeMargin_deg, kEdgeMargin_deg}) {
       for (double del : {-kEdgeMargin_deg, kEdgeMargin_deg}) {
-        if (ray_hits_box(antenna, az + daz, el + del, low, high) != hits) ambiguous = true;
+        if (ray_hits(az + daz, el + del) != hits) ambiguous = true;
       }
     }
     if (ambiguous) {
@@ -88,8 +100,8 @@ TEST(WorldWall, SatellitesBehindTheWallAreAbsentAndAllOthersPresent) {
       ++present;
     }
   }
-  std::printf("[ figures ] wall.yaml: %zu satellite-epochs behind the wall, %zu in view, %zu within %.2f deg of an edge\n",
-              blocked, present, near_edge, kEdgeMargin_deg);
+  std::printf("[ figures ] wall.yaml %s: %zu satellite-epochs blocked, %zu in view, %zu within %.2f deg of an edge\n",
+              sets.c_str(), blocked, present, near_edge, kEdgeMargin_deg);
   EXPECT_GT(blocked, 100u);
   EXPECT_GT(present, 100u);
 
@@ -106,6 +118,24 @@ TEST(WorldWall, SatellitesBehindTheWallAreAbsentAndAllOthersPresent) {
       if (!expected_present[time].count(sat) && !either[time].count(sat)) ADD_FAILURE() << "recorded but behind the wall or unexpected: " << time << " " << sat;
     }
   }
+}
+
+// worlds/wall.sdf: a 40 x 1 x 30 m box centred at (0, 10, 15) on a 400 x 400 m ground plane;
+// antenna at (0, 0, 1.5).
+const Box kWall{{-20.0, 9.5, 0.0}, {20.0, 10.5, 30.0}};
+
+TEST(WorldWall, SatellitesBehindTheWallAreAbsentAndAllOthersPresent) { expect_blocking_by("world_wall", "", {kWall}); }
+
+// world.surroundings_height_m: the world beyond its extent (here the ground plane's 400 x 400 m)
+// blocks what leaves it below 60 m, i.e. up to 11.7-16.3 deg from the antenna, as four walls
+// along the extent's edges would (zero-thickness slabs in the check).
+TEST(WorldWall, SurroundingsBlockWhatLeavesTheWorldBelowTheirHeight) {
+  std::vector<Box> boxes{kWall};
+  for (const double edge : {-200.0, 200.0}) {
+    boxes.push_back(Box{{edge, -200.0, -1.0}, {edge, 200.0, 60.0}});
+    boxes.push_back(Box{{-200.0, edge, -1.0}, {200.0, edge, 60.0}});
+  }
+  expect_blocking_by("world_surroundings", "--set world.surroundings_height_m=60", boxes);
 }
 
 }  // namespace

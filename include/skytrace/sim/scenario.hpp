@@ -161,6 +161,9 @@ struct WorldSettings {
   std::vector<MovingModelSetting> moving;
   std::optional<double> vegetation_attenuation_db_per_m;  // default of vegetation no rule sets
   std::optional<double> vegetation_hull_tolerance_m;      // simplification of vegetation hulls
+  // The city beyond the model's extent: walls this high above the ground along the objects'
+  // horizontal bounds, which block (no reflection, no diffraction) what leaves the model below them.
+  std::optional<double> surroundings_height_m;
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;
   [[nodiscard]] bool any() const { return sdf || osm || footprints || cityjson || citygml || dem || !meshes.empty(); }

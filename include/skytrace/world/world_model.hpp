@@ -21,7 +21,9 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3i> triangles;    // indices into vertices_m, counter-clockwise outward
 };
 
-enum class ObjectKind : std::uint8_t { kBuilding, kTree, kGround, kOther };
+// kSurroundings: the city beyond the model's extent (world.surroundings_height_m), which blocks
+// rays but neither reflects nor diffracts.
+enum class ObjectKind : std::uint8_t { kBuilding, kTree, kGround, kOther, kSurroundings };
 
 struct WorldObject {
   std::string name;  // "model/link/collision" for SDF, "way/123" for OSM, the file for meshes
