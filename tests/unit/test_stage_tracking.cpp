@@ -133,14 +133,28 @@ TEST_F(StageTracking, RunningReceiverReacquiresFromItsAidedThreshold) {
     ++epochs;
   }
   EXPECT_NEAR((epochs + 1) * 0.1, dwell_s + 0.05, 0.1);
-  // Below the aided threshold the search starts over.
-  TrackingState dips(1, 0, false);
+  // Steadily 1 dB below the aided threshold: never found (each window ends at the threshold's
+  // detection time and starts over).
+  TrackingState below(1, 0, false);
   last = t0_;
-  for (int k = 1; k <= 200; ++k) {
-    const double c = k % 10 == 0 ? aided_dbhz - 1.0 : cn0_dbhz;  // a dip every second
-    EXPECT_EQ(step(dips, l1_, c, t0_ + 0.1 * k, last), Lock::kNone) << k;
+  for (int k = 1; k <= 300; ++k) {
+    EXPECT_EQ(step(below, l1_, aided_dbhz - 1.0, t0_ + 0.1 * k, last, &why), Lock::kNone) << k;
+    EXPECT_EQ(why, "below the acquisition threshold");
     last = t0_ + 0.1 * k;
   }
+  // A fade of 0.1 s every second within the window slows the detection but does not restart it:
+  // found after the steady signal's dwell, before the window ends.
+  TrackingState dips(1, 0, false);
+  last = t0_;
+  int found_at = 0;
+  for (int k = 1; k <= 100 && found_at == 0; ++k) {
+    const double c = k % 10 == 0 ? 0.0 : cn0_dbhz;
+    if (step(dips, l1_, c, t0_ + 0.1 * k, last) == Lock::kNewArc) found_at = k;
+    last = t0_ + 0.1 * k;
+  }
+  ASSERT_GT(found_at, 0);
+  EXPECT_GT(found_at * 0.1, dwell_s);
+  EXPECT_LE(found_at * 0.1, reacquisition_dwell_s(aided_dbhz, profile_.integration_time_s) + 0.05);
   // A profile without an aided threshold keeps its cold acquisition after the first epoch.
   profile_.reacquisition_threshold_dbhz.reset();
   TrackingState cold(1, 0, false);

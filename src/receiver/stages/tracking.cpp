@@ -1,5 +1,6 @@
 #include "skytrace/receiver/stages/tracking.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "skytrace/receiver/ephemeris_decoding.hpp"
@@ -53,40 +54,72 @@ TrackingState::Lock TrackingState::lock(const ReceiverProfile& profile, const Sa
     return Lock::kContinuing;
   }
   arc.active = false;
+  if (last_tag && profile.reacquisition_threshold_dbhz && !aided_threshold_dbhz) {
+    return aided_search(profile, arc, cn0_dbhz, tag, *last_tag, channels_used, satellite);
+  }
   if (cn0_dbhz < aided_threshold_dbhz.value_or(satellite.acquisition_threshold_dbhz)) {
     arc.above_since.reset();
     satellite.not_tracked_because = "below the acquisition threshold";
     return Lock::kNone;
   }
   ++channels_used;  // a channel searches for it
-  GnssTime searched_from;  // the part of the interval since the last epoch that the search had
   if (!arc.above_since || !last_tag || arc.acquiring_tag != *last_tag) {
     // Rose (or reappeared) since the last epoch: assume halfway. At the first epoch the receiver
     // has been running before the scenario starts and tracks already.
     arc.above_since = last_tag ? *last_tag + 0.5 * (tag - *last_tag) : tag - 1e9;
-    arc.detected = 0.0;
-    searched_from = *arc.above_since;
-  } else {
-    searched_from = *last_tag;
   }
   arc.acquiring_tag = tag;
-  GnssTime signal_acquired;
-  if (last_tag && profile.reacquisition_threshold_dbhz) {
-    // Aided search: the detection statistic builds up at the rate this C/N0 allows.
-    const double dwell_s = reacquisition_dwell_s(cn0_dbhz, profile.integration_time_s);
-    arc.detected += (tag - searched_from) / dwell_s;
-    if (arc.detected < 1.0) {
-      satellite.not_tracked_because = "acquiring";
-      return Lock::kNone;
-    }
-    signal_acquired = tag - (arc.detected - 1.0) * dwell_s;
-  } else {
-    if (tag - *arc.above_since < profile.acquisition_time_s) {
-      satellite.not_tracked_because = "acquiring";
-      return Lock::kNone;
-    }
-    signal_acquired = *arc.above_since + profile.acquisition_time_s;
+  if (tag - *arc.above_since < profile.acquisition_time_s) {
+    satellite.not_tracked_because = "acquiring";
+    return Lock::kNone;
   }
+  const GnssTime signal_acquired = *arc.above_since + profile.acquisition_time_s;
+  if (!satellite.acquired || signal_acquired < *satellite.acquired) satellite.acquired = signal_acquired;
+  return Lock::kNewArc;
+}
+
+TrackingState::Lock TrackingState::aided_search(const ReceiverProfile& profile, Arc& arc, double cn0_dbhz,
+                                                const GnssTime& tag, const GnssTime& last_tag, int& channels_used,
+                                                SatelliteAcquisition& satellite) {
+  ++channels_used;  // a channel searches for it
+  const double coherent_s = profile.integration_time_s;
+  // A receiver dwells at most as long as the weakest signal it is meant to find needs (its
+  // threshold's detection time), then starts the window over: a signal steadily below the
+  // threshold is never found, a brief fade within a window only slows the detection.
+  const double threshold_dbhz = satellite.acquisition_threshold_dbhz;
+  const double longest_dwell_s = reacquisition_dwell_s(threshold_dbhz, coherent_s);
+  GnssTime searched_from = last_tag;
+  if (!arc.above_since || arc.acquiring_tag != last_tag) {
+    // A new search, from halfway since the last epoch (where the signal was lost or appeared).
+    arc.above_since = std::max(last_tag + 0.5 * (tag - last_tag), tag - longest_dwell_s);
+    arc.signal_blocks = arc.noise_blocks = 0.0;
+    searched_from = *arc.above_since;
+  } else if (tag - *arc.above_since > longest_dwell_s) {
+    arc.above_since = std::max(last_tag, tag - longest_dwell_s);  // the next window
+    arc.signal_blocks = arc.noise_blocks = 0.0;
+    searched_from = *arc.above_since;
+  }
+  arc.acquiring_tag = tag;
+  // Square-law detection over the window: the signal adds rho per coherent block, the statistic's
+  // variance 1 + 2 rho; detected once the deflection sum(rho) / sqrt(sum(1 + 2 rho)) reaches 5
+  // (reacquisition_dwell_s for a steady signal).
+  const double rho = std::pow(10.0, cn0_dbhz / 10.0) * coherent_s;
+  const double blocks = (tag - searched_from) / coherent_s;
+  const double signal_before = arc.signal_blocks, noise_before = arc.noise_blocks;
+  arc.signal_blocks += blocks * rho;
+  arc.noise_blocks += blocks * (1.0 + 2.0 * rho);
+  constexpr double kDeflection = 5.0;
+  if (arc.signal_blocks < kDeflection * std::sqrt(arc.noise_blocks)) {
+    satellite.not_tracked_because = cn0_dbhz < threshold_dbhz ? "below the acquisition threshold" : "acquiring";
+    return Lock::kNone;
+  }
+  // When within the interval the deflection reached 5: the larger root of
+  // (S0 + k rho)^2 = d^2 (N0 + k (1 + 2 rho)) in blocks k.
+  const double c = 1.0 + 2.0 * rho, d2 = kDeflection * kDeflection;
+  const double b = 2.0 * signal_before * rho - d2 * c;
+  const double discriminant = b * b - 4.0 * rho * rho * (signal_before * signal_before - d2 * noise_before);
+  const double k = std::clamp((-b + std::sqrt(std::max(discriminant, 0.0))) / (2.0 * rho * rho), 0.0, blocks);
+  const GnssTime signal_acquired = searched_from + k * coherent_s;
   if (!satellite.acquired || signal_acquired < *satellite.acquired) satellite.acquired = signal_acquired;
   return Lock::kNewArc;
 }

@@ -51,11 +51,12 @@ struct SatelliteAcquisition {
 // threshold.
 [[nodiscard]] double search_threshold_dbhz(const ReceiverProfile& profile, bool running);
 
-// The time an aided search takes to detect a signal of `cn0_dbhz` (the receiver predicts its code
-// delay and Doppler, so the dwell, not the search, sets it): non-coherent sums of K coherent
-// blocks of `coherent_s` until the detection statistic's deflection reaches 5 (false alarm 1e-4
-// per cell, detection 0.9): K = 25 (1 + 2 rho) / rho^2 with rho = C/N0 coherent_s, square-law
-// detection (Kaplan & Hegarty 2006, 8.3; Van Dierendonck 1996). 24 dB-Hz: 0.22 s, 15 dB-Hz: 2.8 s.
+// The time an aided search takes to detect a steady signal of `cn0_dbhz` (the receiver predicts
+// its code delay and Doppler, so the dwell, not the search, sets it): non-coherent sums of K
+// coherent blocks of `coherent_s` until the detection statistic's deflection reaches 5 (false
+// alarm 1e-4 per cell, detection 0.9): K = 25 (1 + 2 rho) / rho^2 with rho = C/N0 coherent_s,
+// square-law detection (Kaplan & Hegarty 2006, 8.3). 24 dB-Hz: 0.22 s, 15 dB-Hz: 2.8 s. At the
+// search threshold it is also the longest window the search integrates before starting over.
 [[nodiscard]] double reacquisition_dwell_s(double cn0_dbhz, double coherent_s);
 
 class TrackingState {
@@ -114,8 +115,13 @@ class TrackingState {
     GnssTime lock_start;     // acquisition or last slip
     std::optional<GnssTime> above_since;  // acquiring: above the acquisition threshold since
     GnssTime acquiring_tag;  // last epoch it was seen acquiring
-    double detected = 0.0;   // aided search: the fraction of its detection time done
+    // Aided search (profile.reacquisition_threshold_dbhz): the window's signal and noise sums in
+    // coherent blocks (above_since: the window's start).
+    double signal_blocks = 0.0, noise_blocks = 0.0;
   };
+  // A running receiver's search for a predicted signal (profile.reacquisition_threshold_dbhz).
+  Lock aided_search(const ReceiverProfile& profile, Arc& arc, double cn0_dbhz, const GnssTime& tag,
+                    const GnssTime& last_tag, int& channels_used, SatelliteAcquisition& satellite);
   std::uint64_t seed_;
   int receiver_index_;
   bool slips_;
