@@ -668,6 +668,12 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     struct Partner {
       const NearFacet* b = nullptr;
       double hb = 0.0;
+      Eigen::Vector3d nb;        // B's normal on the side of the first image
+      Eigen::Vector3d image_ab;  // the first image mirrored in B
+      // The point on B lies on the ray from image_ab towards the satellite and within B's bounding
+      // sphere: only satellites within this cone around the sphere's direction can use the pair.
+      Eigen::Vector3d cone_axis;
+      double cone_cos = -2.0;
     };
     std::vector<Partner> partners;
     for (const NearFacet& a : second_order_facets) {
@@ -686,19 +692,29 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         if (na.dot(fb.centre_m) + fb.radius_m <= ca) continue;
         const double side = hb >= 0.0 ? 1.0 : -1.0;
         if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) continue;
-        partners.push_back(Partner{&b, hb});
+        Partner partner{&b, hb, hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal), {}, {}, -2.0};
+        partner.image_ab = image_a - 2.0 * std::abs(hb) * partner.nb;
+        const Eigen::Vector3d to_b = fb.centre_m - partner.image_ab;
+        const double distance_m = to_b.norm();
+        if (distance_m > fb.radius_m * (1.0 + 1e-9) + 1e-9) {
+          partner.cone_axis = to_b / distance_m;
+          const double sin_half = fb.radius_m / distance_m;
+          partner.cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-9;  // a hair wide
+        }
+        partners.push_back(partner);
       }
       if (partners.empty()) continue;
       for (std::size_t i = 0; i < n_sat; ++i) {
         const Eigen::Vector3d& s = directions[i];
         for (const Partner& partner : partners) {
+          if (partner.cone_cos > -2.0 && partner.cone_axis.dot(s) < partner.cone_cos) continue;
           const NearFacet& b = *partner.b;
           const Facet& fb = facets_[b.index];
           const double hb = partner.hb;
-          const Eigen::Vector3d nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);  // side of image_a
+          const Eigen::Vector3d& nb = partner.nb;  // side of image_a
           const double nbs = nb.dot(s);
           if (nbs <= 1e-6) continue;
-          const Eigen::Vector3d image_ab = image_a - 2.0 * std::abs(hb) * nb;
+          const Eigen::Vector3d& image_ab = partner.image_ab;
           const Eigen::Vector3d p2 = image_ab + (std::abs(hb) / nbs) * s;
           if ((p2 - fb.centre_m).squaredNorm() > fb.radius_m * fb.radius_m) continue;
           const Eigen::Vector3d to_image = image_a - p2;
