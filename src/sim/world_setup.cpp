@@ -232,12 +232,12 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     }
   }
 
-  // OpenStreetMap, footprints and CityJSON without a terrain have no ground: a plane at the world's
-  // z = 0 (its ground height) under everything and 200 m beyond, so that the ground reflects
-  // (models.multipath) and blocks what is below the horizon, as Gazebo worlds' ground planes do.
   // The model's extent, before a ground plane or surroundings are added to it.
   const auto model_bounds = model.objects.empty() ? std::pair<Eigen::Vector3d, Eigen::Vector3d>{}
                                                   : world::world_bounds(model);
+  // OpenStreetMap, footprints and CityJSON without a terrain have no ground: a plane at the world's
+  // z = 0 (its ground height) under everything and 200 m beyond, so that the ground reflects
+  // (models.multipath) and blocks what is below the horizon, as Gazebo worlds' ground planes do.
   const bool has_ground = std::any_of(model.objects.begin(), model.objects.end(),
                                       [](const world::WorldObject& o) { return o.kind == world::ObjectKind::kGround; });
   if (!has_ground && !model.objects.empty() && (w.osm || w.footprints || w.cityjson || w.citygml)) {

@@ -1,9 +1,10 @@
 // Stage 4 of the observation model: the tracking state. Acquisition (a satellite is acquired on a
 // signal above the acquisition threshold, held for the acquisition time, and its other signals are
 // handed over down to the tracking threshold; a running receiver with an aided reacquisition
-// threshold searches from it, for a detection time set by the C/N0), loss of lock below the tracking threshold, the
-// channels (highest satellites first), carrier arcs with their integer ambiguity and cycle slips,
-// the half-cycle flag, and the gate of ephemeris decoding (profile output_requires_ephemeris).
+// threshold searches from it, for a detection time set by the C/N0), loss of lock below the
+// tracking threshold, the channels (highest satellites first), carrier arcs with their integer
+// ambiguity and cycle slips, the half-cycle flag, and the gate of ephemeris decoding (profile
+// output_requires_ephemeris).
 #pragma once
 
 #include <cstdint>
