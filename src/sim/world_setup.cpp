@@ -252,31 +252,28 @@ Result<std::optional<LoadedWorld>> load_world(const Scenario& s) {
     ground.pose = Eigen::Translation3d(0.5 * (low.x() + high.x()), 0.5 * (low.y() + high.y()), 0.0);
     model.objects.push_back(std::move(ground));
   }
-  // The city beyond the model (world.surroundings_height_m): four walls along the objects'
-  // horizontal bounds, from below their lowest base to the height above the ground, so that a
-  // receiver inside sees no open horizon where the model merely ends.
+  // The city beyond the model (world.surroundings_height_m): a 1 m thick wall around the objects'
+  // horizontal bounds, its inner face on them, from below their lowest base to the height above the
+  // ground, so that a receiver inside sees no open horizon where the model merely ends.
   if (w.surroundings_height_m && !model.objects.empty()) {
-    const auto& [low, high] = model_bounds;
+    // Not a structured binding: clang 14 cannot capture one in the lambda below.
+    const Eigen::Vector3d& low = model_bounds.first;
+    const Eigen::Vector3d& high = model_bounds.second;
     const double bottom_m = std::min(low.z(), 0.0) - 1.0;
-    const double top_m = *w.surroundings_height_m;
-    if (top_m > bottom_m) {
-      const Eigen::Vector3d corners[4] = {{low.x(), low.y(), 0.0}, {high.x(), low.y(), 0.0},
-                                          {high.x(), high.y(), 0.0}, {low.x(), high.y(), 0.0}};
-      world::WorldObject ring;
-      ring.name = "surroundings";
-      ring.kind = world::ObjectKind::kSurroundings;
-      for (int side = 0; side < 4; ++side) {
-        const Eigen::Vector3d& a = corners[side];
-        const Eigen::Vector3d& b = corners[(side + 1) % 4];
-        const int first = static_cast<int>(ring.mesh.vertices_m.size());
-        for (const Eigen::Vector3d& corner : {a, b}) {
-          ring.mesh.vertices_m.emplace_back(corner.x(), corner.y(), bottom_m);
-          ring.mesh.vertices_m.emplace_back(corner.x(), corner.y(), top_m);
-        }
-        ring.mesh.triangles.emplace_back(first, first + 2, first + 3);
-        ring.mesh.triangles.emplace_back(first, first + 3, first + 1);
-      }
-      model.objects.push_back(std::move(ring));
+    constexpr double kWallThickness_m = 1.0;
+    const auto rectangle = [&](double out_m) {
+      return world::Ring2{{low.x() - out_m, low.y() - out_m}, {high.x() + out_m, low.y() - out_m},
+                          {high.x() + out_m, high.y() + out_m}, {low.x() - out_m, high.y() + out_m}};
+    };
+    if (*w.surroundings_height_m > bottom_m) {
+      auto ring = world::extrude_polygon(world::PolygonWithHoles{rectangle(kWallThickness_m), {rectangle(0.0)}},
+                                         bottom_m, *w.surroundings_height_m);
+      if (!ring) return ring.error().with_context("world.surroundings_height_m");
+      world::WorldObject surroundings;
+      surroundings.name = "surroundings";
+      surroundings.kind = world::ObjectKind::kSurroundings;
+      surroundings.mesh = std::move(*ring);
+      model.objects.push_back(std::move(surroundings));
     }
   }
   auto scene = world::EmbreeScene::build(model);

@@ -161,8 +161,8 @@ struct WorldSettings {
   std::vector<MovingModelSetting> moving;
   std::optional<double> vegetation_attenuation_db_per_m;  // default of vegetation no rule sets
   std::optional<double> vegetation_hull_tolerance_m;      // simplification of vegetation hulls
-  // The city beyond the model's extent: walls this high above the ground along the objects'
-  // horizontal bounds, which block (no reflection, no diffraction) what leaves the model below them.
+  // The city beyond the model's extent: a wall this high above the ground around the objects'
+  // horizontal bounds, which blocks (no reflection, no diffraction) what leaves the model below it.
   std::optional<double> surroundings_height_m;
   // Overrides of the world's <spherical_coordinates>.
   std::optional<double> latitude_deg, longitude_deg, elevation_m, heading_deg;

@@ -12,10 +12,20 @@ double search_threshold_dbhz(const ReceiverProfile& profile, bool running) {
                                                          : profile.acquisition_threshold_dbhz;
 }
 
+namespace {
+
+// Deflection of the square-law detection statistic an aided search needs:
+// Q^-1(1e-4 false alarms per cell) + Q^-1(1 - 0.9 detection) = 3.72 + 1.28.
+constexpr double kDetectionDeflection = 5.0;
+
+// Signal-to-noise ratio of one coherent block of `coherent_s` at `cn0_dbhz`.
+double block_snr(double cn0_dbhz, double coherent_s) { return std::pow(10.0, cn0_dbhz / 10.0) * coherent_s; }
+
+}  // namespace
+
 double reacquisition_dwell_s(double cn0_dbhz, double coherent_s) {
-  constexpr double kDeflection = 5.0;  // Q^-1(1e-4) + Q^-1(1 - 0.9) = 3.72 + 1.28
-  const double rho = std::pow(10.0, cn0_dbhz / 10.0) * coherent_s;
-  return coherent_s * kDeflection * kDeflection * (1.0 + 2.0 * rho) / (rho * rho);
+  const double rho = block_snr(cn0_dbhz, coherent_s);
+  return coherent_s * kDetectionDeflection * kDetectionDeflection * (1.0 + 2.0 * rho) / (rho * rho);
 }
 
 bool TrackingState::tracked_at(const SatelliteId& sat, const Signal& signal, const std::optional<GnssTime>& last_tag) {
@@ -103,19 +113,18 @@ TrackingState::Lock TrackingState::aided_search(const ReceiverProfile& profile, 
   // Square-law detection over the window: the signal adds rho per coherent block, the statistic's
   // variance 1 + 2 rho; detected once the deflection sum(rho) / sqrt(sum(1 + 2 rho)) reaches 5
   // (reacquisition_dwell_s for a steady signal).
-  const double rho = std::pow(10.0, cn0_dbhz / 10.0) * coherent_s;
+  const double rho = block_snr(cn0_dbhz, coherent_s);
   const double blocks = (tag - searched_from) / coherent_s;
   const double signal_before = arc.signal_blocks, noise_before = arc.noise_blocks;
   arc.signal_blocks += blocks * rho;
   arc.noise_blocks += blocks * (1.0 + 2.0 * rho);
-  constexpr double kDeflection = 5.0;
-  if (arc.signal_blocks < kDeflection * std::sqrt(arc.noise_blocks)) {
+  if (arc.signal_blocks < kDetectionDeflection * std::sqrt(arc.noise_blocks)) {
     satellite.not_tracked_because = cn0_dbhz < threshold_dbhz ? "below the acquisition threshold" : "acquiring";
     return Lock::kNone;
   }
   // When within the interval the deflection reached 5: the larger root of
   // (S0 + k rho)^2 = d^2 (N0 + k (1 + 2 rho)) in blocks k.
-  const double c = 1.0 + 2.0 * rho, d2 = kDeflection * kDeflection;
+  const double c = 1.0 + 2.0 * rho, d2 = kDetectionDeflection * kDetectionDeflection;
   const double b = 2.0 * signal_before * rho - d2 * c;
   const double discriminant = b * b - 4.0 * rho * rho * (signal_before * signal_before - d2 * noise_before);
   const double k = std::clamp((-b + std::sqrt(std::max(discriminant, 0.0))) / (2.0 * rho * rho), 0.0, blocks);
