@@ -24,6 +24,8 @@ constexpr double kSurfaceOffset_m = 0.005;
 constexpr double kEdgeOffset_m = 0.02;
 // Diffraction candidates kept per blocked satellite (least loss first).
 constexpr std::size_t kMaxDiffractedPaths = 3;
+// Scattering patches per facet at most (larger patches on larger facets).
+constexpr std::size_t kMaxPatchesPerFacet = 256;
 // The facet candidates found for one point serve antenna positions this close to it.
 constexpr double kCandidateMargin_m = 10.0;
 
@@ -388,11 +390,17 @@ std::vector<RayOutcome> PropagationScene::trace(const Eigen::Vector3d& origin_m,
 
 std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates(const Eigen::Vector3d& origin_m,
                                                                                 const PathSearchSettings& settings) const {
+  const bool scattering = settings.scattering_coefficient > 0.0;
+  const double scattering_radius_m = scattering ? settings.scattering_radius_m : 0.0;
+  const double scattering_patch_m = scattering ? settings.scattering_patch_m : 0.0;
   {
     const std::lock_guard lock(cache_mutex_);
-    if (cache_ && (cache_->origin_m - origin_m).norm() <= kCandidateMargin_m && cache_->radius_m == settings.radius_m &&
-        cache_->min_area_m2 == settings.min_facet_area_m2 && cache_->frequency_hz == settings.frequency_hz) {
-      return cache_;
+    for (const auto& cached : cache_) {
+      if (cached && (cached->origin_m - origin_m).norm() <= kCandidateMargin_m && cached->radius_m == settings.radius_m &&
+          cached->min_area_m2 == settings.min_facet_area_m2 && cached->frequency_hz == settings.frequency_hz &&
+          cached->scattering_radius_m == scattering_radius_m && cached->scattering_patch_m == scattering_patch_m) {
+        return cached;
+      }
     }
   }
   auto c = std::make_shared<Candidates>();
@@ -400,6 +408,8 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   c->radius_m = settings.radius_m;
   c->min_area_m2 = settings.min_facet_area_m2;
   c->frequency_hz = settings.frequency_hz;
+  c->scattering_radius_m = scattering_radius_m;
+  c->scattering_patch_m = scattering_patch_m;
   if (grid_nx_ > 0) {
     const double r = settings.radius_m + kCandidateMargin_m;
     const int x0 = std::max(0, static_cast<int>(std::floor((origin_m.x() - r - grid_min_.x()) / cell_m_)));
@@ -424,11 +434,33 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
       const Facet& f = facets_[i];
       const Eigen::Vector3d nearest = origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m);
       if (f.area_m2 < settings.min_facet_area_m2 || (nearest - origin_m).norm() > r) continue;
-      c->facets.push_back(NearFacet{i, f.normal, 0.0, eta_of[static_cast<std::size_t>(f.material)]});
+      c->facets.push_back(NearFacet{i, f.normal, 0.0, eta_of[static_cast<std::size_t>(f.material)], nullptr});
     }
   }
+  // The scattering patches: a grid over the facet's plane, at most kMaxPatchesPerFacet cells of
+  // about scattering_patch_m, those whose centre lies on the facet.
+  c->patches.resize(c->facets.size());
+  for (std::size_t k = 0; scattering && k < c->facets.size(); ++k) {
+    const Facet& f = facets_[c->facets[k].index];
+    if ((origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m) - origin_m).norm() > scattering_radius_m + kCandidateMargin_m) continue;
+    const Eigen::Vector2d span = f.max_uv - f.min_uv;
+    const double step = std::max(scattering_patch_m,
+                                 std::sqrt(std::max(span.x() * span.y(), 1e-6) / static_cast<double>(kMaxPatchesPerFacet)));
+    const int nu = std::max(1, static_cast<int>(std::ceil(span.x() / step)));
+    const int nv = std::max(1, static_cast<int>(std::ceil(span.y() / step)));
+    const double du = span.x() / nu, dv = span.y() / nv;
+    for (int a = 0; a < nu; ++a) {
+      for (int b = 0; b < nv; ++b) {
+        const Eigen::Vector2d uv = f.min_uv + Eigen::Vector2d((a + 0.5) * du, (b + 0.5) * dv);
+        const Eigen::Vector3d point = f.origin_m + uv.x() * f.axis_u + uv.y() * f.axis_v;
+        if (f.contains(point)) c->patches[k].push_back(FacetPatch{point, du * dv});
+      }
+    }
+  }
+  for (std::size_t k = 0; k < c->facets.size(); ++k) c->facets[k].patches = &c->patches[k];
   const std::lock_guard lock(cache_mutex_);
-  cache_ = c;
+  cache_[cache_next_] = c;
+  cache_next_ = (cache_next_ + 1) % cache_.size();
   return c;
 }
 
@@ -448,38 +480,61 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   if (blocked.empty()) return;
   const double s2 = settings.scattering_coefficient * settings.scattering_coefficient;
   const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
-  constexpr std::size_t kMaxPatchesPerFacet = 256;
+  const std::array<double, 91>* lobe =
+      settings.scattering_lobe_exponent > 0 ? &directive_lobe_integrals(settings.scattering_lobe_exponent) : nullptr;
+  // What depends on the facet and the satellite only (a plane wave lights every patch of a facet
+  // alike): S^2 |Gamma|^2 cos(theta_i), and the directive lobe's normalisation; 0 when unlit.
+  struct Lighting {
+    double factor = 0.0, lobe_integral = 1.0;
+  };
+  const std::size_t n_blocked = blocked.size();
+  std::vector<Lighting> lighting(n_blocked * near_facets.size());  // [satellite][facet]
+  for (std::size_t j = 0; j < n_blocked; ++j) {
+    const Eigen::Vector3d& s = directions[blocked[j]];
+    for (std::size_t k = 0; k < near_facets.size(); ++k) {
+      const NearFacet& nf = near_facets[k];
+      const double cos_incidence = nf.normal.dot(s);
+      if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
+      Lighting& light = lighting[j * near_facets.size() + k];
+      const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
+      light.factor = s2 * 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm)) * cos_incidence;
+      if (lobe != nullptr) {
+        const double incidence_deg = std::acos(std::clamp(cos_incidence, 0.0, 1.0)) * 180.0 / std::numbers::pi;
+        light.lobe_integral = (*lobe)[static_cast<std::size_t>(std::lround(incidence_deg))];
+      }
+    }
+  }
   struct Patch {
     std::size_t facet = 0;  // index in near_facets
     Eigen::Vector3d point_m;
     double area_m2 = 0.0, distance_m = 0.0, cos_receiver = 0.0, vegetation_db = 0.0;
   };
-  // The patches within the radius on the receiver's side of each facet.
+  // The patches within the radius on the receiver's side of each facet that could matter to a
+  // blocked satellite: lit by it, and strong enough with the scattering lobe at its peak (the exact
+  // power follows for the patches the receiver sees).
   std::vector<Patch> patches;
   std::vector<Eigen::Vector3d> towards;
   for (std::size_t k = 0; k < near_facets.size(); ++k) {
     const NearFacet& nf = near_facets[k];
     const Facet& f = facets_[nf.index];
-    if ((r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm() > settings.scattering_radius_m) continue;
-    const Eigen::Vector2d span = f.max_uv - f.min_uv;
-    const double step = std::max(settings.scattering_patch_m,
-                                 std::sqrt(std::max(span.x() * span.y(), 1e-6) / static_cast<double>(kMaxPatchesPerFacet)));
-    const int nu = std::max(1, static_cast<int>(std::ceil(span.x() / step)));
-    const int nv = std::max(1, static_cast<int>(std::ceil(span.y() / step)));
-    const double du = span.x() / nu, dv = span.y() / nv;
-    for (int a = 0; a < nu; ++a) {
-      for (int b = 0; b < nv; ++b) {
-        const Eigen::Vector2d uv = f.min_uv + Eigen::Vector2d((a + 0.5) * du, (b + 0.5) * dv);
-        const Eigen::Vector3d point = f.origin_m + uv.x() * f.axis_u + uv.y() * f.axis_v;
-        if (!f.contains(point)) continue;
-        const Eigen::Vector3d to_point = point - r;
-        const double d = to_point.norm();
-        if (d < 0.5 || d > settings.scattering_radius_m) continue;
-        const double cos_receiver = -nf.normal.dot(to_point) / d;
-        if (cos_receiver <= 1e-3) continue;
-        patches.push_back(Patch{k, point, du * dv, d, cos_receiver, 0.0});
-        towards.push_back(to_point / d);
-      }
+    if (nf.patches == nullptr || (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm() > settings.scattering_radius_m) continue;
+    double peak_factor = 0.0;  // largest factor x peak pattern over the blocked satellites
+    for (std::size_t j = 0; j < n_blocked; ++j) {
+      const Lighting& light = lighting[j * near_facets.size() + k];
+      peak_factor = std::max(peak_factor, light.factor / light.lobe_integral);
+    }
+    if (peak_factor <= 0.0) continue;
+    for (const FacetPatch& facet_patch : *nf.patches) {
+      const Eigen::Vector3d to_point = facet_patch.point_m - r;
+      const double d = to_point.norm();
+      if (d < 0.5 || d > settings.scattering_radius_m) continue;
+      const double cos_receiver = -nf.normal.dot(to_point) / d;
+      if (cos_receiver <= 1e-3) continue;
+      const double peak_pattern = lobe != nullptr ? 1.001 : cos_receiver / std::numbers::pi;  // a hair high
+      const double peak_power = peak_factor * facet_patch.area_m2 * peak_pattern / (d * d);
+      if (peak_power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
+      patches.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, 0.0});
+      towards.push_back(to_point / d);
     }
   }
   if (patches.empty()) return;
@@ -498,32 +553,13 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   };
   std::vector<Sum> sums(near_facets.size());
   std::vector<Eigen::Vector3d> one(1);
-  const std::array<double, 91>* lobe =
-      settings.scattering_lobe_exponent > 0 ? &directive_lobe_integrals(settings.scattering_lobe_exponent) : nullptr;
-  // What depends on the facet and the satellite only (a plane wave lights every patch of a facet
-  // alike): S^2 |Gamma|^2 cos(theta_i), and the directive lobe's normalisation; 0 when unlit.
-  struct Lighting {
-    double factor = 0.0, lobe_integral = 1.0;
-  };
-  std::vector<Lighting> lighting(near_facets.size());
-  for (const std::size_t i : blocked) {
+  for (std::size_t j = 0; j < n_blocked; ++j) {
+    const std::size_t i = blocked[j];
     const Eigen::Vector3d& s = directions[i];
     std::fill(sums.begin(), sums.end(), Sum{});
-    for (std::size_t k = 0; k < near_facets.size(); ++k) {
-      const NearFacet& nf = near_facets[k];
-      const double cos_incidence = nf.normal.dot(s);
-      lighting[k] = Lighting{};
-      if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
-      const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
-      lighting[k].factor = s2 * 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm)) * cos_incidence;
-      if (lobe != nullptr) {
-        const double incidence_deg = std::acos(std::clamp(cos_incidence, 0.0, 1.0)) * 180.0 / std::numbers::pi;
-        lighting[k].lobe_integral = (*lobe)[static_cast<std::size_t>(std::lround(incidence_deg))];
-      }
-    }
     for (const Patch& patch : visible) {
       const NearFacet& nf = near_facets[patch.facet];
-      const Lighting& light = lighting[patch.facet];
+      const Lighting& light = lighting[j * near_facets.size() + patch.facet];
       if (light.factor <= 0.0) continue;
       // The scattering pattern towards the receiver over its integral on the hemisphere.
       double pattern = patch.cos_receiver / std::numbers::pi;
@@ -565,6 +601,183 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       out[i].paths.push_back(std::move(p));
     }
   }
+}
+
+struct PropagationScene::FacetPair {
+  std::size_t a = 0, b = 0;  // indices into the second-order facets
+  double hb = 0.0;           // the first image's height above B
+  Eigen::Vector3d nb;        // B's normal on the side of the first image
+  Eigen::Vector3d image_ab;  // the first image mirrored in B
+  // The point on B lies on the ray from image_ab towards the satellite and within B's bounding
+  // sphere: only satellites within this cone around the sphere's direction can use the pair.
+  Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();
+  double cone_cos = -2.0;  // -2: no cone (image_ab within the sphere)
+  // Likewise the point on A lies on the ray from the first image along the satellite's direction
+  // mirrored in B, and within A's bounding sphere: a second cone, mirrored back.
+  Eigen::Vector3d mirrored_cone_axis = Eigen::Vector3d::Zero();
+  double mirrored_cone_cos = -2.0;
+
+  // Whether satellite direction s lies in both cones.
+  [[nodiscard]] bool may_carry(const Eigen::Vector3d& s) const {
+    return (cone_cos <= -2.0 || cone_axis.dot(s) >= cone_cos) &&
+           (mirrored_cone_cos <= -2.0 || mirrored_cone_axis.dot(s) >= mirrored_cone_cos);
+  }
+  // The narrower cone, or none.
+  [[nodiscard]] std::pair<const Eigen::Vector3d*, double> narrower_cone() const {
+    if (cone_cos <= -2.0 && mirrored_cone_cos <= -2.0) return {nullptr, -2.0};
+    return cone_cos >= mirrored_cone_cos ? std::pair{&cone_axis, cone_cos} : std::pair{&mirrored_cone_axis, mirrored_cone_cos};
+  }
+};
+
+// The pairs of one antenna position by the sky cells (6 deg in elevation and azimuth) their cones
+// overlap, so that a satellite tries only the pairs whose cone may hold it.
+struct PropagationScene::DoubleBounceIndex {
+  static constexpr int kRows = 30, kColumns = 60;
+  static constexpr double kCell_rad = std::numbers::pi / kRows;
+  static constexpr double kMargin_rad = 1e-6;  // cells a hair wider than the cones need
+
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  std::vector<std::size_t> facets;  // the second-order facets the pairs index (scene indices)
+  std::vector<FacetPair> pairs;     // A by A, then B, as append_facet_pairs makes them
+  std::vector<std::uint32_t> cell_start, cell_pairs;  // pairs per cell, ascending
+  std::vector<std::uint32_t> everywhere;              // pairs without a cone
+
+  static int row_of(double elevation_rad) {
+    return std::clamp(static_cast<int>(std::floor((elevation_rad + std::numbers::pi / 2.0) / kCell_rad)), 0, kRows - 1);
+  }
+  static int column_of(double azimuth_rad) {
+    const int c = static_cast<int>(std::floor((azimuth_rad + std::numbers::pi) / kCell_rad));
+    return ((c % kColumns) + kColumns) % kColumns;
+  }
+  // Every cell the cone (unit axis, cosine of the half angle) may reach.
+  template <class Visit>
+  static void for_each_cell(const Eigen::Vector3d& axis, double cone_cos, Visit&& visit) {
+    const double half = std::acos(std::clamp(cone_cos, -1.0, 1.0)) + kMargin_rad;
+    const double elevation = std::asin(std::clamp(axis.z(), -1.0, 1.0));
+    const double azimuth = std::atan2(axis.y(), axis.x());
+    const int row0 = row_of(elevation - half), row1 = row_of(elevation + half);
+    // A cap that reaches no pole spans azimuths within asin(sin half / cos elevation) of its centre.
+    const bool all_columns = elevation + half >= std::numbers::pi / 2.0 || elevation - half <= -std::numbers::pi / 2.0 ||
+                             std::sin(half) >= std::cos(elevation);
+    int column0 = 0, count = kColumns;
+    if (!all_columns) {
+      const double spread = std::asin(std::sin(half) / std::cos(elevation)) + kMargin_rad;
+      column0 = static_cast<int>(std::floor((azimuth - spread + std::numbers::pi) / kCell_rad));
+      count = std::min(kColumns, static_cast<int>(std::floor((azimuth + spread + std::numbers::pi) / kCell_rad)) - column0 + 1);
+    }
+    for (int row = row0; row <= row1; ++row) {
+      for (int k = 0; k < count; ++k) visit(row * kColumns + (((column0 + k) % kColumns) + kColumns) % kColumns);
+    }
+  }
+  // The pairs that satellite direction s may use, in ascending order.
+  template <class Visit>
+  void for_each_candidate(const Eigen::Vector3d& s, Visit&& visit) const {
+    const int cell = row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * kColumns + column_of(std::atan2(s.y(), s.x()));
+    const std::uint32_t* it = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell)];
+    const std::uint32_t* end = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell) + 1];
+    auto other = everywhere.begin();
+    while (it != end || other != everywhere.end()) {
+      if (other == everywhere.end() || (it != end && *it < *other)) {
+        visit(*it++);
+      } else {
+        visit(*other++);
+      }
+    }
+  }
+};
+
+void PropagationScene::append_facet_pairs(std::size_t a_index, const std::vector<NearFacet>& facets,
+                                          const std::vector<double>& plane_a, const std::vector<Eigen::Vector3d>& image_of,
+                                          std::vector<FacetPair>& out) const {
+  const NearFacet& a = facets[a_index];
+  const Facet& fa = facets_[a.index];
+  const Eigen::Vector3d& na = a.normal;
+  const double ca = plane_a[a_index];
+  const Eigen::Vector3d& image_a = image_of[a_index];
+  for (std::size_t b_index = 0; b_index < facets.size(); ++b_index) {
+    const NearFacet& b = facets[b_index];
+    if (b.index == a.index) continue;
+    const Facet& fb = facets_[b.index];
+    const double hb = fb.normal.dot(image_a) - fb.offset_m;
+    if (std::abs(hb) < 1e-6) continue;
+    // Necessary for any satellite (the point on B lies within B's bounding sphere, the point
+    // on A within A's): B reaches A's receiver side, A reaches B's side of the first image.
+    if (na.dot(fb.centre_m) + fb.radius_m <= ca) continue;
+    const double side = hb >= 0.0 ? 1.0 : -1.0;
+    if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) continue;
+    FacetPair pair{a_index, b_index, hb, hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal), {}, Eigen::Vector3d::Zero(), -2.0};
+    pair.image_ab = image_a - 2.0 * std::abs(hb) * pair.nb;
+    const Eigen::Vector3d to_b = fb.centre_m - pair.image_ab;
+    const double distance_m = to_b.norm();
+    if (distance_m > fb.radius_m * (1.0 + 1e-9) + 1e-9) {
+      pair.cone_axis = to_b / distance_m;
+      const double sin_half = fb.radius_m / distance_m;
+      pair.cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-9;  // a hair wide
+    }
+    const Eigen::Vector3d to_a = fa.centre_m - image_a;
+    const double distance_a_m = to_a.norm();
+    if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
+      // Householder reflection in B's plane: the direction from the first image to A becomes a
+      // satellite direction.
+      const Eigen::Vector3d axis = to_a / distance_a_m;
+      pair.mirrored_cone_axis = axis - 2.0 * pair.nb.dot(axis) * pair.nb;
+      const double sin_half = fa.radius_m / distance_a_m;
+      pair.mirrored_cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-7;  // wider: the axis was reflected
+    }
+    out.push_back(pair);
+  }
+}
+
+std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::double_bounce_index(
+    const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
+    const std::vector<Eigen::Vector3d>& image_of) const {
+  const auto same_facets = [&](const DoubleBounceIndex& index) {
+    return index.facets.size() == facets.size() &&
+           std::equal(facets.begin(), facets.end(), index.facets.begin(),
+                      [](const NearFacet& f, std::size_t i) { return f.index == i; });
+  };
+  {
+    const std::lock_guard lock(cache_mutex_);
+    for (const auto& cached : double_bounce_cache_) {
+      if (cached && cached->origin_m == origin_m && same_facets(*cached)) return cached;
+    }
+    // A moving antenna never comes back to the very same point: index only a point met before.
+    if (std::none_of(double_bounce_seen_m_.begin(), double_bounce_seen_m_.end(),
+                     [&](const std::optional<Eigen::Vector3d>& seen) { return seen && *seen == origin_m; })) {
+      double_bounce_seen_m_[double_bounce_seen_next_] = origin_m;
+      double_bounce_seen_next_ = (double_bounce_seen_next_ + 1) % double_bounce_seen_m_.size();
+      return nullptr;
+    }
+  }
+  auto index = std::make_shared<DoubleBounceIndex>();
+  index->origin_m = origin_m;
+  for (const NearFacet& f : facets) index->facets.push_back(f.index);
+  for (std::size_t a = 0; a < facets.size(); ++a) append_facet_pairs(a, facets, plane_a, image_of, index->pairs);
+  constexpr std::size_t kCells = static_cast<std::size_t>(DoubleBounceIndex::kRows * DoubleBounceIndex::kColumns);
+  index->cell_start.assign(kCells + 1, 0);
+  for (const FacetPair& pair : index->pairs) {
+    const auto [axis, cone_cos] = pair.narrower_cone();
+    if (axis != nullptr) {
+      DoubleBounceIndex::for_each_cell(*axis, cone_cos, [&](int cell) { ++index->cell_start[static_cast<std::size_t>(cell) + 1]; });
+    }
+  }
+  for (std::size_t c = 0; c < kCells; ++c) index->cell_start[c + 1] += index->cell_start[c];
+  index->cell_pairs.resize(index->cell_start[kCells]);
+  std::vector<std::uint32_t> filled(index->cell_start.begin(), index->cell_start.end() - 1);
+  for (std::size_t k = 0; k < index->pairs.size(); ++k) {
+    const auto [axis, cone_cos] = index->pairs[k].narrower_cone();
+    if (axis != nullptr) {
+      DoubleBounceIndex::for_each_cell(*axis, cone_cos, [&](int cell) {
+        index->cell_pairs[filled[static_cast<std::size_t>(cell)]++] = static_cast<std::uint32_t>(k);
+      });
+    } else {
+      index->everywhere.push_back(static_cast<std::uint32_t>(k));
+    }
+  }
+  const std::lock_guard lock(cache_mutex_);
+  double_bounce_cache_[double_bounce_next_] = index;
+  double_bounce_next_ = (double_bounce_next_ + 1) % double_bounce_cache_.size();
+  return index;
 }
 
 std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
@@ -612,7 +825,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   for (const NearFacet& c : near->facets) {
     const double h = c.normal.dot(r) - facets_[c.index].offset_m;
     if (std::abs(h) < 1e-6) continue;  // in the plane: no reflection
-    near_facets.push_back(NearFacet{c.index, h >= 0.0 ? c.normal : Eigen::Vector3d(-c.normal), std::abs(h), c.eta});
+    near_facets.push_back(NearFacet{c.index, h >= 0.0 ? c.normal : Eigen::Vector3d(-c.normal), std::abs(h), c.eta, c.patches});
   }
   // Double bounces between the facets within second_order_radius_m (their number grows as its square).
   std::vector<NearFacet> second_order_facets;
@@ -665,96 +878,85 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   // worked out once instead of once per satellite. Paths are kept per satellite in pair order.
   std::vector<std::vector<Pending>> second_order(n_sat);
   if (settings.max_reflection_order >= 2) {
-    struct Partner {
-      const NearFacet* b = nullptr;
-      double hb = 0.0;
-      Eigen::Vector3d nb;        // B's normal on the side of the first image
-      Eigen::Vector3d image_ab;  // the first image mirrored in B
-      // The point on B lies on the ray from image_ab towards the satellite and within B's bounding
-      // sphere: only satellites within this cone around the sphere's direction can use the pair.
-      Eigen::Vector3d cone_axis;
-      double cone_cos = -2.0;
-    };
-    std::vector<Partner> partners;
-    for (const NearFacet& a : second_order_facets) {
+    // Facet A's plane (na . x = ca) and the receiver's image in it.
+    std::vector<double> plane_a(second_order_facets.size());
+    std::vector<Eigen::Vector3d> image_of(second_order_facets.size());
+    for (std::size_t k = 0; k < second_order_facets.size(); ++k) {
+      const NearFacet& a = second_order_facets[k];
+      plane_a[k] = a.normal.dot(r) - a.height_m;
+      image_of[k] = r - 2.0 * a.height_m * a.normal;
+    }
+    // The double bounce of satellite i off a pair, if there is one.
+    const auto bounce = [&](const FacetPair& pair, std::size_t i) {
+      const Eigen::Vector3d& s = directions[i];
+      if (!pair.may_carry(s)) return;
+      const NearFacet& a = second_order_facets[pair.a];
+      const NearFacet& b = second_order_facets[pair.b];
       const Facet& fa = facets_[a.index];
+      const Facet& fb = facets_[b.index];
       const Eigen::Vector3d& na = a.normal;
-      const double ca = na.dot(r) - a.height_m;  // plane of A: na . x = ca
-      const Eigen::Vector3d image_a = r - 2.0 * a.height_m * na;
-      partners.clear();
-      for (const NearFacet& b : second_order_facets) {
-        if (b.index == a.index) continue;
-        const Facet& fb = facets_[b.index];
-        const double hb = fb.normal.dot(image_a) - fb.offset_m;
-        if (std::abs(hb) < 1e-6) continue;
-        // Necessary for any satellite (the point on B lies within B's bounding sphere, the point
-        // on A within A's): B reaches A's receiver side, A reaches B's side of the first image.
-        if (na.dot(fb.centre_m) + fb.radius_m <= ca) continue;
-        const double side = hb >= 0.0 ? 1.0 : -1.0;
-        if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) continue;
-        Partner partner{&b, hb, hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal), {}, {}, -2.0};
-        partner.image_ab = image_a - 2.0 * std::abs(hb) * partner.nb;
-        const Eigen::Vector3d to_b = fb.centre_m - partner.image_ab;
-        const double distance_m = to_b.norm();
-        if (distance_m > fb.radius_m * (1.0 + 1e-9) + 1e-9) {
-          partner.cone_axis = to_b / distance_m;
-          const double sin_half = fb.radius_m / distance_m;
-          partner.cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-9;  // a hair wide
-        }
-        partners.push_back(partner);
-      }
-      if (partners.empty()) continue;
+      const double ca = plane_a[pair.a];
+      const Eigen::Vector3d& image_a = image_of[pair.a];
+      const double hb = pair.hb;
+      const Eigen::Vector3d& nb = pair.nb;  // side of image_a
+      const double nbs = nb.dot(s);
+      if (nbs <= 1e-6) return;
+      const Eigen::Vector3d& image_ab = pair.image_ab;
+      const Eigen::Vector3d p2 = image_ab + (std::abs(hb) / nbs) * s;
+      if ((p2 - fb.centre_m).squaredNorm() > fb.radius_m * fb.radius_m) return;
+      const Eigen::Vector3d to_image = image_a - p2;
+      const double denom = na.dot(to_image);
+      if (std::abs(denom) < 1e-12) return;
+      const double lambda = (ca - na.dot(p2)) / denom;
+      if (lambda <= 0.0 || lambda >= 1.0) return;
+      const Eigen::Vector3d p1 = p2 + lambda * to_image;
+      // Both bounces on the facing sides: p2 on the receiver's side of A, p1 on B's lit side.
+      if (na.dot(p2) - ca <= 0.0 || nb.dot(p1 - p2) <= 0.0) return;
+      const double d1 = (p1 - r).norm(), d12 = (p2 - p1).norm();
+      if (d1 > settings.radius_m || d12 < 1e-3 || (p2 - r).norm() > settings.radius_m) return;
+      if (!fa.contains(p1) || !fb.contains(p2)) return;
+      const Eigen::Vector3d u12 = (p2 - p1) / d12;
+      Pending p;
+      p.satellite = i;
+      p.path.type = PathType::kReflected;
+      p.path.reflections = 2;
+      p.path.excess_delay_m = d1 + d12 - s.dot(p2 - r);
+      p.path.rhcp_amplitude = 1.0;
+      p.path.lhcp_amplitude = 0.0;
+      reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(b.eta, nbs));
+      reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(a.eta, std::abs(na.dot(u12))));
+      p.path.rhcp_amplitude *= specular_factor * specular_factor;
+      p.path.lhcp_amplitude *= specular_factor * specular_factor;
+      if (p.path.power_linear() < min_power) return;
+      p.path.arrival_direction = (p1 - r) / d1;
+      p.path.point_m = p1;
+      p.path.second_point_m = p2;
+      p.path.material = fa.material;
+      p.path.object = object_names_[fa.object];
+      // excess = -s . (image_ab - r), image_ab = M r + b with M the two Householder reflections.
+      const Eigen::Matrix3d m = (Eigen::Matrix3d::Identity() - 2.0 * nb * nb.transpose()) *
+                                (Eigen::Matrix3d::Identity() - 2.0 * na * na.transpose());
+      p.path.delay_gradient_origin = s - m.transpose() * s;
+      p.path.delay_gradient_direction = -(image_ab - r);
+      p.first_leg_m = d1;
+      p.legs.push_back(Leg{p1 + kSurfaceOffset_m * na, u12, d12});
+      p.legs.push_back(Leg{p2 + kSurfaceOffset_m * nb, s, kInf});
+      second_order[i].push_back(std::move(p));
+    };
+    const std::shared_ptr<const DoubleBounceIndex> index = double_bounce_index(r, second_order_facets, plane_a, image_of);
+    if (index) {
+      // A static antenna: every pair is known, each satellite tries those whose cone covers its
+      // sky cell, in pair order (as below).
       for (std::size_t i = 0; i < n_sat; ++i) {
-        const Eigen::Vector3d& s = directions[i];
-        for (const Partner& partner : partners) {
-          if (partner.cone_cos > -2.0 && partner.cone_axis.dot(s) < partner.cone_cos) continue;
-          const NearFacet& b = *partner.b;
-          const Facet& fb = facets_[b.index];
-          const double hb = partner.hb;
-          const Eigen::Vector3d& nb = partner.nb;  // side of image_a
-          const double nbs = nb.dot(s);
-          if (nbs <= 1e-6) continue;
-          const Eigen::Vector3d& image_ab = partner.image_ab;
-          const Eigen::Vector3d p2 = image_ab + (std::abs(hb) / nbs) * s;
-          if ((p2 - fb.centre_m).squaredNorm() > fb.radius_m * fb.radius_m) continue;
-          const Eigen::Vector3d to_image = image_a - p2;
-          const double denom = na.dot(to_image);
-          if (std::abs(denom) < 1e-12) continue;
-          const double lambda = (ca - na.dot(p2)) / denom;
-          if (lambda <= 0.0 || lambda >= 1.0) continue;
-          const Eigen::Vector3d p1 = p2 + lambda * to_image;
-          // Both bounces on the facing sides: p2 on the receiver's side of A, p1 on B's lit side.
-          if (na.dot(p2) - ca <= 0.0 || nb.dot(p1 - p2) <= 0.0) continue;
-          const double d1 = (p1 - r).norm(), d12 = (p2 - p1).norm();
-          if (d1 > settings.radius_m || d12 < 1e-3 || (p2 - r).norm() > settings.radius_m) continue;
-          if (!fa.contains(p1) || !fb.contains(p2)) continue;
-          const Eigen::Vector3d u12 = (p2 - p1) / d12;
-          Pending p;
-          p.satellite = i;
-          p.path.type = PathType::kReflected;
-          p.path.reflections = 2;
-          p.path.excess_delay_m = d1 + d12 - s.dot(p2 - r);
-          p.path.rhcp_amplitude = 1.0;
-          p.path.lhcp_amplitude = 0.0;
-          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(b.eta, nbs));
-          reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(a.eta, std::abs(na.dot(u12))));
-          p.path.rhcp_amplitude *= specular_factor * specular_factor;
-          p.path.lhcp_amplitude *= specular_factor * specular_factor;
-          if (p.path.power_linear() < min_power) continue;
-          p.path.arrival_direction = (p1 - r) / d1;
-          p.path.point_m = p1;
-          p.path.second_point_m = p2;
-          p.path.material = fa.material;
-          p.path.object = object_names_[fa.object];
-          // excess = -s . (image_ab - r), image_ab = M r + b with M the two Householder reflections.
-          const Eigen::Matrix3d m = (Eigen::Matrix3d::Identity() - 2.0 * nb * nb.transpose()) *
-                                    (Eigen::Matrix3d::Identity() - 2.0 * na * na.transpose());
-          p.path.delay_gradient_origin = s - m.transpose() * s;
-          p.path.delay_gradient_direction = -(image_ab - r);
-          p.first_leg_m = d1;
-          p.legs.push_back(Leg{p1 + kSurfaceOffset_m * na, u12, d12});
-          p.legs.push_back(Leg{p2 + kSurfaceOffset_m * nb, s, kInf});
-          second_order[i].push_back(std::move(p));
+        index->for_each_candidate(directions[i], [&](std::size_t k) { bounce(index->pairs[k], i); });
+      }
+    } else {
+      std::vector<FacetPair> pairs;
+      for (std::size_t a = 0; a < second_order_facets.size(); ++a) {
+        pairs.clear();
+        append_facet_pairs(a, second_order_facets, plane_a, image_of, pairs);
+        for (std::size_t i = 0; i < n_sat; ++i) {
+          for (const FacetPair& pair : pairs) bounce(pair, i);
         }
       }
     }

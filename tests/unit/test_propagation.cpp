@@ -7,6 +7,8 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "skytrace/world/loaders.hpp"
 #include "skytrace/world/propagation.hpp"
@@ -247,6 +249,65 @@ TEST(Propagation, SecondOrderReflectionInTheCanyon) {
   // Without the second order only the single bounce remains.
   settings.max_reflection_order = 1;
   EXPECT_EQ(find_path(scene->paths(rx, {enu_direction(0.0, el)}, settings)[0], PathType::kReflected, 2), nullptr);
+}
+
+// A static antenna's double bounces come from an index of the facet pairs by sky cell, built on
+// its second call at the same point (a moving antenna searches every pair each time). Both must
+// give the same paths, bit for bit: a block of buildings turned every way, scattering on, and
+// satellite directions all over the sky.
+TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
+  WorldModel w;
+  w.objects.push_back(ground_plane(400.0));
+  const struct {
+    Eigen::Vector3d size_m, centre_m;
+    double yaw_deg;
+  } blocks[] = {{{30, 12, 25}, {0, 22, 12.5}, 0.0},   {{20, 20, 40}, {-28, -18, 20}, 20.0},
+                {{40, 8, 15}, {25, -20, 7.5}, -35.0}, {{10, 30, 30}, {35, 15, 15}, 60.0},
+                {{15, 15, 12}, {-30, 20, 6}, 45.0},   {{6, 6, 18}, {8, -6, 9}, 10.0}};
+  int k = 0;
+  for (const auto& b : blocks) {
+    WorldObject o = placed("block" + std::to_string(k++), make_box(b.size_m), b.centre_m, MaterialClass::kConcrete);
+    o.pose.rotate(Eigen::AngleAxisd(b.yaw_deg * kDeg, Eigen::Vector3d::UnitZ()));
+    w.objects.push_back(std::move(o));
+  }
+  PathSearchSettings settings;
+  settings.max_reflection_order = 2;
+  settings.second_order_radius_m = 60.0;
+  settings.scattering_coefficient = 0.4;
+  settings.scattering_lobe_exponent = 4;
+  settings.min_relative_power_db = -40.0;
+  // A Fibonacci lattice over the whole sphere (satellites below the horizon too).
+  std::vector<Eigen::Vector3d> sky;
+  constexpr int kDirections = 3000;
+  for (int i = 0; i < kDirections; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / kDirections;
+    const double azimuth = std::numbers::pi * (3.0 - std::sqrt(5.0)) * i;
+    sky.emplace_back(std::sqrt(1.0 - z * z) * std::cos(azimuth), std::sqrt(1.0 - z * z) * std::sin(azimuth), z);
+  }
+  int double_bounces = 0;
+  for (const Eigen::Vector3d& rx : {Eigen::Vector3d(2.0, 3.0, 1.5), Eigen::Vector3d(-12.0, 1.0, 1.5), Eigen::Vector3d(10.0, -8.0, 20.0)}) {
+    const auto full = propagation(w)->paths(rx, sky, settings);
+    const auto scene = propagation(w);
+    (void)scene->paths(rx, sky, settings);                      // first call at the point: full search
+    (void)scene->paths(rx, sky, settings);                      // second: builds the index
+    const auto indexed = scene->paths(rx, sky, settings);       // third: from the index
+    ASSERT_EQ(full.size(), indexed.size());
+    for (std::size_t i = 0; i < full.size(); ++i) {
+      ASSERT_EQ(full[i].paths.size(), indexed[i].paths.size()) << "direction " << i;
+      for (std::size_t j = 0; j < full[i].paths.size(); ++j) {
+        const SignalPath& a = full[i].paths[j];
+        const SignalPath& b = indexed[i].paths[j];
+        EXPECT_EQ(a.type, b.type);
+        EXPECT_EQ(a.reflections, b.reflections);
+        EXPECT_EQ(a.excess_delay_m, b.excess_delay_m);
+        EXPECT_EQ(a.rhcp_amplitude, b.rhcp_amplitude);
+        EXPECT_EQ(a.point_m, b.point_m);
+        EXPECT_EQ(a.second_point_m, b.second_point_m);
+        double_bounces += a.type == PathType::kReflected && a.reflections == 2 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(double_bounces, 100);  // enough to mean something
 }
 
 TEST(Propagation, ReflectionPointMustLieOnTheFacet) {

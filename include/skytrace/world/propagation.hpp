@@ -9,11 +9,13 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <complex>
 #include <cstddef>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -111,26 +113,51 @@ class PropagationScene final : public PathQuery {
   PropagationScene() = default;
   // A facet near the receiver, seen from it: the normal turned towards it, its height above the
   // plane, the material's permittivity.
+  // A patch of a facet for diffuse scattering: its centre and area.
+  struct FacetPatch {
+    Eigen::Vector3d point_m = Eigen::Vector3d::Zero();
+    double area_m2 = 0.0;
+  };
   struct NearFacet {
     std::size_t index = 0;
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
     double height_m = 0.0;
     std::complex<double> eta;
+    const std::vector<FacetPatch>* patches = nullptr;  // when scattering: the facet's patches
   };
   struct Candidates {
     Eigen::Vector3d origin_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     double radius_m = 0.0, min_area_m2 = 0.0, frequency_hz = 0.0;
+    double scattering_radius_m = 0.0, scattering_patch_m = 0.0;  // 0: no patches made
     std::vector<NearFacet> facets;
+    std::vector<std::vector<FacetPatch>> patches;  // per facet, those within scattering reach
   };
   // Facets near a point (a uniform grid in x, y): those within the radius plus a margin, so that the
   // last answer serves an antenna moving less than the margin. Normal and height as seen from the
-  // cached point; paths() turns them to the antenna's actual position.
+  // cached point; paths() turns them to the antenna's actual position. With scattering, also the
+  // patches of the facets within its radius plus the margin (they do not depend on the antenna).
   std::shared_ptr<const Candidates> candidates(const Eigen::Vector3d& origin_m, const PathSearchSettings& settings) const;
   // Diffuse scattering (settings.scattering_coefficient > 0): for each satellite whose direct ray is
   // blocked, one path per facade from its patches lit by the satellite and seen by the receiver.
   void add_scattered_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                            const PathSearchSettings& settings, const std::vector<NearFacet>& near_facets,
                            std::vector<PathSet>& out) const;
+
+  // Double bounces (satellite -> B -> A -> receiver) for one antenna position: a pair of facets
+  // that can face each other whatever the satellite, and the index of the pairs by sky direction
+  // kept for an antenna that stays where it was (docs/performance.md).
+  struct FacetPair;
+  struct DoubleBounceIndex;
+  // The pairs of second-order facet a (indices into `facets`) with every facet b that may pass a
+  // satellite's signal on to it; plane_a and image_of: each facet's plane constant and the antenna's image in it.
+  void append_facet_pairs(std::size_t a, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
+                          const std::vector<Eigen::Vector3d>& image_of, std::vector<FacetPair>& out) const;
+  // The index for an antenna found at the same point in an earlier call (built on the second
+  // call there), else none.
+  std::shared_ptr<const DoubleBounceIndex> double_bounce_index(const Eigen::Vector3d& origin_m,
+                                                               const std::vector<NearFacet>& facets,
+                                                               const std::vector<double>& plane_a,
+                                                               const std::vector<Eigen::Vector3d>& image_of) const;
 
   std::shared_ptr<const PathQuery> scene_;
   std::vector<Facet> facets_;
@@ -151,8 +178,16 @@ class PropagationScene final : public PathQuery {
   std::vector<std::vector<std::size_t>> object_edges_;
   std::vector<std::vector<EdgeCluster>> object_clusters_;
   std::unordered_map<std::string, std::size_t> object_index_;
+  // The last candidate sets, one per band or settings in use (a GPS and a GLONASS signal search
+  // with different permittivities), replaced oldest first.
+  static constexpr std::size_t kCachedCandidateSets = 4;
   mutable std::mutex cache_mutex_;
-  mutable std::shared_ptr<const Candidates> cache_;
+  mutable std::array<std::shared_ptr<const Candidates>, kCachedCandidateSets> cache_;
+  mutable std::size_t cache_next_ = 0;
+  mutable std::array<std::shared_ptr<const DoubleBounceIndex>, kCachedCandidateSets> double_bounce_cache_;
+  mutable std::size_t double_bounce_next_ = 0;
+  mutable std::array<std::optional<Eigen::Vector3d>, kCachedCandidateSets> double_bounce_seen_m_;  // origins met once
+  mutable std::size_t double_bounce_seen_next_ = 0;
 };
 
 }  // namespace skytrace::world
