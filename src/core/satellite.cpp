@@ -1,7 +1,6 @@
 #include "skytrace/core/satellite.hpp"
 
 #include <cctype>
-#include <cstdio>
 
 namespace skytrace {
 
@@ -73,10 +72,14 @@ int max_satellite_number(GnssSystem system) {
   return 0;
 }
 
+// "%c%02d" written by hand: it names every row of the truth tables.
 std::string SatelliteId::to_string() const {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "%c%02d", system_letter(system), static_cast<int>(number));
-  return buf;
+  std::string out(1, system_letter(system));
+  if (number < 10) out.push_back('0');
+  if (number >= 100) out.push_back(static_cast<char>('0' + number / 100));
+  if (number >= 10) out.push_back(static_cast<char>('0' + number / 10 % 10));
+  out.push_back(static_cast<char>('0' + number % 10));
+  return out;
 }
 
 int SatelliteId::prn() const {

@@ -51,15 +51,19 @@ void neville_at_zero(const std::array<double, kMaxPoints>& x, std::array<Eigen::
 
 // Coordinates in the Earth-fixed frame at time t of a vector given in the Earth-fixed frame of
 // an epoch dt_s = t - epoch earlier (the frame has turned by omega dt_s since).
-Eigen::Vector3d rotate_to_frame_at_t(const Eigen::Vector3d& v, double dt_s) {
-  const double angle_rad = kOmega_radps * dt_s;
-  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
-  return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
-}
+// The Earth's rotation over dt_s as its cosine and sine.
+struct FrameRotation {
+  double c = 1.0, s = 0.0;
+  FrameRotation() = default;
+  explicit FrameRotation(double dt_s) : c(std::cos(kOmega_radps * dt_s)), s(std::sin(kOmega_radps * dt_s)) {}
+  [[nodiscard]] Eigen::Vector3d operator()(const Eigen::Vector3d& v) const {
+    return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
+  }
+};
 
 Eigen::Vector3d omega_cross(const Eigen::Vector3d& r) { return {-kOmega_radps * r.y(), kOmega_radps * r.x(), 0.0}; }
 
-// A two-body (Keplerian) orbit through a position and velocity, evaluated dt_s later with the
+// A two-body (Keplerian) orbit through a position and velocity: its position dt_s later, with the
 // f and g functions of the eccentric anomaly difference (elliptic orbits).
 struct TwoBody {
   Eigen::Vector3d r0_m, v0_mps;
@@ -80,25 +84,22 @@ struct TwoBody {
     return k;
   }
 
-  void at(double dt_s, Eigen::Vector3d& r_m, Eigen::Vector3d& v_mps) const {
+  [[nodiscard]] Eigen::Vector3d position_at(double dt_s) const {
     // Kepler's equation in differences: n dt = dE - e cos E0 sin dE + e sin E0 (1 - cos dE).
     const double mean_s = n_radps * dt_s;
     double de = mean_s;
     for (int iteration = 0; iteration < 20; ++iteration) {
-      const double residual = de - e_cos_e0 * std::sin(de) + e_sin_e0 * (1.0 - std::cos(de)) - mean_s;
-      const double slope = 1.0 - e_cos_e0 * std::cos(de) + e_sin_e0 * std::sin(de);
+      const double sin_de = std::sin(de), cos_de = std::cos(de);
+      const double residual = de - e_cos_e0 * sin_de + e_sin_e0 * (1.0 - cos_de) - mean_s;
+      const double slope = 1.0 - e_cos_e0 * cos_de + e_sin_e0 * sin_de;
       const double step = residual / slope;
       de -= step;
       if (std::abs(step) < 1e-15) break;
     }
     const double c = std::cos(de), s = std::sin(de);
-    const double radius_m = a_m * (1.0 - e_cos_e0 * c + e_sin_e0 * s);
     const double f = 1.0 - a_m / radius0_m * (1.0 - c);
     const double g = dt_s - (de - s) / n_radps;
-    const double f_dot = -std::sqrt(constants::kGmGps_m3ps2 * a_m) * s / (radius_m * radius0_m);
-    const double g_dot = 1.0 - a_m / radius_m * (1.0 - c);
-    r_m = f * r0_m + g * v0_mps;
-    v_mps = f_dot * r0_m + g_dot * v0_mps;
+    return f * r0_m + g * v0_mps;
   }
 };
 
@@ -352,6 +353,9 @@ Result<PreciseEphemerides::Orbit> PreciseEphemerides::orbit(const SatelliteId& s
 
   std::array<double, kMaxPoints> x{};
   std::array<Eigen::Vector3d, kMaxPoints> y;
+  // The samples' positions in the frame of t (kept for the two-body passes below).
+  std::array<Eigen::Vector3d, kMaxPoints> position_in_frame;
+  std::array<FrameRotation, kMaxPoints> rotation;
   bool all_velocities = options_.use_velocity_records;
   const bool inertial = options_.frame == InterpolationFrame::kInertial;
   for (size_t k = 0; k < n; ++k) {
@@ -359,7 +363,9 @@ Result<PreciseEphemerides::Orbit> PreciseEphemerides::orbit(const SatelliteId& s
     const double dt_s = t - epochs[e];
     x[k] = -dt_s / interval_s;  // normalised abscissa keeps the polynomial well conditioned
     const Sp3Record& r = (*series)[e];
-    y[k] = inertial ? rotate_to_frame_at_t(r.position_m, dt_s) : r.position_m;
+    if (inertial) rotation[k] = FrameRotation(dt_s);
+    position_in_frame[k] = inertial ? rotation[k](r.position_m) : r.position_m;
+    y[k] = position_in_frame[k];
     all_velocities = all_velocities && r.has_velocity;
   }
   Orbit out;
@@ -370,8 +376,7 @@ Result<PreciseEphemerides::Orbit> PreciseEphemerides::orbit(const SatelliteId& s
     for (size_t k = 0; k < n; ++k) {
       const size_t e = static_cast<size_t>(start) + k;
       const Sp3Record& r = (*series)[e];
-      y[k] = inertial ? rotate_to_frame_at_t(r.velocity_mps + omega_cross(r.position_m), t - epochs[e])
-                      : r.velocity_mps;
+      y[k] = inertial ? rotation[k](r.velocity_mps + omega_cross(r.position_m)) : r.velocity_mps;
     }
     Eigen::Vector3d unused;
     neville_at_zero(x, y, n, velocity_in_frame, unused);
@@ -388,12 +393,9 @@ Result<PreciseEphemerides::Orbit> PreciseEphemerides::orbit(const SatelliteId& s
     for (int pass = 0; pass < kMaxPasses; ++pass) {
       const auto reference = TwoBody::through(out.position_m, velocity_in_frame);
       if (!reference) break;
-      Eigen::Vector3d r_m, v_mps;
       for (size_t k = 0; k < n; ++k) {
         const size_t e = static_cast<size_t>(start) + k;
-        const double dt_s = t - epochs[e];
-        reference->at(-dt_s, r_m, v_mps);
-        residual[k] = rotate_to_frame_at_t((*series)[e].position_m, dt_s) - r_m;
+        residual[k] = position_in_frame[k] - reference->position_at(-(t - epochs[e]));
       }
       Eigen::Vector3d residual_here, residual_rate;
       neville_at_zero(x, residual, n, residual_here, residual_rate);

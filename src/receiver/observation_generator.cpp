@@ -131,9 +131,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     const auto guess = flight_time_guess_s_.find(sat);
     const double guess_s = guess != flight_time_guess_s_.end() ? guess->second : stages::kFirstFlightTimeGuess_s;
     const GnssTime evaluation_time = epoch.true_time - guess_s;
-    stages::evaluate_record(truth, evaluation_time, glonass_orbits_);
+    const bool from_precise_products = truth_orbits_ != nullptr && settings_.broadcast_truth.count(sat) == 0;
+    if (!from_precise_products) stages::evaluate_record(truth, evaluation_time, glonass_orbits_);
     bool precise_truth = false;
-    if (truth_orbits_ != nullptr && settings_.broadcast_truth.count(sat) == 0) {
+    if (from_precise_products) {
       // Precise products as the truth: the signals come from the precise orbit and clock, while
       // the broadcast record stays the one a receiver decodes (nav.rnx, group delays). Satellites
       // the products lack or cannot serve over the run (a G/R/E product has no BeiDou) were put in

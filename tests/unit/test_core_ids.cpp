@@ -17,6 +17,10 @@ TEST(SatelliteId, ParseAndFormat) {
   EXPECT_EQ(SatelliteId::parse("S27").value().prn(), 127);
   EXPECT_EQ(SatelliteId::parse("J193").value().to_string(), "J01");
   EXPECT_EQ(SatelliteId::parse("C59").value().system, GnssSystem::kBeiDou);
+  EXPECT_EQ(SatelliteId::parse("C59").value().to_string(), "C59");
+  EXPECT_EQ(SatelliteId::parse("R10").value().to_string(), "R10");
+  EXPECT_EQ((SatelliteId{GnssSystem::kGps, 0}).to_string(), "G00");       // as printf's %c%02d
+  EXPECT_EQ((SatelliteId{GnssSystem::kSbas, 158}).to_string(), "S158");
   EXPECT_FALSE(SatelliteId::parse("X01").ok());
   EXPECT_FALSE(SatelliteId::parse("G33").ok());
   EXPECT_FALSE(SatelliteId::parse("G").ok());
