@@ -1153,6 +1153,108 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         first_legs.push_back(toward);
         pending.push_back(std::move(p));
       }
+      // Second order: over an edge of the blocking object, then off a facet near the receiver
+      // (a street canyon's usual NLOS path: over the roof across the street, down onto a facade
+      // and back). The knife edge as seen from the receiver's image in the facet; the reflection
+      // point is where the line from the edge point to the image crosses the facet.
+      if (settings.max_reflection_order < 2 || second_order_facets.empty()) continue;
+      struct ReflectedEdgeHit {
+        std::size_t facet = 0, edge = 0;  // second-order facet, edge
+        Eigen::Vector3d edge_point_m, reflection_point_m;
+        double from_image_m = 0.0, v = 0.0, loss_db = 0.0;
+      };
+      std::vector<ReflectedEdgeHit> reflected_hits;
+      for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
+        const NearFacet& nf = second_order_facets[f_index];
+        const Facet& f = facets_[nf.index];
+        const Eigen::Vector3d image = r - 2.0 * nf.height_m * nf.normal;
+        const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane
+        const auto may_reach_image = [&](const Eigen::Vector3d& centre_m, double radius_m) {
+          const Eigen::Vector3d m = centre_m - image;
+          const double along = m.dot(s);
+          if (along < -radius_m) return false;
+          const double h_min = std::max(std::sqrt(std::max(m.squaredNorm() - along * along, 0.0)) - radius_m, 0.0);
+          return h_min * h_min <= 2.0 * blocked_excess_max_m * (m.norm() + radius_m);
+        };
+        for (const std::size_t object : objects) {
+          for (const EdgeCluster& cluster : object_clusters_[object]) {
+            if (!may_reach_image(cluster.centre_m, cluster.radius_m)) continue;
+            for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+              const std::size_t e = object_edges_[object][k];
+              const DiffractionEdge& edge = edges_[e];
+              if (!may_reach_image(edge.midpoint_m, edge.half_length_m)) continue;
+              Eigen::Vector3d axis = edge.end_m - edge.start_m;
+              const double length = axis.norm();
+              axis /= length;
+              const double c = s.dot(axis);
+              if (1.0 - c * c < 1e-9) continue;
+              const Eigen::Vector3d w = edge.start_m - image;
+              const double along = w.dot(axis);
+              const double rho = (w - along * axis).norm();
+              const double u = c * rho / std::sqrt(1.0 - c * c) - along;
+              if (u <= 1e-3 || u >= length - 1e-3) continue;
+              const Eigen::Vector3d q = edge.start_m + u * axis;
+              const Eigen::Vector3d from_image = q - image;
+              const double d_image = from_image.norm();
+              if (d_image < 1e-3 || from_image.dot(s) <= 0.0) continue;
+              // The edge on the receiver's side of the facet, and the image in its shadow: the
+              // image's line towards the satellite passes on the object's side of the edge.
+              const double above = nf.normal.dot(q) - plane;
+              if (above <= 1e-6) continue;
+              if ((image + from_image.dot(s) * s - q).dot(edge.outward) >= 0.0) continue;
+              const double excess = d_image - s.dot(from_image);
+              if (excess > blocked_excess_max_m) continue;
+              const Eigen::Vector3d point = q + above / (above + nf.height_m) * (image - q);
+              if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
+              const double d1 = (point - r).norm();
+              if (d1 < 1e-3 || d1 > settings.radius_m) continue;
+              const double v = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+              reflected_hits.push_back(ReflectedEdgeHit{f_index, e, q, point, d_image, v, knife_edge_loss_db(v)});
+            }
+          }
+        }
+      }
+      std::sort(reflected_hits.begin(), reflected_hits.end(),
+                [](const ReflectedEdgeHit& a, const ReflectedEdgeHit& b) { return a.loss_db < b.loss_db; });
+      if (reflected_hits.size() > 4 * kMaxDiffractedPaths) reflected_hits.resize(4 * kMaxDiffractedPaths);
+      for (const ReflectedEdgeHit& hit : reflected_hits) {
+        const NearFacet& nf = second_order_facets[hit.facet];
+        const Facet& f = facets_[nf.index];
+        const DiffractionEdge& edge = edges_[hit.edge];
+        const Eigen::Vector3d to_edge = hit.edge_point_m - hit.reflection_point_m;
+        const double reflection_to_edge_m = to_edge.norm();
+        const double d1 = (hit.reflection_point_m - r).norm();
+        Pending p;
+        p.satellite = i;
+        p.path.type = PathType::kDiffracted;
+        p.path.reflections = 1;
+        // Path length from the edge by way of the facet: the distance from the edge to the image.
+        p.path.excess_delay_m = hit.from_image_m - s.dot(hit.edge_point_m - r);
+        p.path.diffraction_v = hit.v;
+        p.path.diffraction_loss_db = hit.loss_db;
+        p.path.rhcp_amplitude = std::polar(std::pow(10.0, -hit.loss_db / 20.0), -std::numbers::pi / 4.0);
+        p.path.lhcp_amplitude = 0.0;
+        reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude,
+                      fresnel_coefficients(nf.eta, nf.normal.dot(to_edge) / reflection_to_edge_m));
+        p.path.rhcp_amplitude *= specular_factor;
+        p.path.lhcp_amplitude *= specular_factor;
+        if (p.path.power_linear() < min_power) continue;
+        p.path.arrival_direction = (hit.reflection_point_m - r) / d1;
+        p.path.point_m = hit.reflection_point_m;
+        p.path.second_point_m = hit.edge_point_m;
+        p.path.material = f.material;
+        p.path.object = object_names_[f.object];
+        // excess = |q - image(r)| - s . (q - r): the image moves with r mirrored in the facet.
+        const Eigen::Vector3d from_image = (hit.edge_point_m - (r - 2.0 * nf.height_m * nf.normal)) / hit.from_image_m;
+        p.path.delay_gradient_origin = s - (from_image - 2.0 * nf.normal.dot(from_image) * nf.normal);
+        p.path.delay_gradient_direction = -(hit.edge_point_m - r);
+        p.first_leg_m = d1;
+        p.legs.push_back(Leg{hit.reflection_point_m + kSurfaceOffset_m * nf.normal, to_edge / reflection_to_edge_m,
+                             reflection_to_edge_m});
+        p.legs.push_back(Leg{hit.edge_point_m + kEdgeOffset_m * edge.outward, s, kInf});
+        first_legs.push_back(p.path.arrival_direction);
+        pending.push_back(std::move(p));
+      }
     }
   }
   if (settings.scattering_coefficient > 0.0) add_scattered_paths(r, directions, settings, near_facets, out);
@@ -1163,13 +1265,14 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
 
   // All first legs start at the receiver: one batch. The others one ray each.
   const std::vector<RayOutcome> first = scene_->trace(r, first_legs);
-  std::vector<std::size_t> diffracted_kept(n_sat, 0);
+  std::vector<std::array<std::size_t, 2>> diffracted_kept(n_sat, {0, 0});  // without, with a reflection
   std::vector<Eigen::Vector3d> one(1);
   for (std::size_t k = 0; k < pending.size(); ++k) {
     Pending& p = pending[k];
     const RayOutcome& o = first[k];
     if (o.blocked && o.blocking_distance_m < p.first_leg_m - leg_tolerance_m(p.first_leg_m)) continue;
-    if (p.path.type == PathType::kDiffracted && diffracted_kept[p.satellite] >= kMaxDiffractedPaths) continue;
+    const std::size_t diffraction_kind = p.path.reflections > 0 ? 1 : 0;
+    if (p.path.type == PathType::kDiffracted && diffracted_kept[p.satellite][diffraction_kind] >= kMaxDiffractedPaths) continue;
     double vegetation_db = o.vegetation_attenuation_db;
     bool clear = true;
     for (const Leg& leg : p.legs) {
@@ -1193,7 +1296,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       return q.type == p.path.type && q.reflections == p.path.reflections && (q.point_m - p.path.point_m).norm() < 1e-3;
     });
     if (duplicate) continue;
-    if (p.path.type == PathType::kDiffracted) ++diffracted_kept[p.satellite];
+    if (p.path.type == PathType::kDiffracted) ++diffracted_kept[p.satellite][diffraction_kind];
     list.push_back(std::move(p.path));
   }
   sort_indirect_paths_by_power(out);

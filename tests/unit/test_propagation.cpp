@@ -310,6 +310,48 @@ TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
   EXPECT_GT(double_bounces, 100);  // enough to mean something
 }
 
+TEST(Propagation, OverTheRoofAcrossTheStreetThenOffTheFacadeBehind) {
+  // A satellite low in the north, hidden by the north wall (30 m, its south face at y = 9.5):
+  // over that wall's top edge, down onto the south wall's face (y = -19.5) and back to the
+  // receiver. Seen from the receiver's image in the south face (y = -39) the edge point is the
+  // knife edge's; the reflection point is where the line from it to the image crosses the face.
+  const auto scene = propagation(canyon(false));
+  const Eigen::Vector3d rx(0.0, 0.0, 1.5);
+  const double el = 25.0;
+  const Eigen::Vector3d s = enu_direction(0.0, el);
+  PathSearchSettings settings;
+  settings.max_reflection_order = 2;
+  const PathSet set = scene->paths(rx, {s}, settings)[0];
+  ASSERT_TRUE(set.direct.blocked);
+  // The image's own line to the satellite passes below the edge (1.5 + 48.5 tan 25 = 24.1 m < 30):
+  // no plain reflection off the south wall.
+  EXPECT_EQ(find_path(set, PathType::kReflected, 1), nullptr);
+  const SignalPath* over_and_back = nullptr;
+  for (const SignalPath& p : set.paths) {
+    if (p.type == PathType::kDiffracted && p.reflections == 1) over_and_back = &p;
+  }
+  ASSERT_NE(over_and_back, nullptr);
+  const Eigen::Vector3d image(0.0, -39.0, 1.5);
+  const Eigen::Vector3d edge(0.0, 9.5, 30.0);  // the top of the south face (the north one is hidden behind it)
+  EXPECT_NEAR((over_and_back->second_point_m - edge).norm(), 0.0, 1e-6);
+  EXPECT_EQ(over_and_back->object, "south");
+  EXPECT_NEAR(over_and_back->point_m.y(), -19.5, 1e-6);
+  const double t = (edge.y() + 19.5) / (edge.y() - image.y());
+  EXPECT_NEAR(over_and_back->point_m.z(), edge.z() + t * (image.z() - edge.z()), 1e-6);
+  EXPECT_NEAR(over_and_back->excess_delay_m, (edge - image).norm() - s.dot(edge - rx), 1e-6);
+  const double v = std::sqrt(4.0 * ((edge - image).norm() - s.dot(edge - image)) / kL1WavelengthM);
+  EXPECT_NEAR(over_and_back->diffraction_v, v, 1e-6);
+  EXPECT_NEAR(over_and_back->diffraction_loss_db, knife_edge_loss_db(v), 1e-9);
+  // Weaker than the knife edge alone by the reflection (concrete, incidence from the edge).
+  EXPECT_LT(over_and_back->power_linear(), std::pow(10.0, -knife_edge_loss_db(v) / 10.0));
+  EXPECT_GT(over_and_back->power_linear(), std::pow(10.0, -(knife_edge_loss_db(v) + 15.0) / 10.0));
+  // A first-order search does not look for it.
+  settings.max_reflection_order = 1;
+  for (const SignalPath& p : scene->paths(rx, {s}, settings)[0].paths) {
+    EXPECT_FALSE(p.type == PathType::kDiffracted && p.reflections == 1);
+  }
+}
+
 TEST(Propagation, ReflectionPointMustLieOnTheFacet) {
   // A 4 m wide wall 10 m east: satellites to the east-north-east reflect only while the specular
   // point stays within the wall's 4 m.
