@@ -309,6 +309,8 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
         Eigen::Vector3d out_dir = (p1 - p0).cross(n).normalized();
         if (out_dir.dot(welded_position[static_cast<std::size_t>(use.opposite[0])] - p0) > 0.0) out_dir = -out_dir;
         edge.outward = out_dir;
+        edge.face_normal_a = n;
+        edge.face_normal_b = -n;
       } else if (use.count == 2) {
         const Eigen::Vector3d& n0 = triangle_normals[use.triangle[0]];
         const Eigen::Vector3d& n1 = triangle_normals[use.triangle[1]];
@@ -319,6 +321,8 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
         const Eigen::Vector3d bisector = n0 + n1;
         if (bisector.norm() < 1e-9) continue;  // a zero-thickness fin
         edge.outward = bisector.normalized();
+        edge.face_normal_a = n0;
+        edge.face_normal_b = n1;
       } else {
         continue;  // non-manifold
       }
@@ -1164,11 +1168,50 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         double from_image_m = 0.0, v = 0.0, loss_db = 0.0;
       };
       std::vector<ReflectedEdgeHit> reflected_hits;
+      // The objects' edge clusters in groups of 16 neighbours (they are in Morton order), each
+      // group and object with a bounding sphere: a facet tests an object, then a group, then a
+      // cluster, then an edge (a city mesh holds thousands of clusters).
+      constexpr std::size_t kClustersPerGroup = 16;
+      struct Sphere {
+        Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+        double radius_m = 0.0;
+      };
+      const auto bounding = [](auto begin, auto end) {
+        Sphere sphere;
+        for (auto it = begin; it != end; ++it) sphere.centre_m += it->centre_m;
+        sphere.centre_m /= static_cast<double>(std::max<std::ptrdiff_t>(end - begin, 1));
+        for (auto it = begin; it != end; ++it) {
+          sphere.radius_m = std::max(sphere.radius_m, (it->centre_m - sphere.centre_m).norm() + it->radius_m);
+        }
+        sphere.radius_m = sphere.radius_m * (1.0 + 1e-9) + 1e-9;
+        return sphere;
+      };
+      std::vector<Sphere> object_spheres;
+      std::vector<std::vector<Sphere>> group_spheres;
+      for (const std::size_t object : objects) {
+        const auto& clusters = object_clusters_[object];
+        object_spheres.push_back(bounding(clusters.begin(), clusters.end()));
+        group_spheres.emplace_back();
+        for (std::size_t g = 0; g < clusters.size(); g += kClustersPerGroup) {
+          const auto first = clusters.begin() + static_cast<std::ptrdiff_t>(g);
+          group_spheres.back().push_back(bounding(first, first + static_cast<std::ptrdiff_t>(std::min(kClustersPerGroup, clusters.size() - g))));
+        }
+      }
+      // Only an edge on the object's outline seen from the satellite (one face lit, the other
+      // not) bends the wave into the shadow.
+      std::vector<std::vector<char>> on_outline;
+      for (const std::size_t object : objects) {
+        on_outline.emplace_back();
+        for (const std::size_t e : object_edges_[object]) {
+          on_outline.back().push_back(edges_[e].face_normal_a.dot(s) * edges_[e].face_normal_b.dot(s) <= 0.0 ? 1 : 0);
+        }
+      }
       for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
         const NearFacet& nf = second_order_facets[f_index];
         const Facet& f = facets_[nf.index];
         const Eigen::Vector3d image = r - 2.0 * nf.height_m * nf.normal;
         const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane
+        // An edge point the image's line may use lies near that line (excess within the bound).
         const auto may_reach_image = [&](const Eigen::Vector3d& centre_m, double radius_m) {
           const Eigen::Vector3d m = centre_m - image;
           const double along = m.dot(s);
@@ -1176,40 +1219,68 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           const double h_min = std::max(std::sqrt(std::max(m.squaredNorm() - along * along, 0.0)) - radius_m, 0.0);
           return h_min * h_min <= 2.0 * blocked_excess_max_m * (m.norm() + radius_m);
         };
-        for (const std::size_t object : objects) {
-          for (const EdgeCluster& cluster : object_clusters_[object]) {
-            if (!may_reach_image(cluster.centre_m, cluster.radius_m)) continue;
-            for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
-              const std::size_t e = object_edges_[object][k];
-              const DiffractionEdge& edge = edges_[e];
-              if (!may_reach_image(edge.midpoint_m, edge.half_length_m)) continue;
-              Eigen::Vector3d axis = edge.end_m - edge.start_m;
-              const double length = axis.norm();
-              axis /= length;
-              const double c = s.dot(axis);
-              if (1.0 - c * c < 1e-9) continue;
-              const Eigen::Vector3d w = edge.start_m - image;
-              const double along = w.dot(axis);
-              const double rho = (w - along * axis).norm();
-              const double u = c * rho / std::sqrt(1.0 - c * c) - along;
-              if (u <= 1e-3 || u >= length - 1e-3) continue;
-              const Eigen::Vector3d q = edge.start_m + u * axis;
-              const Eigen::Vector3d from_image = q - image;
-              const double d_image = from_image.norm();
-              if (d_image < 1e-3 || from_image.dot(s) <= 0.0) continue;
-              // The edge on the receiver's side of the facet, and the image in its shadow: the
-              // image's line towards the satellite passes on the object's side of the edge.
-              const double above = nf.normal.dot(q) - plane;
-              if (above <= 1e-6) continue;
-              if ((image + from_image.dot(s) * s - q).dot(edge.outward) >= 0.0) continue;
-              const double excess = d_image - s.dot(from_image);
-              if (excess > blocked_excess_max_m) continue;
-              const Eigen::Vector3d point = q + above / (above + nf.height_m) * (image - q);
-              if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
-              const double d1 = (point - r).norm();
-              if (d1 < 1e-3 || d1 > settings.radius_m) continue;
-              const double v = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
-              reflected_hits.push_back(ReflectedEdgeHit{f_index, e, q, point, d_image, v, knife_edge_loss_db(v)});
+        // The reflection point lies on the segment from the image to the edge point and on the
+        // facet: an edge point lies in the cone from the image through the facet's bounding sphere.
+        const Eigen::Vector3d to_facet = f.centre_m - image;
+        const double facet_distance_m = to_facet.norm();
+        const bool facet_cone = facet_distance_m > f.radius_m;
+        const Eigen::Vector3d facet_axis = facet_cone ? Eigen::Vector3d(to_facet / facet_distance_m) : Eigen::Vector3d::Zero();
+        const double facet_sin = facet_cone ? f.radius_m / facet_distance_m : 1.0;
+        const double facet_cos = std::sqrt(1.0 - facet_sin * facet_sin);
+        const auto through_facet = [&](const Eigen::Vector3d& centre_m, double radius_m) {
+          if (!facet_cone) return true;
+          const Eigen::Vector3d m = centre_m - image;
+          const double distance_m = m.norm();
+          if (distance_m <= radius_m) return true;
+          const double sin_b = radius_m / distance_m, cos_b = std::sqrt(1.0 - sin_b * sin_b);
+          // cos of (the facet's half angle + the sphere's), a hair wide
+          return m.dot(facet_axis) >= distance_m * (facet_cos * cos_b - facet_sin * sin_b - 1e-9);
+        };
+        const auto may_hold = [&](const Eigen::Vector3d& centre_m, double radius_m) {
+          return through_facet(centre_m, radius_m) && may_reach_image(centre_m, radius_m);
+        };
+        for (std::size_t rank = 0; rank < objects.size(); ++rank) {
+          if (!may_hold(object_spheres[rank].centre_m, object_spheres[rank].radius_m)) continue;
+          const std::size_t object = objects[rank];
+          const auto& clusters = object_clusters_[object];
+          for (std::size_t g = 0; g < group_spheres[rank].size(); ++g) {
+            if (!may_hold(group_spheres[rank][g].centre_m, group_spheres[rank][g].radius_m)) continue;
+            for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
+              const EdgeCluster& cluster = clusters[c_index];
+              if (!may_hold(cluster.centre_m, cluster.radius_m)) continue;
+              for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+                if (on_outline[rank][k] == 0) continue;
+                const std::size_t e = object_edges_[object][k];
+                const DiffractionEdge& edge = edges_[e];
+                if (!may_hold(edge.midpoint_m, edge.half_length_m)) continue;
+                Eigen::Vector3d axis = edge.end_m - edge.start_m;
+                const double length = axis.norm();
+                axis /= length;
+                const double c = s.dot(axis);
+                if (1.0 - c * c < 1e-9) continue;
+                const Eigen::Vector3d w = edge.start_m - image;
+                const double along = w.dot(axis);
+                const double rho = (w - along * axis).norm();
+                const double u = c * rho / std::sqrt(1.0 - c * c) - along;
+                if (u <= 1e-3 || u >= length - 1e-3) continue;
+                const Eigen::Vector3d q = edge.start_m + u * axis;
+                const Eigen::Vector3d from_image = q - image;
+                const double d_image = from_image.norm();
+                if (d_image < 1e-3 || from_image.dot(s) <= 0.0) continue;
+                // The edge on the receiver's side of the facet, and the image in its shadow: the
+                // image's line towards the satellite passes on the object's side of the edge.
+                const double above = nf.normal.dot(q) - plane;
+                if (above <= 1e-6) continue;
+                if ((image + from_image.dot(s) * s - q).dot(edge.outward) >= 0.0) continue;
+                const double excess = d_image - s.dot(from_image);
+                if (excess > blocked_excess_max_m) continue;
+                const Eigen::Vector3d point = q + above / (above + nf.height_m) * (image - q);
+                if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
+                const double d1 = (point - r).norm();
+                if (d1 < 1e-3 || d1 > settings.radius_m) continue;
+                const double v = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+                reflected_hits.push_back(ReflectedEdgeHit{f_index, e, q, point, d_image, v, knife_edge_loss_db(v)});
+              }
             }
           }
         }

@@ -80,6 +80,10 @@ struct DiffractionEdge {
   // Unit outward direction away from the object (bisector of the faces' normals): the offset
   // for rays leaving the edge.
   Eigen::Vector3d outward = Eigen::Vector3d::UnitZ();
+  // The normals of the two faces that meet at the edge (an open surface's border: its face's
+  // normal and the opposite, as a sheet has both sides). A satellite lights exactly one of them
+  // when the edge lies on the object's outline seen from it.
+  Eigen::Vector3d face_normal_a = Eigen::Vector3d::UnitZ(), face_normal_b = -Eigen::Vector3d::UnitZ();
   Eigen::Vector3d midpoint_m = Eigen::Vector3d::Zero();
   double half_length_m = 0.0;
   std::size_t object = 0;
