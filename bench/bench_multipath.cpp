@@ -160,9 +160,11 @@ BENCHMARK(BM_CitysimPathsSecondOrder)->Unit(benchmark::kMicrosecond)->Arg(0)->Ar
 
 // With the NLOS models of the Berlin validation: double bounces within 40 m, diffuse scattering.
 void BM_CitysimPathsNlosModelsStatic(benchmark::State& state) { run_paths(state, false, 1, true, true); }
-BENCHMARK(BM_CitysimPathsNlosModelsStatic)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1);
+// A fixed 100 epochs (the satellites move, the moving antenna covers two streets), so that two
+// builds are compared on the same sky and the same places.
+BENCHMARK(BM_CitysimPathsNlosModelsStatic)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1)->Iterations(100);
 void BM_CitysimPathsNlosModelsMoving(benchmark::State& state) { run_paths(state, true, 1, true, true); }
-BENCHMARK(BM_CitysimPathsNlosModelsMoving)->Unit(benchmark::kMicrosecond)->Arg(0);
+BENCHMARK(BM_CitysimPathsNlosModelsMoving)->Unit(benchmark::kMicrosecond)->Arg(0)->Iterations(100);
 
 // Receiver side: 40 satellites x 4 signals (BPSK(1), BOC(1,1), BPSK(2), BPSK(10)) from the paths
 // the static antenna sees.

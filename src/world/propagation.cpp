@@ -1236,8 +1236,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           // cos of (the facet's half angle + the sphere's), a hair wide
           return m.dot(facet_axis) >= distance_m * (facet_cos * cos_b - facet_sin * sin_b - 1e-9);
         };
+        // ... and on the receiver's side of the facet's plane.
         const auto may_hold = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-          return through_facet(centre_m, radius_m) && may_reach_image(centre_m, radius_m);
+          return nf.normal.dot(centre_m) - plane + radius_m > 0.0 && through_facet(centre_m, radius_m) &&
+                 may_reach_image(centre_m, radius_m);
         };
         for (std::size_t rank = 0; rank < objects.size(); ++rank) {
           if (!may_hold(object_spheres[rank].centre_m, object_spheres[rank].radius_m)) continue;
