@@ -9,6 +9,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <tuple>
 #include <unordered_map>
 
@@ -102,6 +103,34 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) int mark_within_cone
     count += in;
   }
   return count;
+}
+
+// Whether any point within radius_m of centre_m can lie on a path from `origin` over it towards
+// direction s with at most excess_max_m more length than the straight line: the excess over a
+// point at distance h from the line and D from the origin is at least h^2 / (2 D).
+bool may_reach_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& s, double excess_max_m,
+                    const Eigen::Vector3d& centre_m, double radius_m) {
+  const Eigen::Vector3d m = centre_m - origin;
+  const double along = m.dot(s);
+  if (along < -radius_m) return false;
+  const double h_min = std::max(std::sqrt(std::max(m.squaredNorm() - along * along, 0.0)) - radius_m, 0.0);
+  return h_min * h_min <= 2.0 * excess_max_m * (m.norm() + radius_m);
+}
+
+// The point of the edge where the ray from `origin` and the direction s towards the satellite make
+// equal angles with it (Keller's cone: the stationary path over the edge), if it lies inside the edge.
+std::optional<Eigen::Vector3d> keller_point(const DiffractionEdge& edge, const Eigen::Vector3d& origin, const Eigen::Vector3d& s) {
+  Eigen::Vector3d axis = edge.end_m - edge.start_m;
+  const double length = axis.norm();
+  axis /= length;
+  const double c = s.dot(axis);
+  if (1.0 - c * c < 1e-9) return std::nullopt;
+  const Eigen::Vector3d w = edge.start_m - origin;
+  const double along = w.dot(axis);
+  const double rho = (w - along * axis).norm();
+  const double u = c * rho / std::sqrt(1.0 - c * c) - along;
+  if (u <= 1e-3 || u >= length - 1e-3) return std::nullopt;
+  return Eigen::Vector3d(edge.start_m + u * axis);
 }
 
 // The direct path first, then the others strongest first.
@@ -1081,14 +1110,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       }
       const double excess_max_m = blocked ? blocked_excess_max_m : grazing_excess_max_m;
       hits.clear();
-      // The excess over any point within distance R of a point c is at least h^2 / (2 D): h the
-      // least distance of the ball from the ray, D its largest distance from the receiver.
       auto may_reach = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-        const Eigen::Vector3d m = centre_m - r;
-        const double along = m.dot(s);
-        if (along < -radius_m) return false;
-        const double h_min = std::max(std::sqrt(std::max(m.squaredNorm() - along * along, 0.0)) - radius_m, 0.0);
-        return h_min * h_min <= 2.0 * excess_max_m * (m.norm() + radius_m);
+        return may_reach_line(r, s, excess_max_m, centre_m, radius_m);
       };
       for (const std::size_t object : objects) {
         for (const EdgeCluster& cluster : object_clusters_[object]) {
@@ -1097,17 +1120,9 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           const std::size_t e = object_edges_[object][k];
           const DiffractionEdge& edge = edges_[e];
           if (!may_reach(edge.midpoint_m, edge.half_length_m)) continue;
-          Eigen::Vector3d axis = edge.end_m - edge.start_m;
-          const double length = axis.norm();
-          axis /= length;
-          const double c = s.dot(axis);
-          if (1.0 - c * c < 1e-9) continue;
-          const Eigen::Vector3d w = edge.start_m - r;
-          const double along = w.dot(axis);
-          const double rho = (w - along * axis).norm();
-          const double u = c * rho / std::sqrt(1.0 - c * c) - along;
-          if (u <= 1e-3 || u >= length - 1e-3) continue;
-          const Eigen::Vector3d q = edge.start_m + u * axis;
+          const std::optional<Eigen::Vector3d> keller = keller_point(edge, r, s);
+          if (!keller) continue;
+          const Eigen::Vector3d& q = *keller;
           const double d2 = (q - r).norm();
           if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(s) <= 0.0) continue;
           const double excess = d2 - s.dot(q - r);
@@ -1213,11 +1228,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane
         // An edge point the image's line may use lies near that line (excess within the bound).
         const auto may_reach_image = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-          const Eigen::Vector3d m = centre_m - image;
-          const double along = m.dot(s);
-          if (along < -radius_m) return false;
-          const double h_min = std::max(std::sqrt(std::max(m.squaredNorm() - along * along, 0.0)) - radius_m, 0.0);
-          return h_min * h_min <= 2.0 * blocked_excess_max_m * (m.norm() + radius_m);
+          return may_reach_line(image, s, blocked_excess_max_m, centre_m, radius_m);
         };
         // The reflection point lies on the segment from the image to the edge point and on the
         // facet: an edge point lies in the cone from the image through the facet's bounding sphere.
@@ -1255,17 +1266,9 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
                 const std::size_t e = object_edges_[object][k];
                 const DiffractionEdge& edge = edges_[e];
                 if (!may_hold(edge.midpoint_m, edge.half_length_m)) continue;
-                Eigen::Vector3d axis = edge.end_m - edge.start_m;
-                const double length = axis.norm();
-                axis /= length;
-                const double c = s.dot(axis);
-                if (1.0 - c * c < 1e-9) continue;
-                const Eigen::Vector3d w = edge.start_m - image;
-                const double along = w.dot(axis);
-                const double rho = (w - along * axis).norm();
-                const double u = c * rho / std::sqrt(1.0 - c * c) - along;
-                if (u <= 1e-3 || u >= length - 1e-3) continue;
-                const Eigen::Vector3d q = edge.start_m + u * axis;
+                const std::optional<Eigen::Vector3d> keller = keller_point(edge, image, s);
+                if (!keller) continue;
+                const Eigen::Vector3d& q = *keller;
                 const Eigen::Vector3d from_image = q - image;
                 const double d_image = from_image.norm();
                 if (d_image < 1e-3 || from_image.dot(s) <= 0.0) continue;
