@@ -921,6 +921,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     SignalPath path;
     double first_leg_m = 0.0;
     std::vector<Leg> legs;
+    std::optional<std::size_t> facet;  // a first-order reflection's facet (index in near_facets)
   };
   std::vector<Pending> pending;
   std::vector<Eigen::Vector3d> first_legs;
@@ -1081,6 +1082,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         p.path.delay_gradient_origin = 2.0 * ns * nf.normal;
         p.path.delay_gradient_direction = 2.0 * nf.height_m * nf.normal;
         p.first_leg_m = t;
+        p.facet = static_cast<std::size_t>(&nf - near_facets.data());
         p.legs.push_back(Leg{point + kSurfaceOffset_m * nf.normal, s, kInf});
         first_legs.push_back(p.path.arrival_direction);
         pending.push_back(std::move(p));
@@ -1339,42 +1341,139 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     return out;
   }
 
-  // All first legs start at the receiver: one batch. The others one ray each.
-  const std::vector<RayOutcome> first = scene_->trace(r, first_legs);
+  // All first legs start at the receiver: one batch. The others one ray each. A first-order
+  // reflection whose first leg an object blocks is noted for a reflection, then a diffraction
+  // over that object's edge (second order).
+  struct HiddenReflection {
+    std::size_t satellite = 0, facet = 0, object = 0;
+  };
+  std::vector<HiddenReflection> hidden_reflections;
+  const bool reflection_then_diffraction = settings.max_reflection_order >= 2 && settings.diffraction && !edges_.empty();
   std::vector<std::array<std::size_t, 2>> diffracted_kept(n_sat, {0, 0});  // without, with a reflection
   std::vector<Eigen::Vector3d> one(1);
-  for (std::size_t k = 0; k < pending.size(); ++k) {
-    Pending& p = pending[k];
-    const RayOutcome& o = first[k];
-    if (o.blocked && o.blocking_distance_m < p.first_leg_m - leg_tolerance_m(p.first_leg_m)) continue;
-    const std::size_t diffraction_kind = p.path.reflections > 0 ? 1 : 0;
-    if (p.path.type == PathType::kDiffracted && diffracted_kept[p.satellite][diffraction_kind] >= kMaxDiffractedPaths) continue;
-    double vegetation_db = o.vegetation_attenuation_db;
-    bool clear = true;
-    for (const Leg& leg : p.legs) {
-      one[0] = leg.direction;
-      const RayOutcome lo = scene_->trace(leg.origin_m, one).front();
-      if (lo.blocked && (std::isinf(leg.length_m) || lo.blocking_distance_m < leg.length_m - leg_tolerance_m(leg.length_m))) {
-        clear = false;
-        break;
+  const auto settle = [&](std::vector<Pending>& candidates, const std::vector<Eigen::Vector3d>& first_directions) {
+    const std::vector<RayOutcome> first = scene_->trace(r, first_directions);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      Pending& p = candidates[k];
+      const RayOutcome& o = first[k];
+      if (o.blocked && o.blocking_distance_m < p.first_leg_m - leg_tolerance_m(p.first_leg_m)) {
+        if (reflection_then_diffraction && p.facet && o.blocking_distance_m <= settings.radius_m) {
+          const auto it = object_index_.find(std::string(o.blocking_object));
+          if (it != object_index_.end()) hidden_reflections.push_back(HiddenReflection{p.satellite, *p.facet, it->second});
+        }
+        continue;
       }
-      vegetation_db += lo.vegetation_attenuation_db;
+      const std::size_t diffraction_kind = p.path.reflections > 0 ? 1 : 0;
+      if (p.path.type == PathType::kDiffracted && diffracted_kept[p.satellite][diffraction_kind] >= kMaxDiffractedPaths) continue;
+      double vegetation_db = o.vegetation_attenuation_db;
+      bool clear = true;
+      for (const Leg& leg : p.legs) {
+        one[0] = leg.direction;
+        const RayOutcome lo = scene_->trace(leg.origin_m, one).front();
+        if (lo.blocked && (std::isinf(leg.length_m) || lo.blocking_distance_m < leg.length_m - leg_tolerance_m(leg.length_m))) {
+          clear = false;
+          break;
+        }
+        vegetation_db += lo.vegetation_attenuation_db;
+      }
+      if (!clear) continue;
+      const double factor = std::pow(10.0, -vegetation_db / 20.0);
+      p.path.rhcp_amplitude *= factor;
+      p.path.lhcp_amplitude *= factor;
+      p.path.vegetation_attenuation_db = vegetation_db;
+      if (p.path.power_linear() < min_power) continue;
+      // Facets split at a shared triangle edge can both claim the same point.
+      auto& list = out[p.satellite].paths;
+      const bool duplicate = std::any_of(list.begin(), list.end(), [&](const SignalPath& q) {
+        return q.type == p.path.type && q.reflections == p.path.reflections && (q.point_m - p.path.point_m).norm() < 1e-3;
+      });
+      if (duplicate) continue;
+      if (p.path.type == PathType::kDiffracted) ++diffracted_kept[p.satellite][diffraction_kind];
+      list.push_back(std::move(p.path));
     }
-    if (!clear) continue;
-    const double factor = std::pow(10.0, -vegetation_db / 20.0);
-    p.path.rhcp_amplitude *= factor;
-    p.path.lhcp_amplitude *= factor;
-    p.path.vegetation_attenuation_db = vegetation_db;
-    if (p.path.power_linear() < min_power) continue;
-    // Facets split at a shared triangle edge can both claim the same point.
-    auto& list = out[p.satellite].paths;
-    const bool duplicate = std::any_of(list.begin(), list.end(), [&](const SignalPath& q) {
-      return q.type == p.path.type && q.reflections == p.path.reflections && (q.point_m - p.path.point_m).norm() < 1e-3;
-    });
-    if (duplicate) continue;
-    if (p.path.type == PathType::kDiffracted) ++diffracted_kept[p.satellite][diffraction_kind];
-    list.push_back(std::move(p.path));
+  };
+  settle(pending, first_legs);
+
+  // Second order: a reflection off the facet, then a diffraction over an edge of the object that
+  // hid the reflection point from the receiver (a signal round a corner or over a low building
+  // after a facade). The reflected wave is a plane wave from the satellite's direction mirrored
+  // in the facet: the knife edge is the receiver's over that direction, and the reflection point
+  // is where the ray from the edge point back along it meets the facet.
+  std::vector<Pending> second_round;
+  std::vector<Eigen::Vector3d> second_first_legs;
+  for (const HiddenReflection& hidden : hidden_reflections) {
+    const std::size_t i = hidden.satellite;
+    const Eigen::Vector3d& s = directions[i];
+    const NearFacet& nf = near_facets[hidden.facet];
+    const Facet& f = facets_[nf.index];
+    const double ns = nf.normal.dot(s);
+    const Eigen::Vector3d mirrored = s - 2.0 * ns * nf.normal;
+    const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane (the receiver's side lit)
+    std::vector<EdgeHit> found;
+    for (const EdgeCluster& cluster : object_clusters_[hidden.object]) {
+      if (!may_reach_line(r, mirrored, blocked_excess_max_m, cluster.centre_m, cluster.radius_m)) continue;
+      for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+        const std::size_t e = object_edges_[hidden.object][k];
+        const DiffractionEdge& edge = edges_[e];
+        // On the object's outline as the reflected wave sees it.
+        if (edge.face_normal_a.dot(mirrored) * edge.face_normal_b.dot(mirrored) > 0.0) continue;
+        if (!may_reach_line(r, mirrored, blocked_excess_max_m, edge.midpoint_m, edge.half_length_m)) continue;
+        const std::optional<Eigen::Vector3d> keller = keller_point(edge, r, mirrored);
+        if (!keller) continue;
+        const Eigen::Vector3d& q = *keller;
+        const double d2 = (q - r).norm();
+        if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(mirrored) <= 0.0) continue;
+        // The receiver in the edge's shadow, the edge on the facet's lit side.
+        if ((r + (q - r).dot(mirrored) * mirrored - q).dot(edge.outward) >= 0.0) continue;
+        if (nf.normal.dot(q) - plane <= 1e-6) continue;
+        const double excess = d2 - mirrored.dot(q - r);
+        if (excess > blocked_excess_max_m) continue;
+        const double v = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+        found.push_back(EdgeHit{e, q, excess, v, knife_edge_loss_db(v)});
+      }
+    }
+    std::sort(found.begin(), found.end(), [](const EdgeHit& a, const EdgeHit& b) { return a.loss_db < b.loss_db; });
+    if (found.size() > 4 * kMaxDiffractedPaths) found.resize(4 * kMaxDiffractedPaths);
+    for (const EdgeHit& hit : found) {
+      const Eigen::Vector3d& q = hit.point_m;
+      const double back_m = (nf.normal.dot(q) - plane) / ns;  // from the edge back to the facet
+      const Eigen::Vector3d point = q + back_m * mirrored;
+      if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
+      if ((point - r).norm() > settings.radius_m) continue;
+      const DiffractionEdge& edge = edges_[hit.edge];
+      const double d2 = (q - r).norm();
+      const Eigen::Vector3d toward = (q - r) / d2;
+      Pending p;
+      p.satellite = i;
+      p.path.type = PathType::kDiffracted;
+      p.path.reflections = 1;
+      // The edge's excess over the mirrored direction plus the reflection's own, 2 h (n . s).
+      p.path.excess_delay_m = hit.excess_m + 2.0 * nf.height_m * ns;
+      p.path.diffraction_v = hit.v;
+      p.path.diffraction_loss_db = hit.loss_db;
+      p.path.rhcp_amplitude = 1.0;
+      p.path.lhcp_amplitude = 0.0;
+      reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(nf.eta, ns));
+      const std::complex<double> knife = std::polar(std::pow(10.0, -hit.loss_db / 20.0), -std::numbers::pi / 4.0);
+      p.path.rhcp_amplitude *= knife * specular_factor;
+      p.path.lhcp_amplitude *= knife * specular_factor;
+      if (p.path.power_linear() < min_power) continue;
+      p.path.arrival_direction = toward;
+      p.path.point_m = q;
+      p.path.second_point_m = point;
+      p.path.material = edge.material;
+      p.path.object = object_names_[edge.object];
+      // excess = |q - r| - s'.(q - r) + 2 (n . s)(n . r - c), s' = s - 2 (n . s) n.
+      p.path.delay_gradient_origin = s - toward;
+      p.path.delay_gradient_direction = -((q - r) - 2.0 * nf.normal.dot(q - r) * nf.normal) + 2.0 * nf.height_m * nf.normal;
+      p.first_leg_m = d2;
+      p.legs.push_back(Leg{q + kEdgeOffset_m * edge.outward, mirrored, back_m});
+      p.legs.push_back(Leg{point + kSurfaceOffset_m * nf.normal, s, kInf});
+      second_first_legs.push_back(toward);
+      second_round.push_back(std::move(p));
+    }
   }
+  if (!second_round.empty()) settle(second_round, second_first_legs);
   sort_indirect_paths_by_power(out);
   return out;
 }

@@ -310,6 +310,27 @@ TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
   EXPECT_GT(double_bounces, 100);  // enough to mean something
 }
 
+// The excess delay of the path diffracted once and reflected once, moved a little from the
+// receiver and the satellite direction, against its gradients (the Doppler's excess-delay rate).
+void expect_diffracted_reflection_gradients(const PropagationScene& scene, const Eigen::Vector3d& rx,
+                                            const Eigen::Vector3d& s, const PathSearchSettings& settings,
+                                            const SignalPath& path) {
+  const auto excess_at = [&](const Eigen::Vector3d& at, const Eigen::Vector3d& towards) {
+    for (const SignalPath& p : scene.paths(at, {towards}, settings)[0].paths) {
+      if (p.type == PathType::kDiffracted && p.reflections == 1) return p.excess_delay_m;
+    }
+    ADD_FAILURE() << "path lost";
+    return 0.0;
+  };
+  const double step = 1e-4;
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d dr = Eigen::Vector3d::Unit(axis) * step;
+    EXPECT_NEAR(excess_at(rx + dr, s) - path.excess_delay_m, path.delay_gradient_origin.dot(dr), 1e-7) << axis;
+    const Eigen::Vector3d turned = (s + Eigen::Vector3d::Unit(axis) * step).normalized();
+    EXPECT_NEAR(excess_at(rx, turned) - path.excess_delay_m, path.delay_gradient_direction.dot(turned - s), 1e-6) << axis;
+  }
+}
+
 TEST(Propagation, OverTheRoofAcrossTheStreetThenOffTheFacadeBehind) {
   // A satellite low in the north, hidden by the north wall (30 m, its south face at y = 9.5):
   // over that wall's top edge, down onto the south wall's face (y = -19.5) and back to the
@@ -345,6 +366,51 @@ TEST(Propagation, OverTheRoofAcrossTheStreetThenOffTheFacadeBehind) {
   // Weaker than the knife edge alone by the reflection (concrete, incidence from the edge).
   EXPECT_LT(over_and_back->power_linear(), std::pow(10.0, -knife_edge_loss_db(v) / 10.0));
   EXPECT_GT(over_and_back->power_linear(), std::pow(10.0, -(knife_edge_loss_db(v) + 15.0) / 10.0));
+  // Its delay gradients against finite differences (the Doppler's excess-delay rate).
+  expect_diffracted_reflection_gradients(*scene, rx, s, settings, *over_and_back);
+  // A first-order search does not look for it.
+  settings.max_reflection_order = 1;
+  for (const SignalPath& p : scene->paths(rx, {s}, settings)[0].paths) {
+    EXPECT_FALSE(p.type == PathType::kDiffracted && p.reflections == 1);
+  }
+}
+
+TEST(Propagation, OffTheFacadeThenOverTheLowBlockInBetween) {
+  // A satellite low in the south (in view), its reflection off a tall wall 29.5 m north hidden from
+  // the receiver by an 8 m block between them (y = 10-11): the reflected wave, a plane wave from the
+  // satellite's direction mirrored in the wall (north, 20 deg), bends over the block's near top
+  // edge down to the receiver.
+  WorldModel w;
+  w.objects.push_back(placed("wall", make_box({200, 1, 60}), {0, 30, 30}, MaterialClass::kConcrete));
+  w.objects.push_back(placed("block", make_box({200, 1, 8}), {0, 10.5, 4}, MaterialClass::kConcrete));
+  const auto scene = propagation(w);
+  const Eigen::Vector3d rx(0.0, 0.0, 1.5);
+  const Eigen::Vector3d s = enu_direction(180.0, 20.0);
+  PathSearchSettings settings;
+  settings.max_reflection_order = 2;
+  const PathSet set = scene->paths(rx, {s}, settings)[0];
+  ASSERT_FALSE(set.direct.blocked);
+  for (const SignalPath& p : set.paths) {
+    EXPECT_FALSE(p.type == PathType::kReflected && p.object == "wall");  // that reflection is hidden
+  }
+  const SignalPath* round = nullptr;
+  for (const SignalPath& p : set.paths) {
+    if (p.type == PathType::kDiffracted && p.reflections == 1) round = &p;
+  }
+  ASSERT_NE(round, nullptr);
+  const Eigen::Vector3d edge(0.0, 10.0, 8.0);  // the block's top edge on the receiver's side
+  const Eigen::Vector3d mirrored = enu_direction(0.0, 20.0);
+  EXPECT_NEAR((round->point_m - edge).norm(), 0.0, 1e-6);
+  EXPECT_EQ(round->object, "block");
+  // Back from the edge along the mirrored direction to the wall's face (y = 29.5).
+  const double back = (29.5 - edge.y()) / mirrored.y();
+  EXPECT_NEAR((round->second_point_m - (edge + back * mirrored)).norm(), 0.0, 1e-6);
+  const double edge_excess = (edge - rx).norm() - mirrored.dot(edge - rx);
+  EXPECT_NEAR(round->excess_delay_m, edge_excess + 2.0 * 29.5 * std::cos(20.0 * kDeg), 1e-6);
+  EXPECT_NEAR(round->diffraction_v, std::sqrt(4.0 * edge_excess / kL1WavelengthM), 1e-6);
+  EXPECT_LT(round->power_linear(), std::pow(10.0, -round->diffraction_loss_db / 10.0));
+  // Its delay gradients against finite differences (the Doppler's excess-delay rate).
+  expect_diffracted_reflection_gradients(*scene, rx, s, settings, *round);
   // A first-order search does not look for it.
   settings.max_reflection_order = 1;
   for (const SignalPath& p : scene->paths(rx, {s}, settings)[0].paths) {
