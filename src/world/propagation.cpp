@@ -1214,6 +1214,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           group_spheres.back().push_back(bounding(first, first + static_cast<std::ptrdiff_t>(std::min(kClustersPerGroup, clusters.size() - g))));
         }
       }
+      double farthest_edge_m = 0.0;  // from the receiver
+      for (const Sphere& sphere : object_spheres) farthest_edge_m = std::max(farthest_edge_m, (sphere.centre_m - r).norm() + sphere.radius_m);
       // Only an edge on the object's outline seen from the satellite (one face lit, the other
       // not) bends the wave into the shadow.
       std::vector<std::vector<char>> on_outline;
@@ -1227,6 +1229,15 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         const NearFacet& nf = second_order_facets[f_index];
         const Facet& f = facets_[nf.index];
         const Eigen::Vector3d image = r - 2.0 * nf.height_m * nf.normal;
+        // The reflection point lies on the segment from the image to an edge point, no farther from
+        // the image's line towards the satellite than that edge point (h with h^2 <= 2 D excess,
+        // D its distance from the image): the facet must come that close to the line.
+        {
+          const Eigen::Vector3d m = f.centre_m - image;
+          const double along = m.dot(s);
+          const double reach_m = std::sqrt(2.0 * blocked_excess_max_m * (farthest_edge_m + 2.0 * nf.height_m));
+          if (along < -f.radius_m || m.squaredNorm() - along * along > (f.radius_m + reach_m) * (f.radius_m + reach_m)) continue;
+        }
         const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane
         // An edge point the image's line may use lies near that line (excess within the bound).
         const auto may_reach_image = [&](const Eigen::Vector3d& centre_m, double radius_m) {
