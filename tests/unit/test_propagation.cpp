@@ -316,7 +316,8 @@ void expect_diffracted_reflection_gradients(const PropagationScene& scene, const
                                             const Eigen::Vector3d& s, const PathSearchSettings& settings,
                                             const SignalPath& path) {
   const auto excess_at = [&](const Eigen::Vector3d& at, const Eigen::Vector3d& towards) {
-    for (const SignalPath& p : scene.paths(at, {towards}, settings)[0].paths) {
+    const std::vector<PathSet> sets = scene.paths(at, {towards}, settings);
+    for (const SignalPath& p : sets[0].paths) {
       if (p.type == PathType::kDiffracted && p.reflections == 1) return p.excess_delay_m;
     }
     ADD_FAILURE() << "path lost";
@@ -370,7 +371,8 @@ TEST(Propagation, OverTheRoofAcrossTheStreetThenOffTheFacadeBehind) {
   expect_diffracted_reflection_gradients(*scene, rx, s, settings, *over_and_back);
   // A first-order search does not look for it.
   settings.max_reflection_order = 1;
-  for (const SignalPath& p : scene->paths(rx, {s}, settings)[0].paths) {
+  const std::vector<PathSet> first_order = scene->paths(rx, {s}, settings);
+  for (const SignalPath& p : first_order[0].paths) {
     EXPECT_FALSE(p.type == PathType::kDiffracted && p.reflections == 1);
   }
 }
@@ -413,7 +415,8 @@ TEST(Propagation, OffTheFacadeThenOverTheLowBlockInBetween) {
   expect_diffracted_reflection_gradients(*scene, rx, s, settings, *round);
   // A first-order search does not look for it.
   settings.max_reflection_order = 1;
-  for (const SignalPath& p : scene->paths(rx, {s}, settings)[0].paths) {
+  const std::vector<PathSet> first_order = scene->paths(rx, {s}, settings);
+  for (const SignalPath& p : first_order[0].paths) {
     EXPECT_FALSE(p.type == PathType::kDiffracted && p.reflections == 1);
   }
 }
