@@ -690,7 +690,12 @@ struct PropagationScene::DoubleBounceIndex {
   static constexpr double kCell_rad = std::numbers::pi / kRows;
   static constexpr double kMargin_rad = 1e-6;  // cells a hair wider than the cones need
 
+  // Beyond these the index is not kept (memory grows as the square of the facets): the antenna
+  // searches every pair at each epoch as a moving one does.
+  static constexpr std::size_t kMaxPairs = 400'000, kMaxEntries = 16'000'000;
+
   Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  bool too_large = false;           // the pairs were too many to keep: nothing else is kept
   std::vector<std::size_t> facets;  // the second-order facets the pairs index (scene indices)
   std::vector<FacetPair> pairs;     // A by A, then B, as append_facet_pairs makes them
   std::vector<std::uint32_t> cell_start, cell_pairs;  // pairs per cell, ascending
@@ -811,7 +816,7 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
   {
     const std::lock_guard lock(cache_mutex_);
     for (const auto& cached : double_bounce_cache_) {
-      if (cached && cached->origin_m == origin_m && same_facets(*cached)) return cached;
+      if (cached && cached->origin_m == origin_m && same_facets(*cached)) return cached->too_large ? nullptr : cached;
     }
     // A moving antenna never comes back to the very same point: index only a point met before.
     if (std::none_of(double_bounce_seen_m_.begin(), double_bounce_seen_m_.end(),
@@ -824,13 +829,27 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
   auto index = std::make_shared<DoubleBounceIndex>();
   index->origin_m = origin_m;
   for (const NearFacet& f : facets) index->facets.push_back(f.index);
-  for (std::size_t a = 0; a < facets.size(); ++a) append_facet_pairs(a, facets, plane_a, image_of, index->pairs);
+  for (std::size_t a = 0; a < facets.size() && index->pairs.size() <= DoubleBounceIndex::kMaxPairs; ++a) {
+    append_facet_pairs(a, facets, plane_a, image_of, index->pairs);
+  }
   constexpr std::size_t kCells = static_cast<std::size_t>(DoubleBounceIndex::kRows * DoubleBounceIndex::kColumns);
   index->cell_start.assign(kCells + 1, 0);
-  for (const FacetPair& pair : index->pairs) {
-    DoubleBounceIndex::for_each_cell(pair, [&](int cell) { ++index->cell_start[static_cast<std::size_t>(cell) + 1]; });
+  if (index->pairs.size() <= DoubleBounceIndex::kMaxPairs) {
+    for (const FacetPair& pair : index->pairs) {
+      DoubleBounceIndex::for_each_cell(pair, [&](int cell) { ++index->cell_start[static_cast<std::size_t>(cell) + 1]; });
+    }
+    for (std::size_t c = 0; c < kCells; ++c) index->cell_start[c + 1] += index->cell_start[c];
   }
-  for (std::size_t c = 0; c < kCells; ++c) index->cell_start[c + 1] += index->cell_start[c];
+  if (index->pairs.size() > DoubleBounceIndex::kMaxPairs || index->cell_start[kCells] > DoubleBounceIndex::kMaxEntries) {
+    auto marker = std::make_shared<DoubleBounceIndex>();
+    marker->origin_m = origin_m;
+    marker->facets = std::move(index->facets);
+    marker->too_large = true;
+    const std::lock_guard lock(cache_mutex_);
+    double_bounce_cache_[double_bounce_next_] = marker;
+    double_bounce_next_ = (double_bounce_next_ + 1) % double_bounce_cache_.size();
+    return nullptr;
+  }
   index->cell_pairs.resize(index->cell_start[kCells]);
   std::vector<std::uint32_t> filled(index->cell_start.begin(), index->cell_start.end() - 1);
   for (std::size_t k = 0; k < index->pairs.size(); ++k) {
