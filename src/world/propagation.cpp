@@ -518,9 +518,64 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   return c;
 }
 
+std::shared_ptr<const PropagationScene::PatchSight> PropagationScene::patch_sight(const Eigen::Vector3d& r,
+                                                                                  const Candidates& candidates,
+                                                                                  const std::vector<NearFacet>& near_facets,
+                                                                                  double radius_m) const {
+  {
+    const std::lock_guard lock(cache_mutex_);
+    for (const auto& cached : patch_sight_cache_) {
+      if (cached && cached->origin_m == r && cached->candidates == &candidates && cached->radius_m == radius_m &&
+          cached->first.size() == near_facets.size() + 1) {
+        return cached;
+      }
+    }
+    // A moving antenna never comes back to the very same point: keep the view of a point met before.
+    if (std::none_of(patch_sight_seen_m_.begin(), patch_sight_seen_m_.end(),
+                     [&](const std::optional<Eigen::Vector3d>& seen) { return seen && *seen == r; })) {
+      patch_sight_seen_m_[patch_sight_seen_next_] = r;
+      patch_sight_seen_next_ = (patch_sight_seen_next_ + 1) % patch_sight_seen_m_.size();
+      return nullptr;
+    }
+  }
+  auto sight = std::make_shared<PatchSight>();
+  sight->origin_m = r;
+  sight->candidates = &candidates;
+  sight->radius_m = radius_m;
+  std::vector<Eigen::Vector3d> towards;
+  std::vector<double> distance_m;
+  std::vector<std::size_t> slot;
+  for (std::size_t k = 0; k < near_facets.size(); ++k) {
+    const NearFacet& nf = near_facets[k];
+    sight->first.push_back(sight->vegetation_db.size());
+    if (nf.patches == nullptr) continue;
+    for (const FacetPatch& facet_patch : *nf.patches) {
+      sight->vegetation_db.push_back(std::numeric_limits<double>::quiet_NaN());
+      // The same filters and ray as add_scattered_paths.
+      const Eigen::Vector3d to_point = facet_patch.point_m - r;
+      const double d = to_point.norm();
+      if (d < 0.5 || d > radius_m || -nf.normal.dot(to_point) / d <= 1e-3) continue;
+      towards.push_back(to_point / d);
+      distance_m.push_back(d);
+      slot.push_back(sight->vegetation_db.size() - 1);
+    }
+  }
+  sight->first.push_back(sight->vegetation_db.size());
+  const std::vector<RayOutcome> seen = scene_->trace(r, towards);
+  for (std::size_t k = 0; k < seen.size(); ++k) {
+    const RayOutcome& o = seen[k];
+    if (o.blocked && o.blocking_distance_m < distance_m[k] - leg_tolerance_m(distance_m[k])) continue;
+    sight->vegetation_db[slot[k]] = o.vegetation_attenuation_db;
+  }
+  const std::lock_guard lock(cache_mutex_);
+  patch_sight_cache_[patch_sight_next_] = sight;
+  patch_sight_next_ = (patch_sight_next_ + 1) % patch_sight_cache_.size();
+  return sight;
+}
+
 void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::vector<Eigen::Vector3d>& directions,
-                                           const PathSearchSettings& settings, const std::vector<NearFacet>& near_facets,
-                                           std::vector<PathSet>& out) const {
+                                           const PathSearchSettings& settings, const Candidates& candidates,
+                                           const std::vector<NearFacet>& near_facets, std::vector<PathSet>& out) const {
   // Effective-roughness model, Lambertian (Degli-Esposti et al., IEEE Trans. Antennas Propag. 55(1),
   // 2007): a patch of area dA lit at incidence theta_i re-radiates S^2 |Gamma|^2 of the power it
   // intercepts with a cos(theta_s) pattern, so that at distance d its power relative to the
@@ -566,7 +621,9 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   // The patches within the radius on the receiver's side of each facet that could matter to a
   // blocked satellite: lit by it, and strong enough with the scattering lobe at its peak (the exact
   // power follows for the patches the receiver sees).
-  std::vector<Patch> patches;
+  // A static antenna's view of the patches is kept (traced once): the visible ones go straight on.
+  const std::shared_ptr<const PatchSight> sight = patch_sight(r, candidates, near_facets, settings.scattering_radius_m);
+  std::vector<Patch> patches, visible;
   std::vector<Eigen::Vector3d> towards;
   for (std::size_t k = 0; k < near_facets.size(); ++k) {
     const NearFacet& nf = near_facets[k];
@@ -578,7 +635,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       peak_factor = std::max(peak_factor, light.factor / light.lobe_integral);
     }
     if (peak_factor <= 0.0) continue;
-    for (const FacetPatch& facet_patch : *nf.patches) {
+    for (std::size_t p_index = 0; p_index < nf.patches->size(); ++p_index) {
+      const FacetPatch& facet_patch = (*nf.patches)[p_index];
       const Eigen::Vector3d to_point = facet_patch.point_m - r;
       const double d = to_point.norm();
       if (d < 0.5 || d > settings.scattering_radius_m) continue;
@@ -587,14 +645,18 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       const double peak_pattern = lobe != nullptr ? 1.001 : cos_receiver / std::numbers::pi;  // a hair high
       const double peak_power = peak_factor * facet_patch.area_m2 * peak_pattern / (d * d);
       if (peak_power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
+      if (sight) {
+        const double vegetation_db = sight->vegetation_db[sight->first[k] + p_index];
+        if (!std::isnan(vegetation_db)) visible.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, vegetation_db});
+        continue;
+      }
       patches.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, 0.0});
       towards.push_back(to_point / d);
     }
   }
-  if (patches.empty()) return;
+  if (patches.empty() && visible.empty()) return;
   // Which patches the receiver sees: one batch from it.
-  const std::vector<RayOutcome> seen = scene_->trace(r, towards);
-  std::vector<Patch> visible;
+  const std::vector<RayOutcome> seen = patches.empty() ? std::vector<RayOutcome>{} : scene_->trace(r, towards);
   for (std::size_t k = 0; k < patches.size(); ++k) {
     const RayOutcome& o = seen[k];
     if (o.blocked && o.blocking_distance_m < patches[k].distance_m - leg_tolerance_m(patches[k].distance_m)) continue;
@@ -1365,7 +1427,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       }
     }
   }
-  if (settings.scattering_coefficient > 0.0) add_scattered_paths(r, directions, settings, near_facets, out);
+  if (settings.scattering_coefficient > 0.0) add_scattered_paths(r, directions, settings, *near, near_facets, out);
   if (pending.empty()) {
     sort_indirect_paths_by_power(out);
     return out;

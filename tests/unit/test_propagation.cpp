@@ -251,10 +251,10 @@ TEST(Propagation, SecondOrderReflectionInTheCanyon) {
   EXPECT_EQ(find_path(scene->paths(rx, {enu_direction(0.0, el)}, settings)[0], PathType::kReflected, 2), nullptr);
 }
 
-// A static antenna's double bounces come from an index of the facet pairs by sky cell, built on
-// its second call at the same point (a moving antenna searches every pair each time). Both must
-// give the same paths, bit for bit: a block of buildings turned every way, scattering on, and
-// satellite directions all over the sky.
+// A static antenna's double bounces come from an index of the facet pairs by sky cell, and its
+// view of the scattering patches is traced once, both kept from its second call at the same point
+// (a moving antenna searches and traces each time). Both must give the same paths, bit for bit: a
+// block of buildings turned every way, scattering on, and satellite directions all over the sky.
 TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
   WorldModel w;
   w.objects.push_back(ground_plane(400.0));

@@ -144,8 +144,19 @@ class PropagationScene final : public PathQuery {
   // Diffuse scattering (settings.scattering_coefficient > 0): for each satellite whose direct ray is
   // blocked, one path per facade from its patches lit by the satellite and seen by the receiver.
   void add_scattered_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
-                           const PathSearchSettings& settings, const std::vector<NearFacet>& near_facets,
-                           std::vector<PathSet>& out) const;
+                           const PathSearchSettings& settings, const Candidates& candidates,
+                           const std::vector<NearFacet>& near_facets, std::vector<PathSet>& out) const;
+  // What an antenna met at the same point twice sees of the scattering patches (the vegetation its
+  // ray to each crosses; NaN: hidden, or beyond the radius), kept so that it traces them once.
+  struct PatchSight {
+    Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+    const Candidates* candidates = nullptr;
+    double radius_m = 0.0;
+    std::vector<std::size_t> first;      // per near facet, its first patch in vegetation_db
+    std::vector<double> vegetation_db;
+  };
+  std::shared_ptr<const PatchSight> patch_sight(const Eigen::Vector3d& origin_m, const Candidates& candidates,
+                                                const std::vector<NearFacet>& near_facets, double radius_m) const;
 
   // Double bounces (satellite -> B -> A -> receiver) for one antenna position: a pair of facets
   // that can face each other whatever the satellite, and the index of the pairs by sky direction
@@ -192,6 +203,10 @@ class PropagationScene final : public PathQuery {
   mutable std::size_t double_bounce_next_ = 0;
   mutable std::array<std::optional<Eigen::Vector3d>, kCachedCandidateSets> double_bounce_seen_m_;  // origins met once
   mutable std::size_t double_bounce_seen_next_ = 0;
+  mutable std::array<std::shared_ptr<const PatchSight>, kCachedCandidateSets> patch_sight_cache_;
+  mutable std::size_t patch_sight_next_ = 0;
+  mutable std::array<std::optional<Eigen::Vector3d>, kCachedCandidateSets> patch_sight_seen_m_;
+  mutable std::size_t patch_sight_seen_next_ = 0;
 };
 
 }  // namespace skytrace::world
