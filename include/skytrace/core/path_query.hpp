@@ -82,9 +82,11 @@ struct SignalPath {
 struct PathSearchSettings {
   // Reflecting facets whose closest point is within this distance of the receiver.
   double radius_m = 150.0;
-  int max_reflection_order = 1;  // 0: none, 1: single bounce, 2: also double bounce
-  // Double bounces only between facets within this distance (0: radius_m); their cost grows as the
-  // square of the facets within it.
+  // 0: none, 1: single bounce, 2: also double bounces and (with diffraction) a diffraction combined
+  // with one reflection, either way round.
+  int max_reflection_order = 1;
+  // Double bounces only between facets within this distance (0: radius_m), whose cost grows as the
+  // square of the facets within it; a diffraction then a reflection only off them.
   double second_order_radius_m = 0.0;
   bool diffraction = true;       // knife-edge diffraction over building edges
   // Diffraction is for satellites just below an edge: the knife-edge model holds for small angles
