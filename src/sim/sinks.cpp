@@ -115,7 +115,8 @@ void append_paths(std::string& out, const receiver::EpochObservations& epoch, co
       row.fixed(power_db(p.rhcp_amplitude), 2).fixed(power_db(p.lhcp_amplitude), 2);
       row.fixed(sat.path_directions[k].azimuth_deg, 4).fixed(sat.path_directions[k].elevation_deg, 4);
       row.fixed(sat.path_delay_rates_mps[k], 5).fixed(p.point_m.x(), 3).fixed(p.point_m.y(), 3).fixed(p.point_m.z(), 3);
-      if (p.reflections >= 2) {
+      // Two interactions: a double bounce, or a diffraction with a reflection.
+      if (p.reflections >= 2 || (p.type == PathType::kDiffracted && p.reflections == 1)) {
         row.fixed(p.second_point_m.x(), 3).fixed(p.second_point_m.y(), 3).fixed(p.second_point_m.z(), 3);
       } else {
         row.empty(3);

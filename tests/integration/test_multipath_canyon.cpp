@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "process.hpp"
 #include "test_support.hpp"
 #include "zst_text.hpp"
@@ -158,4 +160,37 @@ TEST(MultipathCanyon, NlosExcessIsTheSingleBounceGeometry) {
 }
 
 }  // namespace
+// With the second order the canyon's hidden satellites also come over the far wall's top edge and
+// back off the near wall (or the reverse): paths.csv gives such a path both its points, the
+// reflection and the edge, and a plain path only its own.
+TEST(MultipathCanyon, DiffractionWithAReflectionListsBothItsPoints) {
+  const auto scenario = test::shared_data_dir().parent_path() / "contract" / "canyon.yaml";
+  if (!std::filesystem::exists(scenario)) GTEST_SKIP() << "contract scenario absent: " << scenario;
+  const auto out = test::make_temp_dir("multipath_canyon_order2");
+  const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                   test::shell_quote(scenario.string()) + " --out " + test::shell_quote(out.string()) +
+                                   " --quiet --set models.multipath_order=2 --set time.duration_s=1800");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Table paths = read_csv(out / "paths.csv.zst");
+  std::size_t combined = 0;
+  for (const auto& row : paths.rows) {
+    const bool two_points = paths.at(row, "reflections") == "2" ||
+                            (paths.at(row, "type") == "diffracted" && paths.at(row, "reflections") == "1");
+    EXPECT_EQ(paths.at(row, "second_y_m").empty(), !two_points) << paths.at(row, "time_gpst") << " " << paths.at(row, "sat");
+    if (paths.at(row, "type") != "diffracted" || paths.at(row, "reflections") != "1") continue;
+    ++combined;
+    // Two distinct points, one of them the reflection on a wall's inner face (y = 9.5 or -19.5) or
+    // on the ground (z = 0).
+    const Eigen::Vector3d first(paths.number(row, "point_x_m"), paths.number(row, "point_y_m"), paths.number(row, "point_z_m"));
+    const Eigen::Vector3d second(paths.number(row, "second_x_m"), paths.number(row, "second_y_m"),
+                                 paths.number(row, "second_z_m"));
+    const auto on_reflector = [](const Eigen::Vector3d& p) {
+      return std::abs(p.y() - 9.5) < 1e-3 || std::abs(p.y() + 19.5) < 1e-3 || std::abs(p.z()) < 1e-3;
+    };
+    EXPECT_GT((first - second).norm(), 1.0);
+    EXPECT_TRUE(on_reflector(first) || on_reflector(second)) << first.transpose() << " / " << second.transpose();
+  }
+  EXPECT_GT(combined, 0u);
+}
+
 }  // namespace skytrace
