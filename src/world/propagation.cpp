@@ -449,13 +449,12 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   const double scattering_patch_m = scattering ? settings.scattering_patch_m : 0.0;
   {
     const std::lock_guard lock(cache_mutex_);
-    for (const auto& cached : cache_) {
-      if (cached && (cached->origin_m - origin_m).norm() <= kCandidateMargin_m && cached->radius_m == settings.radius_m &&
-          cached->min_area_m2 == settings.min_facet_area_m2 && cached->frequency_hz == settings.frequency_hz &&
-          cached->scattering_radius_m == scattering_radius_m && cached->scattering_patch_m == scattering_patch_m) {
-        return cached;
-      }
-    }
+    auto cached = candidate_sets_.find([&](const Candidates& c) {
+      return (c.origin_m - origin_m).norm() <= kCandidateMargin_m && c.radius_m == settings.radius_m &&
+             c.min_area_m2 == settings.min_facet_area_m2 && c.frequency_hz == settings.frequency_hz &&
+             c.scattering_radius_m == scattering_radius_m && c.scattering_patch_m == scattering_patch_m;
+    });
+    if (cached) return cached;
   }
   auto c = std::make_shared<Candidates>();
   c->origin_m = origin_m;
@@ -513,8 +512,7 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   }
   for (std::size_t k = 0; k < c->facets.size(); ++k) c->facets[k].patches = &c->patches[k];
   const std::lock_guard lock(cache_mutex_);
-  cache_[cache_next_] = c;
-  cache_next_ = (cache_next_ + 1) % cache_.size();
+  candidate_sets_.keep(c);
   return c;
 }
 
@@ -524,19 +522,13 @@ std::shared_ptr<const PropagationScene::PatchSight> PropagationScene::patch_sigh
                                                                                   double radius_m) const {
   {
     const std::lock_guard lock(cache_mutex_);
-    for (const auto& cached : patch_sight_cache_) {
-      if (cached && cached->origin_m == r && cached->candidates == &candidates && cached->radius_m == radius_m &&
-          cached->first.size() == near_facets.size() + 1) {
-        return cached;
-      }
-    }
+    auto cached = patch_sights_.find([&](const PatchSight& sight) {
+      return sight.origin_m == r && sight.candidates == &candidates && sight.radius_m == radius_m &&
+             sight.first.size() == near_facets.size() + 1;
+    });
+    if (cached) return cached;
     // A moving antenna never comes back to the very same point: keep the view of a point met before.
-    if (std::none_of(patch_sight_seen_m_.begin(), patch_sight_seen_m_.end(),
-                     [&](const std::optional<Eigen::Vector3d>& seen) { return seen && *seen == r; })) {
-      patch_sight_seen_m_[patch_sight_seen_next_] = r;
-      patch_sight_seen_next_ = (patch_sight_seen_next_ + 1) % patch_sight_seen_m_.size();
-      return nullptr;
-    }
+    if (!patch_sights_.met_before(r)) return nullptr;
   }
   auto sight = std::make_shared<PatchSight>();
   sight->origin_m = r;
@@ -568,8 +560,7 @@ std::shared_ptr<const PropagationScene::PatchSight> PropagationScene::patch_sigh
     sight->vegetation_db[slot[k]] = o.vegetation_attenuation_db;
   }
   const std::lock_guard lock(cache_mutex_);
-  patch_sight_cache_[patch_sight_next_] = sight;
-  patch_sight_next_ = (patch_sight_next_ + 1) % patch_sight_cache_.size();
+  patch_sights_.keep(sight);
   return sight;
 }
 
@@ -877,16 +868,11 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
   };
   {
     const std::lock_guard lock(cache_mutex_);
-    for (const auto& cached : double_bounce_cache_) {
-      if (cached && cached->origin_m == origin_m && same_facets(*cached)) return cached->too_large ? nullptr : cached;
-    }
+    auto cached = double_bounce_indexes_.find(
+        [&](const DoubleBounceIndex& index) { return index.origin_m == origin_m && same_facets(index); });
+    if (cached) return cached->too_large ? nullptr : cached;
     // A moving antenna never comes back to the very same point: index only a point met before.
-    if (std::none_of(double_bounce_seen_m_.begin(), double_bounce_seen_m_.end(),
-                     [&](const std::optional<Eigen::Vector3d>& seen) { return seen && *seen == origin_m; })) {
-      double_bounce_seen_m_[double_bounce_seen_next_] = origin_m;
-      double_bounce_seen_next_ = (double_bounce_seen_next_ + 1) % double_bounce_seen_m_.size();
-      return nullptr;
-    }
+    if (!double_bounce_indexes_.met_before(origin_m)) return nullptr;
   }
   auto index = std::make_shared<DoubleBounceIndex>();
   index->origin_m = origin_m;
@@ -908,8 +894,7 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
     marker->facets = std::move(index->facets);
     marker->too_large = true;
     const std::lock_guard lock(cache_mutex_);
-    double_bounce_cache_[double_bounce_next_] = marker;
-    double_bounce_next_ = (double_bounce_next_ + 1) % double_bounce_cache_.size();
+    double_bounce_indexes_.keep(marker);
     return nullptr;
   }
   index->cell_pairs.resize(index->cell_start[kCells]);
@@ -924,8 +909,7 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
     }
   }
   const std::lock_guard lock(cache_mutex_);
-  double_bounce_cache_[double_bounce_next_] = index;
-  double_bounce_next_ = (double_bounce_next_ + 1) % double_bounce_cache_.size();
+  double_bounce_indexes_.keep(index);
   return index;
 }
 

@@ -193,20 +193,43 @@ class PropagationScene final : public PathQuery {
   std::vector<std::vector<std::size_t>> object_edges_;
   std::vector<std::vector<EdgeCluster>> object_clusters_;
   std::unordered_map<std::string, std::size_t> object_index_;
-  // The last candidate sets, one per band or settings in use (a GPS and a GLONASS signal search
-  // with different permittivities), replaced oldest first.
+  // Kept per antenna point: one per band or settings in use (a GPS and a GLONASS signal search
+  // with different permittivities).
   static constexpr std::size_t kCachedCandidateSets = 4;
+  // The last few results of a computation per antenna point, replaced oldest first; and the points met once, for results worth keeping only for an antenna
+  // that comes back to the very same point (a static one). Guarded by cache_mutex_.
+  template <typename T>
+  struct RecentResults {
+    std::array<std::shared_ptr<const T>, kCachedCandidateSets> kept;
+    std::size_t next = 0;
+    std::array<std::optional<Eigen::Vector3d>, kCachedCandidateSets> met;
+    std::size_t next_met = 0;
+
+    template <typename Match>
+    [[nodiscard]] std::shared_ptr<const T> find(Match&& match) const {
+      for (const auto& result : kept) {
+        if (result && match(*result)) return result;
+      }
+      return nullptr;
+    }
+    void keep(std::shared_ptr<const T> result) {
+      kept[next] = std::move(result);
+      next = (next + 1) % kept.size();
+    }
+    // Whether the point was met before; remembers it if not.
+    bool met_before(const Eigen::Vector3d& point_m) {
+      for (const auto& m : met) {
+        if (m && *m == point_m) return true;
+      }
+      met[next_met] = point_m;
+      next_met = (next_met + 1) % met.size();
+      return false;
+    }
+  };
   mutable std::mutex cache_mutex_;
-  mutable std::array<std::shared_ptr<const Candidates>, kCachedCandidateSets> cache_;
-  mutable std::size_t cache_next_ = 0;
-  mutable std::array<std::shared_ptr<const DoubleBounceIndex>, kCachedCandidateSets> double_bounce_cache_;
-  mutable std::size_t double_bounce_next_ = 0;
-  mutable std::array<std::optional<Eigen::Vector3d>, kCachedCandidateSets> double_bounce_seen_m_;  // origins met once
-  mutable std::size_t double_bounce_seen_next_ = 0;
-  mutable std::array<std::shared_ptr<const PatchSight>, kCachedCandidateSets> patch_sight_cache_;
-  mutable std::size_t patch_sight_next_ = 0;
-  mutable std::array<std::optional<Eigen::Vector3d>, kCachedCandidateSets> patch_sight_seen_m_;
-  mutable std::size_t patch_sight_seen_next_ = 0;
+  mutable RecentResults<Candidates> candidate_sets_;
+  mutable RecentResults<DoubleBounceIndex> double_bounce_indexes_;
+  mutable RecentResults<PatchSight> patch_sights_;
 };
 
 }  // namespace skytrace::world
