@@ -6,11 +6,15 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <spdlog/spdlog.h>
 
 #include "commands.hpp"
 #include "skytrace/core/cancellation.hpp"
@@ -53,8 +57,15 @@ int run_gz(const GzArgs& args) {
   options.file_outputs = args.file_outputs;
   install_live_stop_handlers();
   auto st = gz::run_bridge(options);
-  if (!st) return report_error(st.error());
-  return kExitOk;
+  const int code = st ? kExitOk : report_error(st.error());
+  // The files are complete. ign-transport 11's discovery threads outlive main and may dispatch a
+  // message into its shared node while static destructors tear it down (a segfault at exit, seen
+  // under load; gz-sim #1317): end here, without the static destructors.
+  spdlog::shutdown();
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  std::_Exit(code);
 #else
   (void)args;
   std::cerr << "skytrace: error: this build has no Gazebo transport (install libignition-transport-dev and "
