@@ -61,6 +61,38 @@ int run(const RunArgs& args) {
 
 }  // namespace
 
+// `skytrace iq SCENARIO --out DIR`: the run with output.iq set from the options (docs/iq.md).
+void register_iq_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<RunArgs>();
+  auto sample_rate = std::make_shared<double>(4e6);
+  auto format = std::make_shared<std::string>("sc8");
+  auto bands = std::make_shared<std::vector<std::string>>();
+  CLI::App* cmd = app.add_subcommand(
+      "iq", "Write complex baseband samples of the scenario's first receiver (GPS L1 C/A) with a GNSS-SDR "
+            "configuration, beside obs.rnx and truth of the same run");
+  cmd->add_option("scenario", args->scenario, "Scenario YAML file (see docs/scenario.md)")->required();
+  cmd->add_option("--out", args->out_dir, "Output folder (created if missing)")->required();
+  cmd->add_option("--sample-rate", *sample_rate, "Complex samples per second (at least 2.046e6 for L1 C/A)")
+      ->capture_default_str();
+  cmd->add_option("--format", *format, "sc8 (int8 I/Q), sc16 (int16 I/Q) or gr_complex (float32 I/Q)")
+      ->capture_default_str();
+  cmd->add_option("--band", *bands, "Band to write (repeatable): L1 (GPS L1 C/A; the default)");
+  cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv.zst (nor paths.csv.zst)");
+  cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
+  cmd->add_option("--threads", args->threads, "Threads to use, 1-1024 (default: one per hardware thread)");
+  cmd->add_option("--set", args->overrides, "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable)");
+  cmd->callback([args, sample_rate, format, bands, &exit_code]() {
+    RunArgs with_iq = *args;
+    std::string band_list;
+    for (const auto& band : bands->empty() ? std::vector<std::string>{"L1"} : *bands) {
+      band_list += (band_list.empty() ? "" : ", ") + band;
+    }
+    with_iq.overrides.push_back(fmt::format("output.iq={{sample_rate_hz: {:.17g}, format: \"{}\", bands: [{}]}}",
+                                            *sample_rate, *format, band_list));
+    exit_code = run(with_iq);
+  });
+}
+
 void register_run_command(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<RunArgs>();
   CLI::App* cmd = app.add_subcommand("run", "Simulate a scenario: writes obs.rnx, nav.rnx, truth.csv.zst and summary.json");

@@ -29,6 +29,7 @@ int exit_code_for(const Error& error);
 void register_orbits_command(CLI::App& app, int& exit_code);
 void register_fetch_command(CLI::App& app, int& exit_code);
 void register_run_command(CLI::App& app, int& exit_code);
+void register_iq_command(CLI::App& app, int& exit_code);
 void register_compare_command(CLI::App& app, int& exit_code);
 void register_gz_command(CLI::App& app, int& exit_code);
 void register_serve_command(CLI::App& app, int& exit_code);

@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   int exit_code = kExitOk;
   skytrace::install_cancellation_handlers();  // serve and gz install their own stop handlers over these
   register_run_command(app, exit_code);
+  register_iq_command(app, exit_code);
   register_orbits_command(app, exit_code);
   register_fetch_command(app, exit_code);
   register_compare_command(app, exit_code);

@@ -314,6 +314,13 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     velocity_enu_mps = rx_to_enu * epoch.receiver.velocity_mps;
     satellite_enu = enu_unit_vector(obs.direction);
   }
+  const stages::SatelliteTerms terms{p.light_time.range_m,
+                                     p.light_time.range_rate_mps,
+                                     kC * epoch.receiver_clock.bias_s,
+                                     kC * epoch.receiver_clock.drift_s_per_s,
+                                     obs.relativistic_m,
+                                     kC * (p.truth.state.clock_drift_s_per_s + p.truth.state.relativistic_drift_s_per_s),
+                                     obs.troposphere_m};
   for (const Signal& signal : settings_.signals) {
     // A receiver records only what the satellite transmits; the answer is kept for the GPST day.
     if (signal.system != sat.system || !satellite_signals_.transmitted(sat, signal, tag)) continue;
@@ -336,6 +343,29 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
                                                     obs.direction, attenuation_db,
                                                     satellite_signals_.power_offset_db(sat, signal, tag),
                                                     multipath.power_db);
+    if (settings_.incoming_signals) {
+      IncomingSignal in;
+      in.signal = signal;
+      SignalMeasurement clean;
+      clean.signal = signal;
+      clean.carrier_hz = signal_info_.at(signal)->carrier_frequency_hz(obs.glonass_channel);
+      clean.satellite_clock_m = kC * p.truth.state.clock_bias_s;
+      clean.group_delay_m = kC * stages::signal_group_delay_s(p.truth, signal_record, signal, p.precise_truth);
+      clean.ionosphere_code_m = stages::ionosphere_code_delay_m(obs.ionosphere_l1_m, clean.carrier_hz);
+      clean.antenna_phase_centre_m =
+          stages::antenna_phase_centre_m(settings_.antenna_phase_centre.get(), signal, obs.direction);
+      stages::form_observables(terms, clean);
+      in.carrier_hz = clean.carrier_hz;
+      in.pseudorange_m = clean.pseudorange_m;
+      in.carrier_phase_cycles = clean.carrier_phase_cycles;
+      in.doppler_hz = clean.doppler_hz;
+      in.unobstructed_cn0_dbhz = cn0_dbhz - multipath.power_db;
+      in.paths.reserve(through_antenna.size());
+      for (const ReceivedPath& r : through_antenna) {
+        in.paths.push_back(IncomingPath{r.excess_delay_m, r.excess_delay_rate_mps, r.amplitude});
+      }
+      obs.incoming.push_back(std::move(in));
+    }
     stages::Candidate candidate{&signal, cn0_dbhz, multipath, std::move(signal_record), nullptr, {}};
     if (fading) {
       candidate.foliage = &band_field(sat, signal, obs, velocity_enu_mps, satellite_enu, tag);
@@ -350,13 +380,6 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     candidates_.push_back(std::move(candidate));
   }
 
-  const stages::SatelliteTerms terms{p.light_time.range_m,
-                                     p.light_time.range_rate_mps,
-                                     kC * epoch.receiver_clock.bias_s,
-                                     kC * epoch.receiver_clock.drift_s_per_s,
-                                     obs.relativistic_m,
-                                     kC * (p.truth.state.clock_drift_s_per_s + p.truth.state.relativistic_drift_s_per_s),
-                                     obs.troposphere_m};
   stages::SatelliteAcquisition acquisition = tracking_.begin_satellite(profile, acquirable, last_tag_.has_value());
   records_used_.clear();
   // The errors of the satellite's L1 C/A loop at this epoch, which aided loops follow.

@@ -396,7 +396,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   }
 
   if (auto output = root.child("output")) {
-    output->expect_keys({"rinex_version", "fix", "nmea", "rtcm3", "mcap", "mcap_compression", "truth_format"});
+    output->expect_keys({"rinex_version", "fix", "nmea", "rtcm3", "mcap", "mcap_compression", "truth_format", "iq"});
     if (auto c = output->child("rinex_version")) s.output.rinex_version = c->as_choice({"3.04", "4.00"});
     if (auto c = output->child("fix")) s.output.fix = c->as_bool();
     if (auto c = output->child("nmea")) s.output.nmea = c->as_bool();
@@ -404,6 +404,29 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (auto c = output->child("mcap")) s.output.mcap = c->as_bool();
     if (auto c = output->child("mcap_compression")) s.output.mcap_compression = c->as_choice({"zstd", "lz4", "none"});
     if (auto c = output->child("truth_format")) s.output.truth_format = c->as_choice({"csv.zst", "csv"});
+    if (auto iq = output->child("iq")) {
+      iq->expect_keys({"sample_rate_hz", "format", "bands"});
+      IqSettings settings;
+      // L1 C/A's main lobe is 2.046 MHz wide: complex samples need at least that rate.
+      if (auto c = iq->child("sample_rate_hz")) settings.sample_rate_hz = c->as_double_in(2.046e6, 100e6);
+      if (auto c = iq->child("format")) settings.format = c->as_choice({"sc8", "sc16", "gr_complex"});
+      if (auto c = iq->child("bands")) {
+        settings.bands.clear();
+        for (const auto& band : c->as_list_or_single()) {
+          const std::string name = band.as_choice({"L1"});
+          if (std::find(settings.bands.begin(), settings.bands.end(), name) == settings.bands.end()) {
+            settings.bands.push_back(name);
+          }
+        }
+      }
+      const bool tracks_l1ca = !s.receivers.empty() &&
+                               std::any_of(s.receivers.front().signals.begin(), s.receivers.front().signals.end(),
+                                           [](const Signal& sig) { return sig.to_string() == "G1C"; });
+      if (!tracks_l1ca) {
+        iq->fail("band L1 (GPS L1 C/A): the first receiver does not list signal G1C in receiver.signals");
+      }
+      s.output.iq = settings;
+    }
   }
   if (auto c = root.child("seed")) {
     const double seed = c->as_double_in(0.0, 1.8e19);
@@ -635,6 +658,11 @@ std::string scenario_to_json(const Scenario& s) {
                  {"mcap", s.output.mcap},
                  {"mcap_compression", s.output.mcap_compression},
                  {"truth_format", s.output.truth_format}};
+  if (s.output.iq) {
+    j["output"]["iq"] = {{"sample_rate_hz", s.output.iq->sample_rate_hz},
+                         {"format", s.output.iq->format},
+                         {"bands", s.output.iq->bands}};
+  }
   j["seed"] = s.seed;
   return j.dump(2);
 }

@@ -428,6 +428,7 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.foliage.enabled = s.models.foliage_fading;
   g.foliage.diffuse_db = s.models.foliage_diffuse_db;
   g.foliage.wind_spread_hz = s.models.foliage_wind_spread_hz;
+  g.incoming_signals = s.output.iq.has_value() && index == 0;  // the IQ samples are the first receiver's
   if (resources.precise_coverage) g.broadcast_truth = resources.precise_coverage->broadcast_truth();
   auto phase_centre = load_antenna_phase_centre(s, rx, g.signals, g.profile.antenna_rinex_type);
   if (!phase_centre) return phase_centre.error();

@@ -543,6 +543,7 @@ const std::vector<SinkKind>& run_sink_table() {
       {"report.html", [](const RunContext&) { return true; }, false,
        [](const RunContext& c) -> Result<std::unique_ptr<EpochSink>> { return std::unique_ptr<EpochSink>(std::make_unique<ReportSink>(c)); }},
       {"bag (rosbag2, MCAP)", [](const RunContext& c) { return c.scenario->output.mcap; }, true, &make_mcap_sink},
+      {"iq_L1 (IQ samples)", [](const RunContext& c) { return c.scenario->output.iq.has_value(); }, false, &make_iq_sink},
   };
   return table;
 }

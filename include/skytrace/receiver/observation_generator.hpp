@@ -83,6 +83,8 @@ struct GeneratorSettings {
   std::shared_ptr<const AntennaPhaseCentre> antenna_phase_centre;
   // Fast fading of direct rays through vegetation (models.foliage_fading; applies with noise).
   stages::FoliageFadingSettings foliage;
+  // Record every arriving signal in SatelliteObservation::incoming (for IQ samples).
+  bool incoming_signals = false;
 };
 
 // Generates one receiver's observations epoch by epoch (in increasing time), keeping the carrier

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include <complex>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -71,6 +72,26 @@ struct SignalMeasurement {
   double foliage_power_db = 0.0;
 };
 
+// A signal as it arrives at the antenna, whatever the receiver makes of it (recorded with
+// GeneratorSettings::incoming_signals, for signal-level outputs such as IQ samples): the observables
+// of its direct path without noise, multipath or ambiguity, the C/N0 it would have unobstructed,
+// and its paths through the antenna.
+struct IncomingPath {
+  double excess_delay_m = 0.0;
+  double excess_delay_rate_mps = 0.0;
+  // Relative to the unobstructed direct signal, after the antenna, without the excess path's phase.
+  std::complex<double> amplitude{1.0, 0.0};
+};
+struct IncomingSignal {
+  Signal signal;
+  double carrier_hz = 0.0;
+  double pseudorange_m = 0.0;
+  double carrier_phase_cycles = 0.0;
+  double doppler_hz = 0.0;
+  double unobstructed_cn0_dbhz = 0.0;
+  std::vector<IncomingPath> paths;  // empty: the direct path alone (no world, or multipath off)
+};
+
 // How a satellite's signals arrive (models.multipath): only the direct path, the direct path and
 // others (reflections, diffraction), or no direct path at all.
 enum class PathKind { kNone, kLos, kMultipath, kNlos };
@@ -110,6 +131,9 @@ struct SatelliteObservation {
   std::vector<SignalPath> paths;
   std::vector<AzimuthElevation> path_directions;
   std::vector<double> path_delay_rates_mps;
+  // Every healthy listed signal the satellite transmits and the antenna receives, tracked or not
+  // (only with GeneratorSettings::incoming_signals).
+  std::vector<IncomingSignal> incoming;
 };
 
 struct EpochObservations {

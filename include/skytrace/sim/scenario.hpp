@@ -169,6 +169,14 @@ struct WorldSettings {
   [[nodiscard]] bool any() const { return sdf || osm || footprints || cityjson || citygml || dem || !meshes.empty(); }
 };
 
+// IQ samples (output.iq; `skytrace iq`): complex baseband of the first receiver's antenna, one file
+// per band, with a GNSS-SDR configuration that processes them (docs/iq.md).
+struct IqSettings {
+  double sample_rate_hz = 4e6;
+  std::string format = "sc8";  // sc8 | sc16 | gr_complex: interleaved int8, int16 or float32 I/Q
+  std::vector<std::string> bands = {"L1"};  // L1: GPS L1 C/A
+};
+
 struct OutputSettings {
   std::string rinex_version = "3.04";  // 3.04 | 4.00
   bool fix = true;     // fix.csv: the position engine on the first receiver's observations
@@ -182,6 +190,7 @@ struct OutputSettings {
   // about 11 % of the plain bytes, read as they are by pandas, polars and DuckDB) or as plain CSV
   // (docs/adr/0004-truth-format.md).
   std::string truth_format = "csv.zst";
+  std::optional<IqSettings> iq;
 };
 
 struct Scenario {

@@ -153,6 +153,9 @@ class StagedFile final : public ByteStream {
   std::string buffer_;
 };
 
+// IQ samples of the first receiver's antenna and a GNSS-SDR configuration (output.iq; src/sim/iq_sink.cpp).
+[[nodiscard]] Result<std::unique_ptr<EpochSink>> make_iq_sink(const RunContext& context);
+
 // The McapSink of output.mcap (src/sim/mcap_sink.cpp): a rosbag2 folder with the ROS 2 topics.
 [[nodiscard]] Result<std::unique_ptr<EpochSink>> make_mcap_sink(const RunContext& context);
 

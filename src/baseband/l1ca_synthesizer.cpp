@@ -1,0 +1,272 @@
+#include "skytrace/baseband/l1ca_synthesizer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include "skytrace/core/constants.hpp"
+
+namespace skytrace::baseband {
+namespace {
+
+constexpr double kL1_hz = 1575.42e6;
+constexpr double kL1Wavelength_m = constants::kSpeedOfLight_mps / kL1_hz;
+constexpr int kLutBits = 10;
+constexpr int kLutSize = 1 << kLutBits;
+
+// Output units per unit of noise standard deviation (per component): room for the signals and
+// about 8 sigma before int8 clips, 16 sigma for int16.
+double output_scale(SampleFormat format) {
+  switch (format) {
+    case SampleFormat::kSc8: return 16.0;
+    case SampleFormat::kSc16: return 2048.0;
+    case SampleFormat::kGrComplex: return 1.0;
+  }
+  return 1.0;
+}
+
+struct CarrierTable {
+  std::array<float, kLutSize> cos_table{};
+  std::array<float, kLutSize> sin_table{};
+  CarrierTable() {
+    for (int i = 0; i < kLutSize; ++i) {
+      const double angle = 2.0 * std::numbers::pi * (static_cast<double>(i) + 0.5) / kLutSize;
+      cos_table[static_cast<size_t>(i)] = static_cast<float>(std::cos(angle));
+      sin_table[static_cast<size_t>(i)] = static_cast<float>(std::sin(angle));
+    }
+  }
+};
+const CarrierTable& carrier_table() {
+  static const CarrierTable table;
+  return table;
+}
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) {
+  const std::int64_t q = a / b;
+  return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
+}
+
+// Cubic Hermite interpolation between (t0, y0, slope0) and (t1, y1, slope1).
+double hermite(double t, double t0, double y0, double slope0, double t1, double y1, double slope1) {
+  const double h = t1 - t0;
+  const double s = (t - t0) / h;
+  const double s2 = s * s;
+  const double s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * slope0 + (-2 * s3 + 3 * s2) * y1 + (s3 - s2) * h * slope1;
+}
+
+}  // namespace
+
+Result<SampleFormat> parse_sample_format(const std::string& name) {
+  if (name == "sc8") return SampleFormat::kSc8;
+  if (name == "sc16") return SampleFormat::kSc16;
+  if (name == "gr_complex") return SampleFormat::kGrComplex;
+  return make_error(ErrorCode::kInvalidArgument, "sample format '" + name + "': expected sc8, sc16 or gr_complex");
+}
+
+int bytes_per_sample(SampleFormat format) {
+  switch (format) {
+    case SampleFormat::kSc8: return 2;
+    case SampleFormat::kSc16: return 4;
+    case SampleFormat::kGrComplex: return 8;
+  }
+  return 2;
+}
+
+const char* gnss_sdr_item_type(SampleFormat format) {
+  switch (format) {
+    case SampleFormat::kSc8: return "ibyte";
+    case SampleFormat::kSc16: return "ishort";
+    case SampleFormat::kGrComplex: return "gr_complex";
+  }
+  return "ibyte";
+}
+
+L1caSynthesizer::L1caSynthesizer(SynthesizerSettings settings)
+    : settings_(std::move(settings)), noise_(stream_key(settings_.seed, {0x1a1ca5ULL})) {
+  const WeekTow start = settings_.start.to_week_tow(TimeScale::kGpst);
+  first_week_ = start.week;
+  start_sow_ = start.tow_s;
+}
+
+double L1caSynthesizer::noise_sigma() const { return output_scale(settings_.format); }
+
+int L1caSynthesizer::data_sign(int prn, Channel& channel, std::int64_t period_ms) {
+  const std::int64_t bit_in_run_weeks = floor_div(period_ms, 20);
+  const std::int64_t subframe_index = floor_div(bit_in_run_weeks, kLnavBitsPerSubframe);
+  const std::int64_t subframe_sow_total = subframe_index * 6;
+  const int week = first_week_ + static_cast<int>(floor_div(subframe_sow_total, 604800));
+  const int sow = static_cast<int>(subframe_sow_total - 604800 * floor_div(subframe_sow_total, 604800));
+  if (sow != channel.subframe_start_sow || week != channel.subframe_week) {
+    channel.subframe_start_sow = sow;
+    channel.subframe_week = week;
+    const orbits::KeplerEphemeris* record =
+        settings_.record_at ? settings_.record_at(prn, GnssTime::from_week_tow(TimeScale::kGpst, week, sow)) : nullptr;
+    if (record != nullptr) {
+      channel.subframe = lnav_subframe(*record, settings_.lnav, week, sow);
+    } else {
+      channel.subframe.fill(0);
+    }
+  }
+  const auto bit = static_cast<size_t>(bit_in_run_weeks - subframe_index * kLnavBitsPerSubframe);
+  return channel.subframe[bit] != 0 ? -1 : 1;
+}
+
+Status L1caSynthesizer::add_instant(double time_s, const std::vector<L1caArrival>& arrivals, std::string& out) {
+  Instant now;
+  now.time_s = time_s;
+  for (const L1caArrival& a : arrivals) {
+    if (!channels_.contains(a.prn)) {
+      auto code = gps_ca_code(a.prn);
+      if (!code) return code.error();
+      channels_[a.prn].code = *code;
+    }
+    now.arrivals[a.prn] = a;
+  }
+  most_satellites_ = std::max(most_satellites_, now.arrivals.size());
+  if (previous_) {
+    if (time_s <= previous_->time_s) {
+      return make_error(ErrorCode::kInvalidArgument, "IQ samples: instants must increase in time");
+    }
+    if (auto st = synthesize(*previous_, now, out); !st) return st;
+  }
+  previous_ = std::move(now);
+  return Ok{};
+}
+
+Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::string& out) {
+  const double fs = settings_.sample_rate_hz;
+  const auto block = static_cast<std::int64_t>(std::floor(fs * 1e-3));  // samples per block, at most 1 ms
+  const auto end_sample = static_cast<std::int64_t>(std::ceil(to.time_s * fs - 1e-6));
+  const double scale = output_scale(settings_.format);
+  const CarrierTable& lut = carrier_table();
+  // start_sow_ * 1000 = whole ms + a fraction: transmission times are counted in ms from the run's
+  // first week's start.
+  const double start_ms = start_sow_ * 1000.0;
+  const auto start_ms_whole = static_cast<std::int64_t>(std::floor(start_ms));
+  const double start_ms_fraction = start_ms - static_cast<double>(start_ms_whole);
+
+  struct Replica {
+    Channel* channel;
+    int prn;
+    const L1caArrival* a0;
+    const L1caArrival* a1;
+    ArrivalPath path;
+    double amplitude;  // linear, output units before scaling
+  };
+  std::vector<Replica> replicas;
+  for (const auto& [prn, a0] : from.arrivals) {
+    auto it = to.arrivals.find(prn);
+    if (it == to.arrivals.end()) continue;
+    const double direct_amplitude = std::sqrt(2.0 * std::pow(10.0, a0.unobstructed_cn0_dbhz / 10.0) / fs);
+    const std::vector<ArrivalPath> direct_only = {ArrivalPath{}};
+    for (const ArrivalPath& path : a0.paths.empty() ? direct_only : a0.paths) {
+      replicas.push_back(Replica{&channels_.at(prn), prn, &a0, &it->second, path, direct_amplitude * std::abs(path.amplitude)});
+    }
+  }
+
+  while (samples_written_ < end_sample) {
+    const std::int64_t n0 = samples_written_;
+    const auto n = static_cast<size_t>(std::min(block, end_sample - n0));
+    re_.assign(n, 0.0F);
+    im_.assign(n, 0.0F);
+    if (settings_.noise) {
+      for (size_t i = 0; i < n; ++i) {
+        re_[i] = static_cast<float>(noise_.gaussian());
+        im_[i] = static_cast<float>(noise_.gaussian());
+      }
+    }
+    const double tb = static_cast<double>(n0) / fs;
+    const double te = static_cast<double>(n0 + static_cast<std::int64_t>(n)) / fs;
+    for (Replica& r : replicas) {
+      const L1caArrival& a0 = *r.a0;
+      const L1caArrival& a1 = *r.a1;
+      auto range_at = [&](double t) {
+        const double p = hermite(t, from.time_s, a0.pseudorange_m, -a0.doppler_hz * kL1Wavelength_m, to.time_s,
+                                 a1.pseudorange_m, -a1.doppler_hz * kL1Wavelength_m);
+        return p + r.path.excess_delay_m + r.path.excess_delay_rate_mps * (t - from.time_s);
+      };
+      auto phase_at = [&](double t) {  // baseband carrier phase, cycles
+        const double l = hermite(t, from.time_s, a0.carrier_phase_cycles, -a0.doppler_hz, to.time_s,
+                                 a1.carrier_phase_cycles, -a1.doppler_hz);
+        const double excess_m = r.path.excess_delay_m + r.path.excess_delay_rate_mps * (t - from.time_s);
+        return -(l + excess_m / kL1Wavelength_m) + std::arg(r.path.amplitude) / (2.0 * std::numbers::pi);
+      };
+      // Transmission time (satellite clock) in ms since the first week's start.
+      const double xb = (tb - range_at(tb) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction;
+      const double xe = (te - range_at(te) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction;
+      const auto period_b = static_cast<std::int64_t>(std::floor(xb));
+      double chip = (xb - static_cast<double>(period_b)) * kCaCodeLength;
+      const double chips_per_sample = (xe - xb) * kCaCodeLength / static_cast<double>(n);
+      const double phase_b = phase_at(tb);
+      const double cycles_per_sample = (phase_at(te) - phase_b) / static_cast<double>(n);
+      double phase = phase_b - std::floor(phase_b);
+      std::int64_t period = start_ms_whole + period_b;
+      const auto amplitude = static_cast<float>(r.amplitude);
+      const std::int8_t* code = r.channel->code.data();
+      size_t i = 0;
+      while (i < n) {
+        // Samples up to the next code period, whose data bit may differ.
+        const double left_chips = kCaCodeLength - chip;
+        auto segment = static_cast<size_t>(std::ceil(left_chips / chips_per_sample));
+        segment = std::clamp<size_t>(segment, 1, n - i);
+        const float a = amplitude * static_cast<float>(data_sign(r.prn, *r.channel, period));
+        for (size_t k = 0; k < segment; ++k) {
+          const double c = chip + static_cast<double>(k) * chips_per_sample;
+          const auto chip_index = std::min(static_cast<int>(c), kCaCodeLength - 1);
+          const double ph = phase + static_cast<double>(k) * cycles_per_sample;
+          const auto lut_index = static_cast<size_t>(static_cast<std::int64_t>(std::floor(ph * kLutSize)) & (kLutSize - 1));
+          const float v = a * static_cast<float>(code[chip_index]);
+          re_[i + k] += v * lut.cos_table[lut_index];
+          im_[i + k] += v * lut.sin_table[lut_index];
+        }
+        chip += static_cast<double>(segment) * chips_per_sample;
+        phase += static_cast<double>(segment) * cycles_per_sample;
+        phase -= std::floor(phase);
+        i += segment;
+        if (chip >= kCaCodeLength) {
+          chip -= kCaCodeLength;
+          ++period;
+        }
+      }
+    }
+    quantize(re_.data(), im_.data(), n, out);
+    samples_written_ += static_cast<std::int64_t>(n);
+  }
+  (void)scale;
+  return Ok{};
+}
+
+void L1caSynthesizer::quantize(const float* re, const float* im, size_t n, std::string& out) const {
+  const auto scale = static_cast<float>(output_scale(settings_.format));
+  const size_t at = out.size();
+  out.resize(at + n * static_cast<size_t>(bytes_per_sample(settings_.format)));
+  char* p = out.data() + at;
+  switch (settings_.format) {
+    case SampleFormat::kSc8:
+      for (size_t i = 0; i < n; ++i) {
+        p[2 * i] = static_cast<char>(static_cast<std::int8_t>(std::clamp(std::nearbyint(re[i] * scale), -127.0F, 127.0F)));
+        p[2 * i + 1] = static_cast<char>(static_cast<std::int8_t>(std::clamp(std::nearbyint(im[i] * scale), -127.0F, 127.0F)));
+      }
+      break;
+    case SampleFormat::kSc16:
+      for (size_t i = 0; i < n; ++i) {
+        const auto v_re = static_cast<std::int16_t>(std::clamp(std::nearbyint(re[i] * scale), -32767.0F, 32767.0F));
+        const auto v_im = static_cast<std::int16_t>(std::clamp(std::nearbyint(im[i] * scale), -32767.0F, 32767.0F));
+        std::memcpy(p + 4 * i, &v_re, 2);  // little-endian hosts: the file is little-endian
+        std::memcpy(p + 4 * i + 2, &v_im, 2);
+      }
+      break;
+    case SampleFormat::kGrComplex:
+      for (size_t i = 0; i < n; ++i) {
+        const float v_re = re[i] * scale;
+        const float v_im = im[i] * scale;
+        std::memcpy(p + 8 * i, &v_re, 4);
+        std::memcpy(p + 8 * i + 4, &v_im, 4);
+      }
+      break;
+  }
+}
+
+}  // namespace skytrace::baseband
