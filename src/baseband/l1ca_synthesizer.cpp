@@ -159,7 +159,7 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
   for (const auto& [prn, a0] : from.arrivals) {
     auto it = to.arrivals.find(prn);
     if (it == to.arrivals.end()) continue;
-    const double direct_amplitude = std::sqrt(2.0 * std::pow(10.0, a0.unobstructed_cn0_dbhz / 10.0) / fs);
+    const double direct_amplitude = std::sqrt(2.0 * std::pow(10.0, a0.antenna_cn0_dbhz / 10.0) / fs);
     const std::vector<ArrivalPath> direct_only = {ArrivalPath{}};
     for (const ArrivalPath& path : a0.paths.empty() ? direct_only : a0.paths) {
       replicas.push_back(Replica{&channels_.at(prn), prn, &a0, &it->second, path, direct_amplitude * std::abs(path.amplitude)});

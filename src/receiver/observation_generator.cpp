@@ -359,7 +359,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       in.pseudorange_m = clean.pseudorange_m;
       in.carrier_phase_cycles = clean.carrier_phase_cycles;
       in.doppler_hz = clean.doppler_hz;
-      in.unobstructed_cn0_dbhz = cn0_dbhz - multipath.power_db;
+      in.antenna_cn0_dbhz = cn0_dbhz - multipath.power_db + profile.implementation_loss_db;
       in.paths.reserve(through_antenna.size());
       for (const ReceivedPath& r : through_antenna) {
         in.paths.push_back(IncomingPath{r.excess_delay_m, r.excess_delay_rate_mps, r.amplitude});

@@ -83,7 +83,7 @@ class IqSink final : public EpochSink {
         a.pseudorange_m = in.pseudorange_m;
         a.carrier_phase_cycles = in.carrier_phase_cycles;
         a.doppler_hz = in.doppler_hz;
-        a.unobstructed_cn0_dbhz = in.unobstructed_cn0_dbhz;
+        a.antenna_cn0_dbhz = in.antenna_cn0_dbhz;
         for (const receiver::IncomingPath& p : in.paths) {
           a.paths.push_back(baseband::ArrivalPath{p.excess_delay_m, p.excess_delay_rate_mps, p.amplitude});
         }
@@ -143,10 +143,15 @@ class IqSink final : public EpochSink {
     t += "Acquisition_1C.doppler_max=6000\nAcquisition_1C.doppler_step=250\nAcquisition_1C.max_dwells=1\n";
     t += "Acquisition_1C.dump=false\n";
     t += "Tracking_1C.implementation=GPS_L1_CA_DLL_PLL_Tracking\nTracking_1C.item_type=gr_complex\n";
-    t += "Tracking_1C.pll_bw_hz=35.0\nTracking_1C.dll_bw_hz=2.0\nTracking_1C.early_late_space_chips=0.5\n";
+    // Wide loops to pull in, then 10 ms correlations with narrow ones (profiles/gnss-sdr.yaml).
+    t += "Tracking_1C.pll_bw_hz=20.0\nTracking_1C.dll_bw_hz=2.0\nTracking_1C.early_late_space_chips=0.5\n";
+    t += "Tracking_1C.extend_correlation_symbols=10\nTracking_1C.pll_bw_narrow_hz=5.0\n";
+    t += "Tracking_1C.dll_bw_narrow_hz=0.5\n";
     t += "Tracking_1C.dump=false\n";
     t += "TelemetryDecoder_1C.implementation=GPS_L1_CA_Telemetry_Decoder\nTelemetryDecoder_1C.dump=false\n";
+    // Carrier-smoothed pseudoranges, as receivers report them.
     t += "Observables.implementation=Hybrid_Observables\nObservables.dump=false\n";
+    t += "Observables.enable_carrier_smoothing=true\nObservables.smoothing_factor=200\n";
     t += "PVT.implementation=RTKLIB_PVT\nPVT.positioning_mode=Single\nPVT.iono_model=Broadcast\n";
     t += "PVT.trop_model=Saastamoinen\nPVT.output_rate_ms=1000\nPVT.display_rate_ms=1000\n";
     t += "PVT.output_path=./gnss-sdr\nPVT.rinex_output_enabled=true\nPVT.rinex_version=3\n";

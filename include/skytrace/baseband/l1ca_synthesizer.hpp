@@ -34,13 +34,13 @@ struct ArrivalPath {
 
 // A satellite's L1 C/A signal at one instant: the noise-free pseudorange (the satellite clock's
 // transmission time follows from it), carrier phase and Doppler of its direct path, the C/N0 it would
-// have unobstructed, and its paths (empty: the direct one alone).
+// have unobstructed at the antenna's output (the noise density of the samples), and its paths (empty: the direct one alone).
 struct L1caArrival {
   int prn = 0;
   double pseudorange_m = 0.0;
   double carrier_phase_cycles = 0.0;
   double doppler_hz = 0.0;
-  double unobstructed_cn0_dbhz = 0.0;
+  double antenna_cn0_dbhz = 0.0;
   std::vector<ArrivalPath> paths;
 };
 

@@ -74,8 +74,9 @@ struct SignalMeasurement {
 
 // A signal as it arrives at the antenna, whatever the receiver makes of it (recorded with
 // GeneratorSettings::incoming_signals, for signal-level outputs such as IQ samples): the observables
-// of its direct path without noise, multipath or ambiguity, the C/N0 it would have unobstructed,
-// and its paths through the antenna.
+// of its direct path without noise, multipath or ambiguity, the C/N0 it would have unobstructed at
+// the antenna's output (before the receiver's implementation loss: the receiver processing the
+// signal has its own), and its paths through the antenna.
 struct IncomingPath {
   double excess_delay_m = 0.0;
   double excess_delay_rate_mps = 0.0;
@@ -88,7 +89,7 @@ struct IncomingSignal {
   double pseudorange_m = 0.0;
   double carrier_phase_cycles = 0.0;
   double doppler_hz = 0.0;
-  double unobstructed_cn0_dbhz = 0.0;
+  double antenna_cn0_dbhz = 0.0;
   std::vector<IncomingPath> paths;  // empty: the direct path alone (no world, or multipath off)
 };
 

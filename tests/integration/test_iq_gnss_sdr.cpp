@@ -1,0 +1,198 @@
+// `skytrace iq` checked by a real software receiver: GNSS-SDR (Debian 12's gnss-sdr 0.0.17) runs
+// the configuration skytrace wrote on the samples as they are, and what it makes of them is held
+// against the same run's obs.rnx, nav.rnx and the scenario's position (docs/iq.md).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <regex>
+#include <set>
+
+#include "process.hpp"
+#include "skytrace/core/frames.hpp"
+#include "skytrace/io/rinex_obs.hpp"
+#include "skytrace/orbits/rinex_nav.hpp"
+#include "test_support.hpp"
+
+namespace skytrace {
+namespace {
+
+std::filesystem::path contract(const std::string& name) {
+  return test::shared_data_dir().parent_path() / "contract" / name;
+}
+
+std::optional<std::filesystem::path> file_ending(const std::filesystem::path& dir, char last) {
+  if (!std::filesystem::exists(dir)) return std::nullopt;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.empty() && name.back() == last) return entry.path();
+  }
+  return std::nullopt;
+}
+
+class IqGnssSdr : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!test::program_available("gnss-sdr")) GTEST_SKIP() << "gnss-sdr absent (scripts/setup installs it)";
+    if (!std::filesystem::exists(contract("esbc-open-sky.yaml")) ||
+        !std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx")) {
+      GTEST_SKIP() << "contract scenario or ESBC data absent (set SKYTRACE_SHARED_DATA)";
+    }
+  }
+  // skytrace iq on a contract scenario (90 s at 1 s, GPS L1 C/A, the gnss-sdr profile), then
+  // GNSS-SDR in the output folder.
+  std::filesystem::path run_both(const std::string& scenario, const std::vector<std::string>& extra_sets = {}) {
+    const auto dir = test::make_temp_dir("iq_gnss_sdr");
+    std::string command = test::shell_quote(test::skytrace_executable().string()) + " iq " +
+                          test::shell_quote(contract(scenario).string()) + " --out " + test::shell_quote(dir.string()) +
+                          " --quiet --set time.duration_s=90 --set time.interval_s=1 --set receiver.profile=gnss-sdr"
+                          " --set 'receiver.signals=[G1C]'";
+    for (const auto& s : extra_sets) command += " --set " + test::shell_quote(s);
+    const auto iq = test::run_command(command + " 2>&1");
+    EXPECT_EQ(iq.exit_code, 0) << iq.output;
+    std::filesystem::create_directories(dir / "gnss-sdr");
+    const auto receiver = test::run_command("cd " + test::shell_quote(dir.string()) +
+                                            " && timeout 600 gnss-sdr --config_file=gnss-sdr.conf > gnss-sdr.log 2>&1");
+    EXPECT_EQ(receiver.exit_code, 0) << receiver.output;
+    return dir;
+  }
+};
+
+TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
+  const auto dir = run_both("esbc-open-sky.yaml");
+  std::ifstream log_file(dir / "gnss-sdr.log");
+  std::stringstream log_text;
+  log_text << log_file.rdbuf();
+  const std::string log = log_text.str();
+
+  // The samples hold the satellites of the run's obs.rnx; GNSS-SDR's observations come from
+  // those of them whose ephemeris it accepts (it requires IODC == IODE over all ten bits:
+  // Gps_Navigation_Message::satellite_validation; G18's record has IODC 388, IODE 132).
+  auto sim = io::read_rinex_obs(dir / "obs.rnx");
+  ASSERT_TRUE(sim) << sim.error().message;
+  auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
+  ASSERT_TRUE(sim_nav);
+  std::set<std::string> in_samples;
+  std::set<std::string> usable_by_gnss_sdr;
+  for (const auto& epoch : sim->epochs) {
+    for (const auto& s : epoch.satellites) in_samples.insert(s.satellite.to_string());
+  }
+  for (const auto& eph : sim_nav->kepler) {
+    if (eph.iodc == eph.iode && in_samples.contains(eph.satellite.to_string())) {
+      usable_by_gnss_sdr.insert(eph.satellite.to_string());
+    }
+  }
+  ASSERT_GE(in_samples.size(), 8u);
+  // It tracks every satellite of the samples.
+  for (const auto& sat : in_samples) {
+    const std::string prn = sat.substr(1);
+    EXPECT_NE(log.find("for satellite GPS PRN " + prn), std::string::npos) << sat << " never tracked";
+  }
+  const auto real_obs_path = file_ending(dir / "gnss-sdr", 'O');
+  ASSERT_TRUE(real_obs_path) << log.substr(log.size() > 4000 ? log.size() - 4000 : 0);
+  auto real = io::read_rinex_obs(*real_obs_path);
+  ASSERT_TRUE(real) << real.error().message;
+  std::set<std::string> observed;
+  for (const auto& epoch : real->epochs) {
+    for (const auto& s : epoch.satellites) observed.insert(s.satellite.to_string());
+  }
+  EXPECT_EQ(observed, usable_by_gnss_sdr);
+
+  // The ephemerides it decoded are nav.rnx's records, field by field.
+  const auto real_nav_path = file_ending(dir / "gnss-sdr", 'N');
+  ASSERT_TRUE(real_nav_path);
+  auto real_nav = orbits::read_rinex_nav(*real_nav_path);
+  ASSERT_TRUE(real_nav) << real_nav.error().message;
+  int compared = 0;
+  for (const auto& decoded : real_nav->kepler) {
+    const orbits::KeplerEphemeris* ours = nullptr;
+    for (const auto& eph : sim_nav->kepler) {
+      if (eph.satellite == decoded.satellite && eph.iode == decoded.iode) ours = &eph;
+    }
+    ASSERT_NE(ours, nullptr) << decoded.satellite.to_string() << " IODE " << decoded.iode << " is not in nav.rnx";
+    SCOPED_TRACE(decoded.satellite.to_string());
+    ++compared;
+    EXPECT_EQ(decoded.toe - ours->toe, 0.0);
+    EXPECT_EQ(decoded.toc - ours->toc, 0.0);
+    EXPECT_EQ(decoded.health, ours->health);
+    EXPECT_NEAR(decoded.sqrt_a_sqrtm, ours->sqrt_a_sqrtm, 1e-9 * ours->sqrt_a_sqrtm);
+    EXPECT_NEAR(decoded.eccentricity, ours->eccentricity, 1e-9);
+    EXPECT_NEAR(decoded.m0_rad, ours->m0_rad, 1e-9);
+    EXPECT_NEAR(decoded.omega0_rad, ours->omega0_rad, 1e-9);
+    EXPECT_NEAR(decoded.omega_rad, ours->omega_rad, 1e-9);
+    EXPECT_NEAR(decoded.i0_rad, ours->i0_rad, 1e-9);
+    EXPECT_NEAR(decoded.omega_dot_rad_per_s, ours->omega_dot_rad_per_s, 1e-15);
+    EXPECT_NEAR(decoded.delta_n_rad_per_s, ours->delta_n_rad_per_s, 1e-15);
+    EXPECT_NEAR(decoded.crs_m, ours->crs_m, 1e-6);
+    EXPECT_NEAR(decoded.crc_m, ours->crc_m, 1e-6);
+    EXPECT_NEAR(decoded.af0_s, ours->af0_s, 1e-12);
+    EXPECT_NEAR(decoded.af1_s_per_s, ours->af1_s_per_s, 1e-17);
+    EXPECT_NEAR(decoded.group_delays.tgd_s, ours->group_delays.tgd_s, 1e-12);
+  }
+  EXPECT_EQ(compared, static_cast<int>(usable_by_gnss_sdr.size()));
+
+  // Its observations against the run's own (common clock removed per epoch).
+  const auto compared_json = dir / "compare.json";
+  const auto cmp = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " compare " +
+                                     test::shell_quote(real_obs_path->string()) + " " +
+                                     test::shell_quote((dir / "obs.rnx").string()) + " --json " +
+                                     test::shell_quote(compared_json.string()) + " 2>&1");
+  ASSERT_EQ(cmp.exit_code, 0) << cmp.output;
+  std::ifstream json_file(compared_json);
+  const auto j = nlohmann::json::parse(json_file);
+  const nlohmann::json* g1c = nullptr;
+  for (const auto& s : j.at("signals")) {
+    if (s.at("signal") == "G1C") g1c = &s;
+  }
+  ASSERT_NE(g1c, nullptr) << cmp.output;
+  EXPECT_GE(g1c->at("pseudorange_m").at("count").get<int>(), 200) << cmp.output;
+  EXPECT_LE(g1c->at("pseudorange_m").at("abs_p68").get<double>(), 1.0) << cmp.output;
+  EXPECT_LE(g1c->at("doppler_mps").at("abs_p68").get<double>(), 0.05) << cmp.output;
+  EXPECT_LE(g1c->at("phase_difference_m").at("abs_p68").get<double>(), 0.01) << cmp.output;
+  EXPECT_LE(g1c->at("cn0_dbhz").at("mean_abs_difference").get<double>(), 1.5) << cmp.output;
+
+  // Its fixes: within 5 m of the antenna (the contract's marker, 0.216 m below the antenna).
+  const Eigen::Vector3d marker(3582105.2910, 532589.7313, 5232754.8054);
+  const Geodetic marker_geodetic = ecef_to_geodetic(marker);
+  const Eigen::Vector3d antenna = enu_to_ecef(Eigen::Vector3d(0.0, 0.0, 0.2160), marker_geodetic);
+  const std::regex position(R"(Lat = ([-0-9.]+) \[deg\], Long = ([-0-9.]+) \[deg\], Height = ([-0-9.]+) \[m\])");
+  int fixes = 0;
+  double worst_m = 0.0;
+  for (std::sregex_iterator it(log.begin(), log.end(), position), end; it != end; ++it) {
+    const Eigen::Vector3d p = geodetic_to_ecef(Geodetic{std::stod((*it)[1]), std::stod((*it)[2]), std::stod((*it)[3])});
+    worst_m = std::max(worst_m, (p - antenna).norm());
+    ++fixes;
+  }
+  EXPECT_GE(fixes, 30);
+  EXPECT_LE(worst_m, 5.0);
+  std::cout << "GNSS-SDR: " << observed.size() << " satellites, " << fixes << " fixes, worst 3D error " << worst_m
+            << " m; " << g1c->dump() << "\n";
+}
+
+TEST(IqBadInput, RatesBandsAndSignalsTheReceiverLacksAreRefusedWithNothingWritten) {
+  if (!std::filesystem::exists(contract("esbc-open-sky.yaml"))) GTEST_SKIP() << "contract scenario absent";
+  const auto dir = test::make_temp_dir("iq_bad_input");
+  const std::string base = test::shell_quote(test::skytrace_executable().string()) + " iq " +
+                           test::shell_quote(contract("esbc-open-sky.yaml").string()) + " --quiet --set time.duration_s=2";
+  struct Case {
+    std::string arguments;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"--sample-rate 1e6", "output.iq.sample_rate_hz"},
+      {"--band E1", "output.iq.bands"},
+      {"--format sc4", "output.iq.format"},
+      {"--set 'receiver.signals=[E1C]'", "does not list signal G1C"},
+  };
+  for (const auto& c : cases) {
+    const auto out = dir / "out";
+    const auto r = test::run_command(base + " --out " + test::shell_quote(out.string()) + " " + c.arguments + " 2>&1");
+    EXPECT_EQ(r.exit_code, 3) << c.arguments << ": " << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.arguments << ": " << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out / "iq_L1.sc8")) << c.arguments;
+  }
+}
+
+}  // namespace
+}  // namespace skytrace
