@@ -78,6 +78,7 @@ void register_iq_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--band", *bands, "Band to write (repeatable): L1 (GPS L1 C/A; the default)");
   cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv.zst (nor paths.csv.zst)");
+  cmd->add_option("--truth-format", args->truth_format, "csv.zst (default) or csv, as for skytrace run");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
   cmd->add_option("--threads", args->threads, "Threads to use, 1-1024 (default: one per hardware thread)");
   cmd->add_option("--set", args->overrides, "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable)");

@@ -5,7 +5,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <regex>
 #include <set>
 
@@ -168,6 +172,123 @@ TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
   EXPECT_LE(worst_m, 5.0);
   std::cout << "GNSS-SDR: " << observed.size() << " satellites, " << fixes << " fixes, worst 3D error " << worst_m
             << " m; " << g1c->dump() << "\n";
+}
+
+// Pseudoranges of GPS C1C per (epoch, satellite) from a RINEX file.
+std::map<std::pair<std::int64_t, std::string>, double> c1c_by_epoch(const io::ObservationFile& file) {
+  std::map<std::pair<std::int64_t, std::string>, double> out;
+  const auto& types = file.header.observation_types.at(GnssSystem::kGps);
+  size_t column = types.size();
+  for (size_t i = 0; i < types.size(); ++i) {
+    if (types[i].code == "C1C") column = i;
+  }
+  for (const auto& epoch : file.epochs) {
+    for (const auto& s : epoch.satellites) {
+      if (s.satellite.system != GnssSystem::kGps || column >= s.values.size() || !s.values[column].value) continue;
+      out[{std::llround(epoch.time.gpst_seconds_approx()), s.satellite.to_string()}] = *s.values[column].value;
+    }
+  }
+  return out;
+}
+
+// One wall reflecting (contract wall.yaml with multipath on): GNSS-SDR's code error on the
+// satellites the wall affects follows skytrace's DLL model (receiver/multipath) at the profile's
+// correlator spacing (1 chip, gnss-sdr.conf's half a chip either side). GNSS-SDR's code error: its
+// pseudorange minus the run's multipath-free one (obs.rnx less truth's code_multipath_m), less the
+// epoch's median over the satellites the model leaves unaffected (the receiver clock). Raw
+// pseudoranges here: carrier smoothing would average the multipath.
+TEST_F(IqGnssSdr, WallMultipathCodeErrorFollowsTheDllModel) {
+  const auto dir = test::make_temp_dir("iq_gnss_sdr_wall");
+  const auto iq = test::run_command(
+      test::shell_quote(test::skytrace_executable().string()) + " iq " +
+      test::shell_quote(contract("wall.yaml").string()) + " --out " + test::shell_quote(dir.string()) +
+      " --quiet --truth-format csv --set models.multipath=true --set time.duration_s=120 --set time.interval_s=1"
+      " --set receiver.profile=gnss-sdr --set 'receiver.signals=[G1C]' 2>&1");
+  ASSERT_EQ(iq.exit_code, 0) << iq.output;
+  const auto smoothing = test::run_command("cd " + test::shell_quote(dir.string()) +
+                                           " && sed -i 's/enable_carrier_smoothing=true/enable_carrier_smoothing=false/'"
+                                           " gnss-sdr.conf && mkdir -p gnss-sdr && timeout 600 gnss-sdr"
+                                           " --config_file=gnss-sdr.conf > gnss-sdr.log 2>&1");
+  ASSERT_EQ(smoothing.exit_code, 0);
+  const auto real_path = file_ending(dir / "gnss-sdr", 'O');
+  ASSERT_TRUE(real_path);
+  auto real = io::read_rinex_obs(*real_path);
+  auto sim = io::read_rinex_obs(dir / "obs.rnx");
+  ASSERT_TRUE(real && sim);
+  const auto real_pr = c1c_by_epoch(*real);
+  const auto sim_pr = c1c_by_epoch(*sim);
+  // The model's code error per (epoch, satellite) from truth.csv.
+  std::map<std::pair<std::int64_t, std::string>, double> model_m;
+  std::ifstream truth(dir / "truth.csv");
+  std::string line;
+  std::getline(truth, line);
+  auto split = [](const std::string& text) {
+    std::vector<std::string> fields;
+    std::stringstream ss(text);
+    for (std::string f; std::getline(ss, f, ',');) fields.push_back(f);
+    return fields;
+  };
+  const auto header = split(line);
+  auto column = [&](const std::string& name) {
+    return static_cast<size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const size_t time_col = column("time_gpst"), sat_col = column("sat"), signal_col = column("signal"),
+               mp_col = column("code_multipath_m");
+  ASSERT_LT(mp_col, header.size());
+  while (std::getline(truth, line)) {
+    const auto f = split(line);
+    if (f.size() <= mp_col || f[signal_col] != "G1C" || f[mp_col].empty()) continue;
+    auto t = GnssTime::parse_iso8601(f[time_col], TimeScale::kGpst);
+    ASSERT_TRUE(t);
+    model_m[{std::llround(t->gpst_seconds_approx()), f[sat_col]}] = std::stod(f[mp_col]);
+  }
+  // Per epoch: GNSS-SDR's error less the clock from the unaffected satellites.
+  std::map<std::string, std::vector<std::pair<double, double>>> per_satellite;  // (model, GNSS-SDR)
+  std::map<std::int64_t, std::vector<std::pair<std::string, std::pair<double, double>>>> epochs;
+  for (const auto& [key, pr] : real_pr) {
+    auto s = sim_pr.find(key);
+    auto m = model_m.find(key);
+    if (s == sim_pr.end() || m == model_m.end()) continue;
+    epochs[key.first].push_back({key.second, {m->second, pr - (s->second - m->second)}});
+  }
+  for (const auto& [t, sats] : epochs) {
+    std::vector<double> clock;
+    for (const auto& [sat, v] : sats) {
+      if (std::abs(v.first) < 0.1) clock.push_back(v.second);
+    }
+    if (clock.size() < 3) continue;
+    std::nth_element(clock.begin(), clock.begin() + static_cast<long>(clock.size() / 2), clock.end());
+    const double receiver_clock_m = clock[clock.size() / 2];
+    for (const auto& [sat, v] : sats) per_satellite[sat].push_back({v.first, v.second - receiver_clock_m});
+  }
+  double xy = 0.0, xx = 0.0, yy = 0.0;
+  int affected = 0;
+  std::string summary;
+  for (const auto& [sat, values] : per_satellite) {
+    double model2 = 0.0, sdr2 = 0.0;
+    for (const auto& [m, e] : values) {
+      model2 += m * m;
+      sdr2 += e * e;
+    }
+    const double model_rms = std::sqrt(model2 / static_cast<double>(values.size()));
+    summary += sat + ": model rms " + std::to_string(model_rms) + " m, GNSS-SDR rms " +
+               std::to_string(std::sqrt(sdr2 / static_cast<double>(values.size()))) + " m\n";
+    if (model_rms < 0.5 || values.size() < 40) continue;
+    ++affected;
+    for (const auto& [m, e] : values) {
+      xy += m * e;
+      xx += m * m;
+      yy += e * e;
+    }
+  }
+  ASSERT_GE(affected, 2) << summary;
+  // Least-squares slope of GNSS-SDR's error on the model's, and their correlation.
+  const double slope = xy / xx;
+  const double correlation = xy / std::sqrt(xx * yy);
+  EXPECT_NEAR(slope, 1.0, 0.2) << summary;
+  EXPECT_GT(correlation, 0.9) << summary;
+  std::cout << "wall multipath: " << affected << " satellites affected, slope " << slope << ", correlation "
+            << correlation << "\n" << summary;
 }
 
 TEST(IqBadInput, RatesBandsAndSignalsTheReceiverLacksAreRefusedWithNothingWritten) {
