@@ -201,32 +201,40 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
       const double chips_per_sample = (xe - xb) * kCaCodeLength / static_cast<double>(n);
       const double phase_b = phase_at(tb);
       const double cycles_per_sample = (phase_at(te) - phase_b) / static_cast<double>(n);
-      double phase = phase_b - std::floor(phase_b);
+      // Fixed point within the block: chips with 32 fractional bits, the carrier in 2^-32 cycles
+      // (wrapping as the phase does).
+      constexpr double kFraction = 4294967296.0;  // 2^32
+      const auto chip_step = static_cast<std::uint64_t>(std::llround(chips_per_sample * kFraction));
+      const auto carrier_step = static_cast<std::uint32_t>(
+          static_cast<std::int64_t>(std::llround((cycles_per_sample - std::floor(cycles_per_sample)) * kFraction)));
+      auto carrier = static_cast<std::uint32_t>(
+          static_cast<std::int64_t>(std::llround((phase_b - std::floor(phase_b)) * kFraction)));
+      auto chip_fixed = static_cast<std::uint64_t>(chip * kFraction);
+      constexpr std::uint64_t kCodeEnd = static_cast<std::uint64_t>(kCaCodeLength) << 32;
       std::int64_t period = start_ms_whole + period_b;
       const auto amplitude = static_cast<float>(r.amplitude);
       const std::int8_t* code = r.channel->code.data();
+      const float* cos_table = lut.cos_table.data();
+      const float* sin_table = lut.sin_table.data();
       size_t i = 0;
       while (i < n) {
         // Samples up to the next code period, whose data bit may differ.
-        const double left_chips = kCaCodeLength - chip;
-        auto segment = static_cast<size_t>(std::ceil(left_chips / chips_per_sample));
-        segment = std::clamp<size_t>(segment, 1, n - i);
+        size_t segment = chip_fixed >= kCodeEnd ? 0 : static_cast<size_t>((kCodeEnd - chip_fixed + chip_step - 1) / chip_step);
+        segment = std::min(segment, n - i);
         const float a = amplitude * static_cast<float>(data_sign(r.prn, *r.channel, period));
+        float* re = re_.data() + i;
+        float* im = im_.data() + i;
         for (size_t k = 0; k < segment; ++k) {
-          const double c = chip + static_cast<double>(k) * chips_per_sample;
-          const auto chip_index = std::min(static_cast<int>(c), kCaCodeLength - 1);
-          const double ph = phase + static_cast<double>(k) * cycles_per_sample;
-          const auto lut_index = static_cast<size_t>(static_cast<std::int64_t>(std::floor(ph * kLutSize)) & (kLutSize - 1));
-          const float v = a * static_cast<float>(code[chip_index]);
-          re_[i + k] += v * lut.cos_table[lut_index];
-          im_[i + k] += v * lut.sin_table[lut_index];
+          const float v = a * static_cast<float>(code[chip_fixed >> 32]);
+          const std::uint32_t lut_index = carrier >> (32 - kLutBits);
+          re[k] += v * cos_table[lut_index];
+          im[k] += v * sin_table[lut_index];
+          chip_fixed += chip_step;
+          carrier += carrier_step;
         }
-        chip += static_cast<double>(segment) * chips_per_sample;
-        phase += static_cast<double>(segment) * cycles_per_sample;
-        phase -= std::floor(phase);
         i += segment;
-        if (chip >= kCaCodeLength) {
-          chip -= kCaCodeLength;
+        if (chip_fixed >= kCodeEnd) {
+          chip_fixed -= kCodeEnd;
           ++period;
         }
       }

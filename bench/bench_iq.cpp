@@ -1,0 +1,75 @@
+// IQ sample generation (baseband/l1ca_synthesizer): seconds of GPS L1 C/A samples per second of CPU
+// on one core, for the case (12 satellites, 3 paths each, 4 MS/s, sc8) and its parts.
+// Items processed = complex samples; "real time" is items_per_second >= the sample rate.
+#include <benchmark/benchmark.h>
+
+#include <string>
+#include <vector>
+
+#include "skytrace/baseband/l1ca_synthesizer.hpp"
+#include "skytrace/core/constants.hpp"
+
+namespace {
+
+using namespace skytrace;
+using namespace skytrace::baseband;
+
+// `satellites` satellites of PRN 1.., each with `paths` paths (the direct one and reflections 5-40
+// m longer at -6 to -12 dB), ranges 20,000-25,000 km, Dopplers -4 to +4 kHz, C/N0 40-50 dB-Hz.
+std::vector<L1caArrival> arrivals_at(double t, int satellites, int paths) {
+  const double wavelength_m = constants::kSpeedOfLight_mps / 1575.42e6;
+  std::vector<L1caArrival> out;
+  for (int k = 0; k < satellites; ++k) {
+    L1caArrival a;
+    a.prn = k + 1;
+    a.doppler_hz = -4000.0 + 8000.0 * k / std::max(1, satellites - 1);
+    a.pseudorange_m = 20.0e6 + 4.0e5 * k - a.doppler_hz * wavelength_m * t;
+    a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
+    a.antenna_cn0_dbhz = 40.0 + k % 11;
+    for (int p = 0; p < paths; ++p) {
+      a.paths.push_back(ArrivalPath{p == 0 ? 0.0 : 5.0 + 12.0 * p, 0.1 * p,
+                                    std::polar(p == 0 ? 1.0 : std::pow(10.0, -(3.0 + 3.0 * p) / 20.0), 0.7 * p)});
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+void BM_L1caSamples(benchmark::State& state) {
+  const int satellites = static_cast<int>(state.range(0));
+  const int paths = static_cast<int>(state.range(1));
+  const double fs = static_cast<double>(state.range(2));
+  const bool noise = state.range(3) != 0;
+  SynthesizerSettings settings;
+  settings.sample_rate_hz = fs;
+  settings.format = SampleFormat::kSc8;
+  settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
+  settings.noise = noise;
+  L1caSynthesizer synthesizer(settings);
+  std::string bytes;
+  double t = 0.0;
+  (void)synthesizer.add_instant(t, arrivals_at(t, satellites, paths), bytes);
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    bytes.clear();
+    t += 1.0;  // one second of samples per iteration
+    if (!synthesizer.add_instant(t, arrivals_at(t, satellites, paths), bytes)) state.SkipWithError("failed");
+    benchmark::DoNotOptimize(bytes.data());
+    samples += static_cast<std::int64_t>(bytes.size() / 2);
+  }
+  state.SetItemsProcessed(samples);
+  state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(samples) / fs, benchmark::Counter::kIsRate);
+}
+// satellites, paths, sample rate, noise
+BENCHMARK(BM_L1caSamples)
+    ->Args({12, 3, 4000000, 1})  // the case
+    ->Args({12, 1, 4000000, 1})
+    ->Args({12, 3, 4000000, 0})  // without the noise
+    ->Args({0, 0, 4000000, 1})   // the noise alone
+    ->Args({12, 3, 8000000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
+
+}  // namespace
+
+BENCHMARK_MAIN();
