@@ -315,5 +315,26 @@ TEST(IqBadInput, RatesBandsAndSignalsTheReceiverLacksAreRefusedWithNothingWritte
   }
 }
 
+// A disk that fills up: a file size limit (ulimit -f, SIGXFSZ ignored so that the write fails
+// with EFBIG as it would with ENOSPC) stops the run at the samples' write, naming the file.
+TEST(IqBadInput, AWriteThatFailsLeavesNothingAndExitsFive) {
+  if (!std::filesystem::exists(contract("esbc-open-sky.yaml")) ||
+      !std::filesystem::exists(test::shared_data_dir() / "real/esbc_2020177/ESBC00DNK_R_20201770000_01D_MN.rnx")) {
+    GTEST_SKIP() << "contract scenario or ESBC data absent";
+  }
+  const auto dir = test::make_temp_dir("iq_full_disk");
+  const auto out = dir / "out";
+  const auto r = test::run_command(
+      "sh -c " + test::shell_quote("trap '' XFSZ; ulimit -f 20000; " +
+                                   test::shell_quote(test::skytrace_executable().string()) + " iq " +
+                                   test::shell_quote(contract("esbc-open-sky.yaml").string()) + " --out " +
+                                   test::shell_quote(out.string()) +
+                                   " --quiet --set time.duration_s=5 --set time.interval_s=1") +
+      " 2>&1");
+  EXPECT_EQ(r.exit_code, 5) << r.output;
+  EXPECT_NE(r.output.find("iq_L1.sc8: write failed"), std::string::npos) << r.output;
+  EXPECT_TRUE(!std::filesystem::exists(out) || std::filesystem::is_empty(out)) << r.output;
+}
+
 }  // namespace
 }  // namespace skytrace
