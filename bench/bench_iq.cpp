@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "skytrace/baseband/l1ca_synthesizer.hpp"
+#include "skytrace/baseband/synthesizer.hpp"
 #include "skytrace/core/constants.hpp"
 
 namespace {
@@ -16,12 +16,12 @@ using namespace skytrace::baseband;
 
 // `satellites` satellites of PRN 1.., each with `paths` paths (the direct one and reflections 5-40
 // m longer at -6 to -12 dB), ranges 20,000-25,000 km, Dopplers -4 to +4 kHz, C/N0 40-50 dB-Hz.
-std::vector<L1caArrival> arrivals_at(double t, int satellites, int paths) {
+std::vector<Arrival> arrivals_at(double t, int satellites, int paths) {
   const double wavelength_m = constants::kSpeedOfLight_mps / 1575.42e6;
-  std::vector<L1caArrival> out;
+  std::vector<Arrival> out;
   for (int k = 0; k < satellites; ++k) {
-    L1caArrival a;
-    a.prn = k + 1;
+    Arrival a;
+    a.id = k + 1;
     a.doppler_hz = -4000.0 + 8000.0 * k / std::max(1, satellites - 1);
     a.pseudorange_m = 20.0e6 + 4.0e5 * k - a.doppler_hz * wavelength_m * t;
     a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
@@ -45,7 +45,7 @@ void BM_L1caSamples(benchmark::State& state) {
   settings.format = SampleFormat::kSc8;
   settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
   settings.noise = noise;
-  L1caSynthesizer synthesizer(settings);
+  BasebandSynthesizer synthesizer(settings, make_gps_l1ca_signals({}, 2111, nullptr));
   std::string bytes;
   double t = 0.0;
   (void)synthesizer.add_instant(t, arrivals_at(t, satellites, paths), bytes);

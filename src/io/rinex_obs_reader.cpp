@@ -157,7 +157,9 @@ bool parse_fixed_point(std::string_view s, double& value) {
 
 std::optional<TimeScale> time_system_from_label(std::string_view label) {
   if (label == "GPS") return TimeScale::kGpst;
-  if (label == "GLO") return TimeScale::kGlonasst;
+  // RINEX's GLO time tags are UTC(SU) (RINEX 2.10 8.1.1, 3.0x Table A2 "GLO (=UTC time system)"),
+  // not GLONASS system time (UTC(SU) + 3 h).
+  if (label == "GLO") return TimeScale::kUtc;
   if (label == "GAL") return TimeScale::kGst;
   if (label == "BDT" || label == "BDS") return TimeScale::kBdt;
   if (label == "QZS") return TimeScale::kQzsst;
@@ -168,7 +170,7 @@ std::optional<TimeScale> time_system_from_label(std::string_view label) {
 TimeScale default_time_system(const std::optional<GnssSystem>& file_system) {
   if (!file_system) return TimeScale::kGpst;
   switch (*file_system) {
-    case GnssSystem::kGlonass: return TimeScale::kGlonasst;
+    case GnssSystem::kGlonass: return TimeScale::kUtc;  // GLO
     case GnssSystem::kGalileo: return TimeScale::kGst;
     case GnssSystem::kBeiDou: return TimeScale::kBdt;
     case GnssSystem::kQzss: return TimeScale::kQzsst;
@@ -431,6 +433,14 @@ class Parser {
         for (size_t k = 0; k < 8; ++k) {
           const auto sat_text = field(line, 4 + 7 * k, 3);
           if (sat_text.empty()) break;
+          // The count rules: text after the announced satellites is left alone, with a note
+          // (GNSS-SDR 0.0.17 writes "  0 R 0  0" when it lists none).
+          if (slots_expected && h.glonass_slots.size() >= *slots_expected) {
+            file_.warnings.push_back(lines_.where(i) + ": GLONASS SLOT / FRQ #: text after the " +
+                                     std::to_string(*slots_expected) +
+                                     " satellites the count announces ignored");
+            break;
+          }
           auto sat = SatelliteId::parse(sat_text);
           if (!sat || sat->system != GnssSystem::kGlonass) {
             return error(i, "GLONASS SLOT / FRQ #: bad satellite '" + std::string(sat_text) + "'");

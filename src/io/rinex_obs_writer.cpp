@@ -80,7 +80,7 @@ struct EpochFields {
 EpochFields epoch_fields(const GnssTime& t, TimeScale scale) {
   // Rounded to 1e-7 s on the continuous timeline first, then split (exact integers), so that
   // 59.99999996 s carries into the next minute, hour, day, month and year; second 60 only inside a
-  // real leap second of GLONASST.
+  // real leap second of UTC (GLO).
   const RoundedCalendarTime c = t.to_rounded_calendar(scale, kEpochDecimals);
   return EpochFields{c.year, c.month, c.day, c.hour, c.minute,
                      static_cast<long long>(c.second) * 10000000LL + static_cast<long long>(c.fraction)};
@@ -89,12 +89,12 @@ EpochFields epoch_fields(const GnssTime& t, TimeScale scale) {
 std::optional<std::string_view> rinex_time_system_label(TimeScale scale) {
   switch (scale) {
     case TimeScale::kGpst: return "GPS";
-    case TimeScale::kGlonasst: return "GLO";
+    case TimeScale::kUtc: return "GLO";  // RINEX's GLO time tags are UTC(SU)
     case TimeScale::kGst: return "GAL";
     case TimeScale::kBdt: return "BDT";
     case TimeScale::kQzsst: return "QZS";
     case TimeScale::kIrnwt: return "IRN";
-    default: return std::nullopt;  // UTC and TAI are not RINEX observation time systems
+    default: return std::nullopt;  // GLONASST (UTC + 3 h) and TAI are not RINEX observation time systems
   }
 }
 

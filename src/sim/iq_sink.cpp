@@ -5,7 +5,7 @@
 
 #include <algorithm>
 
-#include "skytrace/baseband/l1ca_synthesizer.hpp"
+#include "skytrace/baseband/synthesizer.hpp"
 #include "skytrace/sim/sinks.hpp"
 
 namespace skytrace::sim {
@@ -40,6 +40,24 @@ baseband::LnavCommon lnav_common(const orbits::BroadcastEphemerides& ephemerides
   return c;
 }
 
+baseband::GnavCommon gnav_common(const orbits::BroadcastEphemerides& ephemerides) {
+  baseband::GnavCommon c;
+  for (const auto& correction : ephemerides.data().time_corrections) {
+    if (correction.type == "GLUT") c.tau_c_s = correction.a0_s;
+    if (correction.type == "GLGP") c.tau_gps_s = correction.a0_s;
+  }
+  return c;
+}
+
+// One band of the samples: its file, its synthesizer and the signal of the observations it takes.
+struct IqBand {
+  std::string name;  // L1 | G1
+  std::string signal;  // G1C | R1C
+  std::string file_name;
+  std::unique_ptr<StagedFile> file;
+  std::unique_ptr<baseband::BasebandSynthesizer> synthesizer;
+};
+
 class IqSink final : public EpochSink {
  public:
   static Result<std::unique_ptr<EpochSink>> make(const RunContext& c) {
@@ -48,114 +66,150 @@ class IqSink final : public EpochSink {
     if (!format) return format.error();
     auto sink = std::unique_ptr<IqSink>(new IqSink());
     sink->settings_ = iq;
+    sink->format_ = *format;
     sink->staging_dir_ = c.staging_dir;
-    sink->file_name_ = "iq_L1." + iq.format;
-    auto file = StagedFile::create(c.staging_dir / sink->file_name_);
-    if (!file) return file.error();
-    sink->file_ = std::move(*file);
-    const orbits::BroadcastEphemerides* ephemerides = c.resources->ephemerides.get();
-    baseband::SynthesizerSettings s;
-    s.sample_rate_hz = iq.sample_rate_hz;
-    s.format = *format;
-    s.start = c.scenario->time.start;
-    s.seed = c.scenario->seed;
-    s.noise = true;
-    s.lnav = lnav_common(*ephemerides, c.scenario->time.start);
-    s.record_at = [ephemerides](int prn, const GnssTime& t) {
-      return ephemerides->find_kepler(SatelliteId{GnssSystem::kGps, static_cast<std::uint8_t>(prn)}, t,
-                                      orbits::NavMessage::kGpsLnav);
-    };
-    sink->synthesizer_ = std::make_unique<baseband::L1caSynthesizer>(std::move(s));
     sink->start_ = c.scenario->time.start;
+    const orbits::BroadcastEphemerides* ephemerides = c.resources->ephemerides.get();
+    const int first_week = c.scenario->time.start.to_week_tow(TimeScale::kGpst).week;
+    for (const std::string& name : iq.bands) {
+      IqBand band;
+      band.name = name;
+      band.file_name = "iq_" + name + "." + iq.format;
+      auto file = StagedFile::create(c.staging_dir / band.file_name);
+      if (!file) return file.error();
+      band.file = std::move(*file);
+      baseband::SynthesizerSettings s;
+      s.sample_rate_hz = iq.sample_rate_hz;
+      s.format = *format;
+      s.start = c.scenario->time.start;
+      s.seed = c.scenario->seed + (name == "L1" ? 0 : 1);  // independent noise per band
+      s.noise = true;
+      std::unique_ptr<baseband::BandSignals> signals;
+      if (name == "L1") {
+        band.signal = "G1C";
+        signals = baseband::make_gps_l1ca_signals(
+            lnav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
+              return ephemerides->find_kepler(SatelliteId{GnssSystem::kGps, static_cast<std::uint8_t>(prn)}, t,
+                                              orbits::NavMessage::kGpsLnav);
+            });
+      } else {
+        band.signal = "R1C";
+        signals = baseband::make_glonass_l1of_signals(
+            gnav_common(*ephemerides), first_week, [ephemerides](int slot, const GnssTime& t) {
+              return ephemerides->find_glonass(SatelliteId{GnssSystem::kGlonass, static_cast<std::uint8_t>(slot)}, t);
+            });
+      }
+      band.synthesizer = std::make_unique<baseband::BasebandSynthesizer>(std::move(s), std::move(signals));
+      sink->bands_.push_back(std::move(band));
+    }
     return std::unique_ptr<EpochSink>(std::move(sink));
   }
 
   Status add(const SinkEpoch& e) override {
     if (e.receiver_index != 0) return Ok{};
     const receiver::EpochObservations& obs = *e.observations;
-    arrivals_.clear();
-    for (const receiver::SatelliteObservation& sat : obs.satellites) {
-      if (sat.satellite.system != GnssSystem::kGps) continue;
-      for (const receiver::IncomingSignal& in : sat.incoming) {
-        if (in.signal.to_string() != "G1C") continue;
-        baseband::L1caArrival a;
-        a.prn = sat.satellite.prn();
-        a.pseudorange_m = in.pseudorange_m;
-        a.carrier_phase_cycles = in.carrier_phase_cycles;
-        a.doppler_hz = in.doppler_hz;
-        a.antenna_cn0_dbhz = in.antenna_cn0_dbhz;
-        for (const receiver::IncomingPath& p : in.paths) {
-          a.paths.push_back(baseband::ArrivalPath{p.excess_delay_m, p.excess_delay_rate_mps, p.amplitude});
+    for (IqBand& band : bands_) {
+      arrivals_.clear();
+      for (const receiver::SatelliteObservation& sat : obs.satellites) {
+        for (const receiver::IncomingSignal& in : sat.incoming) {
+          if (in.signal.to_string() != band.signal) continue;
+          baseband::Arrival a;
+          a.id = sat.satellite.prn();
+          a.carrier_hz = in.carrier_hz;
+          a.pseudorange_m = in.pseudorange_m;
+          a.carrier_phase_cycles = in.carrier_phase_cycles;
+          a.doppler_hz = in.doppler_hz;
+          a.antenna_cn0_dbhz = in.antenna_cn0_dbhz;
+          for (const receiver::IncomingPath& p : in.paths) {
+            a.paths.push_back(baseband::ArrivalPath{p.excess_delay_m, p.excess_delay_rate_mps, p.amplitude});
+          }
+          arrivals_.push_back(std::move(a));
         }
-        arrivals_.push_back(std::move(a));
       }
+      buffer_.clear();
+      if (auto st = band.synthesizer->add_instant(obs.receiver_time - start_, arrivals_, buffer_); !st) return st;
+      if (auto st = band.file->write(buffer_); !st) return st;
     }
-    buffer_.clear();
-    if (auto st = synthesizer_->add_instant(obs.receiver_time - start_, arrivals_, buffer_); !st) return st;
-    return file_->write(buffer_);
+    return Ok{};
   }
 
   Status finish() override {
-    if (auto st = file_->close(); !st) return st;
-    auto conf = StagedFile::create(staging_dir_ / "gnss-sdr.conf");
-    if (!conf) return conf.error();
-    if (auto st = (*conf)->write(gnss_sdr_configuration()); !st) return st;
-    return (*conf)->close();
+    for (IqBand& band : bands_) {
+      if (auto st = band.file->close(); !st) return st;
+      auto conf = StagedFile::create(staging_dir_ / ("gnss-sdr-" + band.name + ".conf"));
+      if (!conf) return conf.error();
+      if (auto st = (*conf)->write(gnss_sdr_configuration(band)); !st) return st;
+      if (auto st = (*conf)->close(); !st) return st;
+    }
+    return Ok{};
   }
 
  private:
   IqSink() = default;
 
-  // GNSS-SDR (0.0.17) reading the file as it is: GPS L1 C/A, one channel per satellite the file holds
-  // at once (at least 4), its PVT writing RINEX and NMEA into gnss-sdr/ beside the file. Run it from
-  // the output folder: gnss-sdr --config_file=gnss-sdr.conf
-  [[nodiscard]] std::string gnss_sdr_configuration() const {
+  // GNSS-SDR (0.0.17) reading a band's file as it is: one channel per satellite the file holds at
+  // once (at least 4), its PVT writing RINEX and NMEA into gnss-sdr-BAND/ beside the file. Run it
+  // from the output folder: gnss-sdr --config_file=gnss-sdr-BAND.conf
+  [[nodiscard]] std::string gnss_sdr_configuration(const IqBand& band) const {
     const double fs = settings_.sample_rate_hz;
-    const size_t channels = std::max<size_t>(4, synthesizer_->most_satellites());
+    const size_t channels = std::max<size_t>(4, band.synthesizer->most_satellites());
+    const bool gps = band.name == "L1";
+    const std::string id = gps ? "1C" : "1G";
+    const std::string out_dir = "gnss-sdr-" + band.name;
     std::string t;
-    t += "; GNSS-SDR configuration written by skytrace for " + file_name_ + "\n";
+    t += "; GNSS-SDR configuration written by skytrace for " + band.file_name + " (" +
+         (gps ? "GPS L1 C/A" : "GLONASS L1OF, centred on 1602 MHz") + ")\n";
     t += fmt::format("; {} complex samples at {:.0f} samples/s ({} bytes each); run from this folder:\n",
-                     synthesizer_->samples_written(), fs,
-                     baseband::bytes_per_sample(*baseband::parse_sample_format(settings_.format)));
-    t += ";   mkdir -p gnss-sdr && gnss-sdr --config_file=gnss-sdr.conf\n";
+                     band.synthesizer->samples_written(), fs, baseband::bytes_per_sample(format_));
+    t += ";   mkdir -p " + out_dir + " && gnss-sdr --config_file=gnss-sdr-" + band.name + ".conf\n";
     t += "[GNSS-SDR]\n";
     t += fmt::format("GNSS-SDR.internal_fs_sps={:.0f}\n", fs);
     t += "SignalSource.implementation=File_Signal_Source\n";
-    t += "SignalSource.filename=" + file_name_ + "\n";
-    t += fmt::format("SignalSource.item_type={}\n",
-                     baseband::gnss_sdr_item_type(*baseband::parse_sample_format(settings_.format)));
+    t += "SignalSource.filename=" + band.file_name + "\n";
+    t += fmt::format("SignalSource.item_type={}\n", baseband::gnss_sdr_item_type(format_));
     t += fmt::format("SignalSource.sampling_frequency={:.0f}\n", fs);
     t += "SignalSource.samples=0\nSignalSource.repeat=false\nSignalSource.enable_throttle_control=false\n";
     t += "SignalSource.dump=false\n";
     t += "SignalConditioner.implementation=Signal_Conditioner\n";
     t += std::string("DataTypeAdapter.implementation=") +
-         (settings_.format == "sc8"    ? "Ibyte_To_Complex"
-          : settings_.format == "sc16" ? "Ishort_To_Complex"
-                                       : "Pass_Through") +
+         (format_ == baseband::SampleFormat::kSc8    ? "Ibyte_To_Complex"
+          : format_ == baseband::SampleFormat::kSc16 ? "Ishort_To_Complex"
+                                                     : "Pass_Through") +
          "\n";
-    if (settings_.format == "gr_complex") t += "DataTypeAdapter.item_type=gr_complex\n";
+    if (format_ == baseband::SampleFormat::kGrComplex) t += "DataTypeAdapter.item_type=gr_complex\n";
     t += "InputFilter.implementation=Pass_Through\nInputFilter.item_type=gr_complex\n";
     t += "Resampler.implementation=Pass_Through\nResampler.item_type=gr_complex\n";
-    t += "Channels_1C.count=" + std::to_string(channels) + "\n";
-    t += "Channels.in_acquisition=1\nChannel.signal=1C\n";
-    t += "Acquisition_1C.implementation=GPS_L1_CA_PCPS_Acquisition\nAcquisition_1C.item_type=gr_complex\n";
-    t += "Acquisition_1C.coherent_integration_time_ms=1\nAcquisition_1C.pfa=0.01\n";
-    t += "Acquisition_1C.doppler_max=6000\nAcquisition_1C.doppler_step=250\nAcquisition_1C.max_dwells=1\n";
-    t += "Acquisition_1C.dump=false\n";
-    t += "Tracking_1C.implementation=GPS_L1_CA_DLL_PLL_Tracking\nTracking_1C.item_type=gr_complex\n";
+    t += "Channels_" + id + ".count=" + std::to_string(channels) + "\n";
+    t += "Channels.in_acquisition=1\nChannel.signal=" + id + "\n";
+    if (gps) {
+      t += "Acquisition_1C.implementation=GPS_L1_CA_PCPS_Acquisition\n";
+    } else {
+      t += "Acquisition_1G.implementation=GLONASS_L1_CA_PCPS_Acquisition\n";
+    }
+    t += "Acquisition_" + id + ".item_type=gr_complex\n";
+    t += "Acquisition_" + id + ".coherent_integration_time_ms=1\nAcquisition_" + id + ".pfa=0.01\n";
+    t += "Acquisition_" + id + ".doppler_max=6000\nAcquisition_" + id + ".doppler_step=250\n";
+    t += "Acquisition_" + id + ".max_dwells=1\nAcquisition_" + id + ".dump=false\n";
+    t += std::string("Tracking_") + id + ".implementation=" +
+         (gps ? "GPS_L1_CA_DLL_PLL_Tracking" : "GLONASS_L1_CA_DLL_PLL_Tracking") + "\n";
+    t += "Tracking_" + id + ".item_type=gr_complex\n";
     // Wide loops to pull in, then 10 ms correlations with narrow ones (profiles/gnss-sdr.yaml).
-    t += "Tracking_1C.pll_bw_hz=20.0\nTracking_1C.dll_bw_hz=2.0\nTracking_1C.early_late_space_chips=0.5\n";
-    t += "Tracking_1C.extend_correlation_symbols=10\nTracking_1C.pll_bw_narrow_hz=5.0\n";
-    t += "Tracking_1C.dll_bw_narrow_hz=0.5\n";
-    t += "Tracking_1C.dump=false\n";
-    t += "TelemetryDecoder_1C.implementation=GPS_L1_CA_Telemetry_Decoder\nTelemetryDecoder_1C.dump=false\n";
+    t += "Tracking_" + id + ".pll_bw_hz=20.0\nTracking_" + id + ".dll_bw_hz=2.0\n";
+    t += "Tracking_" + id + ".early_late_space_chips=0.5\n";
+    t += "Tracking_" + id + ".extend_correlation_symbols=10\nTracking_" + id + ".pll_bw_narrow_hz=5.0\n";
+    t += "Tracking_" + id + ".dll_bw_narrow_hz=0.5\nTracking_" + id + ".dump=false\n";
+    t += std::string("TelemetryDecoder_") + id + ".implementation=" +
+         (gps ? "GPS_L1_CA_Telemetry_Decoder" : "GLONASS_L1_CA_Telemetry_Decoder") + "\n";
+    t += "TelemetryDecoder_" + id + ".dump=false\n";
     // Carrier-smoothed pseudoranges, as receivers report them.
     t += "Observables.implementation=Hybrid_Observables\nObservables.dump=false\n";
     t += "Observables.enable_carrier_smoothing=true\nObservables.smoothing_factor=200\n";
-    t += "PVT.implementation=RTKLIB_PVT\nPVT.positioning_mode=Single\nPVT.iono_model=Broadcast\n";
+    // L1OF carries no ionosphere model: GLONASS alone is solved without one.
+    t += std::string("PVT.implementation=RTKLIB_PVT\nPVT.positioning_mode=Single\nPVT.iono_model=") +
+         (gps ? "Broadcast" : "OFF") + "\n";
     t += "PVT.trop_model=Saastamoinen\nPVT.output_rate_ms=1000\nPVT.display_rate_ms=1000\n";
-    t += "PVT.output_path=./gnss-sdr\nPVT.rinex_output_enabled=true\nPVT.rinex_version=3\n";
-    t += "PVT.nmea_output_file_enabled=true\nPVT.nmea_dump_filename=gnss-sdr/gnss_sdr_pvt.nmea\n";
+    t += "PVT.output_path=./" + out_dir + "\nPVT.rinex_output_enabled=true\nPVT.rinex_version=3\n";
+    t += "PVT.nmea_output_file_enabled=true\nPVT.nmea_dump_filename=" + out_dir + "/gnss_sdr_pvt.nmea\n";
     t += "PVT.flag_nmea_tty_port=false\nPVT.flag_rtcm_server=false\nPVT.flag_rtcm_tty_port=false\n";
     t += "PVT.kml_output_enabled=false\nPVT.gpx_output_enabled=false\nPVT.geojson_output_enabled=false\n";
     t += "PVT.xml_output_enabled=false\nPVT.dump=false\n";
@@ -163,12 +217,11 @@ class IqSink final : public EpochSink {
   }
 
   IqSettings settings_;
+  baseband::SampleFormat format_ = baseband::SampleFormat::kSc8;
   std::filesystem::path staging_dir_;
-  std::string file_name_;
-  std::unique_ptr<StagedFile> file_;
-  std::unique_ptr<baseband::L1caSynthesizer> synthesizer_;
   GnssTime start_;
-  std::vector<baseband::L1caArrival> arrivals_;
+  std::vector<IqBand> bands_;
+  std::vector<baseband::Arrival> arrivals_;
   std::string buffer_;
 };
 

@@ -11,7 +11,7 @@
 #include <random>
 
 #include "skytrace/baseband/gps_l1ca.hpp"
-#include "skytrace/baseband/l1ca_synthesizer.hpp"
+#include "skytrace/baseband/synthesizer.hpp"
 #include "skytrace/core/constants.hpp"
 #include "skytrace/orbits/rinex_nav.hpp"
 #include "test_support.hpp"
@@ -212,7 +212,7 @@ TEST(Lnav, SubframesDecodeBackToTheBroadcastRecord) {
 
 // A correlator of this test over samples of one satellite without data: the prompt sums per
 // millisecond with the code and carrier the test expects, and one with another PRN for the noise.
-TEST(L1caSynthesizer, CorrelatorMeasuresTheCn0CodeDelayAndCarrierItWasGiven) {
+TEST(BasebandSynthesizer, CorrelatorMeasuresTheCn0CodeDelayAndCarrierItWasGiven) {
   constexpr double fs = 4.092e6;  // not a multiple of the chip rate's 1 ms: blocks of 4092 samples
   constexpr double kCn0_dbhz = 44.0;
   constexpr double kPseudorange0_m = 21'234'567.8;
@@ -223,11 +223,11 @@ TEST(L1caSynthesizer, CorrelatorMeasuresTheCn0CodeDelayAndCarrierItWasGiven) {
   settings.format = SampleFormat::kGrComplex;
   settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
   settings.seed = 3;
-  L1caSynthesizer synthesizer(settings);
+  BasebandSynthesizer synthesizer(settings, make_gps_l1ca_signals({}, 2111, nullptr));
   // A constant Doppler: the range falls at -D lambda; the phase in cycles follows the range.
   auto arrival_at = [&](double t) {
-    L1caArrival a;
-    a.prn = 5;
+    Arrival a;
+    a.id = 5;
     a.pseudorange_m = kPseudorange0_m - kDoppler_hz * wavelength_m * t;
     a.carrier_phase_cycles = a.pseudorange_m / wavelength_m + 0.3;
     a.doppler_hz = kDoppler_hz;
@@ -253,7 +253,7 @@ TEST(L1caSynthesizer, CorrelatorMeasuresTheCn0CodeDelayAndCarrierItWasGiven) {
       std::complex<double> sum = 0.0;
       for (size_t k = m; k < m + per_ms; ++k) {
         const double t = static_cast<double>(k) / fs;
-        const L1caArrival a = arrival_at(t);
+        const Arrival a = arrival_at(t);
         const double tx_ms = (t - a.pseudorange_m / constants::kSpeedOfLight_mps) * 1000.0 + start_ms;
         double chip = (tx_ms - std::floor(tx_ms)) * kCaCodeLength + offset_chips;
         chip -= kCaCodeLength * std::floor(chip / kCaCodeLength);
@@ -285,13 +285,13 @@ TEST(L1caSynthesizer, CorrelatorMeasuresTheCn0CodeDelayAndCarrierItWasGiven) {
   EXPECT_GT(std::abs(total) / static_cast<double>(prompt.size()), 0.9 * std::sqrt(mean_power(prompt) - noise));
 }
 
-TEST(L1caSynthesizer, FormatsScaleTheSameNoise) {
+TEST(BasebandSynthesizer, FormatsScaleTheSameNoise) {
   for (const char* name : {"sc8", "sc16", "gr_complex"}) {
     auto format = parse_sample_format(name);
     ASSERT_TRUE(format);
     SynthesizerSettings settings;
     settings.format = *format;
-    L1caSynthesizer synthesizer(settings);
+    BasebandSynthesizer synthesizer(settings, make_gps_l1ca_signals({}, 2111, nullptr));
     std::string bytes;
     ASSERT_TRUE(synthesizer.add_instant(0.0, {}, bytes));
     ASSERT_TRUE(synthesizer.add_instant(0.01, {}, bytes));
@@ -316,6 +316,116 @@ TEST(L1caSynthesizer, FormatsScaleTheSameNoise) {
     EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(n)) / synthesizer.noise_sigma(), 1.0, 0.02) << name;
   }
   EXPECT_FALSE(parse_sample_format("sc4"));
+}
+
+}  // namespace
+}  // namespace skytrace::baseband
+
+namespace skytrace::baseband {
+namespace {
+
+// GLONASS L1OF: the ranging code's first chips and period, the strings' Hamming code as a receiver
+// checks it, the fields read back, and the symbols decoded as receivers undo relative code and
+// meander (GNSS-SDR checks the same end to end in tests/integration/test_iq_gnss_sdr.cpp).
+TEST(GlonassL1of, RangingCodeStartsWithTheIcdChipsAndIsAnMSequence) {
+  const auto& code = glonass_ranging_code();
+  // ICD GLONASS 5.1, 3.3.1.2: the code read at the 7th stage starts 111111100.
+  std::string first;
+  for (int i = 0; i < 9; ++i) first += code[static_cast<size_t>(i)] < 0 ? '1' : '0';
+  EXPECT_EQ(first, "111111100");
+  // An m-sequence of degree 9: 256 ones, 255 zeros, autocorrelation -1 off the peak.
+  int ones = 0;
+  for (auto c : code) ones += c < 0 ? 1 : 0;
+  EXPECT_EQ(ones, 256);
+  for (int lag = 1; lag < kGlonassCodeLength; lag += 17) {
+    int r = 0;
+    for (int i = 0; i < kGlonassCodeLength; ++i) {
+      r += code[static_cast<size_t>(i)] * code[static_cast<size_t>((i + lag) % kGlonassCodeLength)];
+    }
+    EXPECT_EQ(r, -1) << "lag " << lag;
+  }
+}
+
+// The ICD's check (4.7): C1..C7 and C_sigma all zero for a string received without error; one
+// flipped data bit gives a syndrome.
+bool gnav_checks_pass(const std::array<std::uint8_t, kGlonassStringBits>& bits) {
+  auto b = [&](int number) { return static_cast<int>(bits[static_cast<size_t>(kGlonassStringBits - number)]); };
+  std::array<std::uint8_t, kGlonassStringBits> recomputed = bits;
+  set_gnav_hamming(recomputed);
+  int sum_all = 0;
+  for (int n = 1; n <= kGlonassStringBits; ++n) sum_all ^= b(n);
+  return recomputed == bits && sum_all == 0;
+}
+
+TEST(GlonassL1of, StringsCarryTheRecordAndTheirHammingCode) {
+  orbits::GlonassEphemeris e;
+  e.satellite = SatelliteId{GnssSystem::kGlonass, 9};
+  e.toe = GnssTime::from_calendar(CalendarTime{2020, 6, 25, 0, 15, 0.0}, TimeScale::kUtc);
+  e.position_m = {-11836194.33594, 11848921.38672, 19227001.46484};
+  e.velocity_mps = {-2571.640014648, 555.4933547974, -1933.672904968};
+  e.acceleration_mps2 = {-9.313225746155e-7, -1.862645149231e-6, -9.313225746155e-7};
+  e.minus_tau_n_s = 1.398939639330e-4;
+  e.gamma_n = 1.818989403546e-12;
+  e.frequency_channel = -2;
+  const GnavCommon common{1.5e-8, -2.0e-9};
+  const int frame_start = 3 * 3600 + 15 * 60 + 30;  // 03:15:30 MT
+  std::array<std::array<std::uint8_t, kGlonassStringBits>, 6> s{};
+  for (int n = 1; n <= 5; ++n) s[static_cast<size_t>(n)] = gnav_string(e, common, n, frame_start, 177, 7);
+  auto field = [&](int string, int first, int n) {
+    std::uint64_t v = 0;
+    for (int i = 0; i < n; ++i) v = (v << 1) | s[static_cast<size_t>(string)][static_cast<size_t>(kGlonassStringBits - (first - i))];
+    return v;
+  };
+  auto signed_field = [&](int string, int first, int n) {
+    const double magnitude = static_cast<double>(field(string, first - 1, n - 1));
+    return field(string, first, 1) != 0 ? -magnitude : magnitude;
+  };
+  for (int n = 1; n <= 5; ++n) {
+    SCOPED_TRACE("string " + std::to_string(n));
+    EXPECT_EQ(s[static_cast<size_t>(n)][0], 0);  // the idle bit
+    EXPECT_EQ(field(n, 84, 4), static_cast<std::uint64_t>(n));
+    EXPECT_TRUE(gnav_checks_pass(s[static_cast<size_t>(n)]));
+    auto flipped = s[static_cast<size_t>(n)];
+    flipped[30] ^= 1U;
+    EXPECT_FALSE(gnav_checks_pass(flipped));
+  }
+  EXPECT_EQ(field(1, 76, 5), 3u);   // t_k hours
+  EXPECT_EQ(field(1, 71, 6), 15u);  // minutes
+  EXPECT_EQ(field(1, 65, 1), 1u);   // + 30 s
+  EXPECT_NEAR(signed_field(1, 35, 27) * std::ldexp(1.0, -11) * 1e3, e.position_m.x(), 0.25);
+  EXPECT_NEAR(signed_field(2, 64, 24) * std::ldexp(1.0, -20) * 1e3, e.velocity_mps.y(), 1e-3);
+  EXPECT_NEAR(signed_field(3, 40, 5) * std::ldexp(1.0, -30) * 1e3, e.acceleration_mps2.z(), 1e-6);
+  // t_b: 00:15 UTC is 03:15 MT, the 13th quarter hour.
+  EXPECT_EQ(field(2, 76, 7), 13u);
+  EXPECT_NEAR(signed_field(3, 79, 11) * std::ldexp(1.0, -40), e.gamma_n, std::ldexp(1.0, -41));
+  EXPECT_NEAR(signed_field(4, 80, 22) * std::ldexp(1.0, -30), -e.minus_tau_n_s, std::ldexp(1.0, -31));
+  EXPECT_EQ(field(4, 26, 11), 177u);  // N_T
+  EXPECT_EQ(field(4, 15, 5), 9u);     // slot
+  EXPECT_EQ(field(5, 36, 5), 7u);     // N_4: 2020-2023
+  EXPECT_NEAR(signed_field(5, 69, 32) * std::ldexp(1.0, -31), common.tau_c_s, std::ldexp(1.0, -32));
+}
+
+TEST(GlonassL1of, SymbolsUndoneAsReceiversDoGiveTheStringBack) {
+  orbits::GlonassEphemeris e;
+  e.satellite = SatelliteId{GnssSystem::kGlonass, 3};
+  e.toe = GnssTime::from_calendar(CalendarTime{2020, 6, 25, 0, 15, 0.0}, TimeScale::kUtc);
+  e.position_m = {1.2e7, -1.5e7, 1.9e7};
+  const auto bits = gnav_string(e, GnavCommon{}, 1, 0, 177, 7);
+  const auto symbols = gnav_symbols(bits);
+  // The time mark closes the string.
+  const std::string mark = "111110001101110101000010010110";
+  for (size_t k = 0; k < mark.size(); ++k) EXPECT_EQ(symbols[170 + k], mark[k] == '1' ? 1 : -1);
+  // Meander pairs (1, 0) mean relative 1, (0, 1) relative 0; data = relative xor the one before.
+  std::array<int, kGlonassStringBits> relative{};
+  for (int i = 0; i < kGlonassStringBits; ++i) {
+    const int a = symbols[static_cast<size_t>(2 * i)];
+    const int b = symbols[static_cast<size_t>(2 * i + 1)];
+    ASSERT_EQ(a, -b) << "symbol pair " << i << " is not a meander";
+    relative[static_cast<size_t>(i)] = a > 0 ? 1 : 0;
+  }
+  for (int i = 1; i < kGlonassStringBits; ++i) {
+    EXPECT_EQ(relative[static_cast<size_t>(i - 1)] ^ relative[static_cast<size_t>(i)], bits[static_cast<size_t>(i)]) << i;
+  }
 }
 
 }  // namespace

@@ -297,24 +297,26 @@ TEST_P(RinexObsRoundTrip, EveryValueAndFlagAndHeaderField) {
 
 INSTANTIATE_TEST_SUITE_P(Versions, RinexObsRoundTrip, ::testing::Values(3.04, 4.00));
 
-TEST(RinexObsWriter, GlonassTimeSystemEpochsAreUtcPlusThreeHours) {
+// RINEX's GLO time system tags epochs in UTC(SU) (RINEX 3.04 Table A2: "GLO (=UTC time system)";
+// GNSS-SDR and RTKLIB read and write it so), not in GLONASS system time.
+TEST(RinexObsWriter, GlonassTimeSystemEpochsAreUtc) {
   const auto dir = test::make_temp_dir("rinex_obs_glo_time");
   const auto path = dir / "glo.rnx";
   ObservationHeader h = two_system_header(3.04);
   h.observation_types.erase(GnssSystem::kGps);
-  h.time_system = TimeScale::kGlonasst;
+  h.time_system = TimeScale::kUtc;
   ObservationEpoch e;
   e.time = kT0;  // 2020-06-25 00:00:00 GPST = 2020-06-24 23:59:42 UTC (GPS-UTC = 18 s)
   e.satellites.push_back({SatelliteId{GnssSystem::kGlonass, 1}, {val(20000000.0)}});
   ASSERT_TRUE(write_rinex_obs(path, h, {e}).ok());
   const std::string text = read_all(path);
-  EXPECT_NE(text.find("> 2020 06 25 02 59 42.0000000  0  1\n"), std::string::npos);
-  EXPECT_NE(text.find("  2020     6    25     2    59   42.0000000     GLO         TIME OF FIRST OBS"),
+  EXPECT_NE(text.find("> 2020 06 24 23 59 42.0000000  0  1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("  2020     6    24    23    59   42.0000000     GLO         TIME OF FIRST OBS"),
             std::string::npos);
   EXPECT_NE(text.find("     3.04           OBSERVATION DATA    R"), std::string::npos);
   auto read = read_rinex_obs(path);
   ASSERT_TRUE(read.ok()) << read.error().message;
-  EXPECT_EQ(read->header.time_system, TimeScale::kGlonasst);
+  EXPECT_EQ(read->header.time_system, TimeScale::kUtc);
   ASSERT_EQ(read->epochs.size(), 1u);
   EXPECT_NEAR(read->epochs[0].time - kT0, 0.0, 1e-9);
 }
@@ -337,10 +339,10 @@ std::string header_time(const std::string& iso) {
 
 TEST(RinexObsWriter, EpochRoundedToF11_7CarriesIntoMinuteHourDayMonthYearAndWeek) {
   const auto dir = test::make_temp_dir("rinex_obs_boundaries");
-  for (const TimeScale scale : {TimeScale::kGpst, TimeScale::kGlonasst}) {
+  for (const TimeScale scale : {TimeScale::kGpst, TimeScale::kUtc}) {
     for (const double fraction : test::fractions_rounding_up(7)) {
       ObservationHeader h = two_system_header(3.04);
-      if (scale == TimeScale::kGlonasst) h.observation_types.erase(GnssSystem::kGps);
+      if (scale == TimeScale::kUtc) h.observation_types.erase(GnssSystem::kGps);
       h.time_system = scale;
       std::vector<ObservationEpoch> epochs;
       for (const auto& b : test::time_boundaries()) {
@@ -369,14 +371,14 @@ TEST(RinexObsWriter, EpochRoundedToF11_7CarriesIntoMinuteHourDayMonthYearAndWeek
   }
 }
 
-TEST(RinexObsWriter, EpochInsideTheLeapSecondKeepsSecond60InGlonassTime) {
-  // GLONASST has UTC's leap seconds: 2017-01-01T02:59:60 GLONASST is real; just before it rounds
-  // into it, just before its end rounds into 03:00:00.
+TEST(RinexObsWriter, EpochInsideTheLeapSecondKeepsSecond60InGloTime) {
+  // GLO time tags are UTC: 2016-12-31T23:59:60 is real; just before it rounds into it, just before
+  // its end rounds into 2017-01-01 00:00:00.
   const auto dir = test::make_temp_dir("rinex_obs_leap");
   ObservationHeader h = two_system_header(3.04);
   h.observation_types.erase(GnssSystem::kGps);
-  h.time_system = TimeScale::kGlonasst;
-  const GnssTime leap = GnssTime::parse_iso8601("2017-01-01T02:59:60", TimeScale::kGlonasst).value();
+  h.time_system = TimeScale::kUtc;
+  const GnssTime leap = GnssTime::parse_iso8601("2016-12-31T23:59:60", TimeScale::kUtc).value();
   std::vector<ObservationEpoch> epochs(2);
   epochs[0].time = leap - 1.0 + (1.0 - 4e-8);
   epochs[1].time = leap + (1.0 - 4e-8);
@@ -384,8 +386,8 @@ TEST(RinexObsWriter, EpochInsideTheLeapSecondKeepsSecond60InGlonassTime) {
   const auto path = dir / "leap.rnx";
   ASSERT_TRUE(write_rinex_obs(path, h, epochs).ok());
   const std::string text = read_all(path);
-  EXPECT_NE(text.find("> 2017 01 01 02 59 60.0000000  0  1\n"), std::string::npos) << text;
-  EXPECT_NE(text.find("> 2017 01 01 03 00  0.0000000  0  1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("> 2016 12 31 23 59 60.0000000  0  1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("> 2017 01 01 00 00  0.0000000  0  1\n"), std::string::npos) << text;
 }
 
 // ------------------------------------------------------------------ overflow
@@ -489,8 +491,10 @@ TEST(RinexObsWriter, RejectsInvalidInput) {
   }
   {
     ObservationHeader h = two_system_header(3.04);
-    h.time_system = TimeScale::kUtc;
+    h.time_system = TimeScale::kTai;  // no RINEX observation time system (GLO is UTC, GLONASST none)
     RinexObsWriter writer;
+    EXPECT_FALSE(writer.open(dir / "c.rnx", h).ok());
+    h.time_system = TimeScale::kGlonasst;
     EXPECT_FALSE(writer.open(dir / "c.rnx", h).ok());
   }
   RinexObsWriter writer;

@@ -1,4 +1,4 @@
-#include "skytrace/baseband/l1ca_synthesizer.hpp"
+#include "skytrace/baseband/synthesizer.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +10,6 @@
 namespace skytrace::baseband {
 namespace {
 
-constexpr double kL1_hz = 1575.42e6;
-constexpr double kL1Wavelength_m = constants::kSpeedOfLight_mps / kL1_hz;
 constexpr int kLutBits = 10;
 constexpr int kLutSize = 1 << kLutBits;
 
@@ -40,11 +38,6 @@ struct CarrierTable {
 const CarrierTable& carrier_table() {
   static const CarrierTable table;
   return table;
-}
-
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {
-  const std::int64_t q = a / b;
-  return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
 }
 
 // Cubic Hermite interpolation between (t0, y0, slope0) and (t1, y1, slope1).
@@ -83,46 +76,25 @@ const char* gnss_sdr_item_type(SampleFormat format) {
   return "ibyte";
 }
 
-L1caSynthesizer::L1caSynthesizer(SynthesizerSettings settings)
-    : settings_(std::move(settings)), noise_(stream_key(settings_.seed, {0x1a1ca5ULL})) {
+BasebandSynthesizer::BasebandSynthesizer(SynthesizerSettings settings, std::unique_ptr<BandSignals> signals)
+    : settings_(std::move(settings)), signals_(std::move(signals)), noise_(stream_key(settings_.seed, {0x1a1ca5ULL})) {
   const WeekTow start = settings_.start.to_week_tow(TimeScale::kGpst);
   first_week_ = start.week;
   start_sow_ = start.tow_s;
 }
 
-double L1caSynthesizer::noise_sigma() const { return output_scale(settings_.format); }
+double BasebandSynthesizer::noise_sigma() const { return output_scale(settings_.format); }
 
-int L1caSynthesizer::data_sign(int prn, Channel& channel, std::int64_t period_ms) {
-  const std::int64_t bit_in_run_weeks = floor_div(period_ms, 20);
-  const std::int64_t subframe_index = floor_div(bit_in_run_weeks, kLnavBitsPerSubframe);
-  const std::int64_t subframe_sow_total = subframe_index * 6;
-  const int week = first_week_ + static_cast<int>(floor_div(subframe_sow_total, 604800));
-  const int sow = static_cast<int>(subframe_sow_total - 604800 * floor_div(subframe_sow_total, 604800));
-  if (sow != channel.subframe_start_sow || week != channel.subframe_week) {
-    channel.subframe_start_sow = sow;
-    channel.subframe_week = week;
-    const orbits::KeplerEphemeris* record =
-        settings_.record_at ? settings_.record_at(prn, GnssTime::from_week_tow(TimeScale::kGpst, week, sow)) : nullptr;
-    if (record != nullptr) {
-      channel.subframe = lnav_subframe(*record, settings_.lnav, week, sow);
-    } else {
-      channel.subframe.fill(0);
-    }
-  }
-  const auto bit = static_cast<size_t>(bit_in_run_weeks - subframe_index * kLnavBitsPerSubframe);
-  return channel.subframe[bit] != 0 ? -1 : 1;
-}
-
-Status L1caSynthesizer::add_instant(double time_s, const std::vector<L1caArrival>& arrivals, std::string& out) {
+Status BasebandSynthesizer::add_instant(double time_s, const std::vector<Arrival>& arrivals, std::string& out) {
   Instant now;
   now.time_s = time_s;
-  for (const L1caArrival& a : arrivals) {
-    if (!channels_.contains(a.prn)) {
-      auto code = gps_ca_code(a.prn);
+  for (const Arrival& a : arrivals) {
+    if (!codes_.contains(a.id)) {
+      auto code = signals_->code(a.id);
       if (!code) return code.error();
-      channels_[a.prn].code = *code;
+      codes_[a.id] = *code;
     }
-    now.arrivals[a.prn] = a;
+    now.arrivals[a.id] = a;
   }
   most_satellites_ = std::max(most_satellites_, now.arrivals.size());
   if (previous_) {
@@ -135,7 +107,7 @@ Status L1caSynthesizer::add_instant(double time_s, const std::vector<L1caArrival
   return Ok{};
 }
 
-Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::string& out) {
+Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, std::string& out) {
   const double fs = settings_.sample_rate_hz;
   const auto block = static_cast<std::int64_t>(std::floor(fs * 1e-3));  // samples per block, at most 1 ms
   const auto end_sample = static_cast<std::int64_t>(std::ceil(to.time_s * fs - 1e-6));
@@ -148,21 +120,24 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
   const double start_ms_fraction = start_ms - static_cast<double>(start_ms_whole);
 
   struct Replica {
-    Channel* channel;
-    int prn;
-    const L1caArrival* a0;
-    const L1caArrival* a1;
+    const std::int8_t* code;
+    int id;
+    const Arrival* a0;
+    const Arrival* a1;
     ArrivalPath path;
     double amplitude;  // linear, output units before scaling
+    double carrier_offset_hz;
   };
+  const int code_length = signals_->code_length();
   std::vector<Replica> replicas;
-  for (const auto& [prn, a0] : from.arrivals) {
-    auto it = to.arrivals.find(prn);
+  for (const auto& [id, a0] : from.arrivals) {
+    auto it = to.arrivals.find(id);
     if (it == to.arrivals.end()) continue;
     const double direct_amplitude = std::sqrt(2.0 * std::pow(10.0, a0.antenna_cn0_dbhz / 10.0) / fs);
     const std::vector<ArrivalPath> direct_only = {ArrivalPath{}};
     for (const ArrivalPath& path : a0.paths.empty() ? direct_only : a0.paths) {
-      replicas.push_back(Replica{&channels_.at(prn), prn, &a0, &it->second, path, direct_amplitude * std::abs(path.amplitude)});
+      replicas.push_back(Replica{codes_.at(id), id, &a0, &it->second, path, direct_amplitude * std::abs(path.amplitude),
+                                 a0.carrier_hz - signals_->centre_hz()});
     }
   }
 
@@ -180,25 +155,28 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
     const double tb = static_cast<double>(n0) / fs;
     const double te = static_cast<double>(n0 + static_cast<std::int64_t>(n)) / fs;
     for (Replica& r : replicas) {
-      const L1caArrival& a0 = *r.a0;
-      const L1caArrival& a1 = *r.a1;
+      const Arrival& a0 = *r.a0;
+      const Arrival& a1 = *r.a1;
+      const double wavelength_m = constants::kSpeedOfLight_mps / a0.carrier_hz;
       auto range_at = [&](double t) {
-        const double p = hermite(t, from.time_s, a0.pseudorange_m, -a0.doppler_hz * kL1Wavelength_m, to.time_s,
-                                 a1.pseudorange_m, -a1.doppler_hz * kL1Wavelength_m);
+        const double p = hermite(t, from.time_s, a0.pseudorange_m, -a0.doppler_hz * wavelength_m, to.time_s,
+                                 a1.pseudorange_m, -a1.doppler_hz * wavelength_m);
         return p + r.path.excess_delay_m + r.path.excess_delay_rate_mps * (t - from.time_s);
       };
       auto phase_at = [&](double t) {  // baseband carrier phase, cycles
         const double l = hermite(t, from.time_s, a0.carrier_phase_cycles, -a0.doppler_hz, to.time_s,
                                  a1.carrier_phase_cycles, -a1.doppler_hz);
         const double excess_m = r.path.excess_delay_m + r.path.excess_delay_rate_mps * (t - from.time_s);
-        return -(l + excess_m / kL1Wavelength_m) + std::arg(r.path.amplitude) / (2.0 * std::numbers::pi);
+        // The carrier sits carrier_offset_hz from the band's centre (GLONASS FDMA).
+        return -(l + excess_m / wavelength_m) + std::arg(r.path.amplitude) / (2.0 * std::numbers::pi) +
+               r.carrier_offset_hz * t;
       };
       // Transmission time (satellite clock) in ms since the first week's start.
       const double xb = (tb - range_at(tb) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction;
       const double xe = (te - range_at(te) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction;
       const auto period_b = static_cast<std::int64_t>(std::floor(xb));
-      double chip = (xb - static_cast<double>(period_b)) * kCaCodeLength;
-      const double chips_per_sample = (xe - xb) * kCaCodeLength / static_cast<double>(n);
+      const double chip = (xb - static_cast<double>(period_b)) * code_length;
+      const double chips_per_sample = (xe - xb) * code_length / static_cast<double>(n);
       const double phase_b = phase_at(tb);
       const double cycles_per_sample = (phase_at(te) - phase_b) / static_cast<double>(n);
       // Fixed point within the block: chips with 32 fractional bits, the carrier in 2^-32 cycles
@@ -210,10 +188,10 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
       auto carrier = static_cast<std::uint32_t>(
           static_cast<std::int64_t>(std::llround((phase_b - std::floor(phase_b)) * kFraction)));
       auto chip_fixed = static_cast<std::uint64_t>(chip * kFraction);
-      constexpr std::uint64_t kCodeEnd = static_cast<std::uint64_t>(kCaCodeLength) << 32;
+      const std::uint64_t kCodeEnd = static_cast<std::uint64_t>(code_length) << 32;
       std::int64_t period = start_ms_whole + period_b;
       const auto amplitude = static_cast<float>(r.amplitude);
-      const std::int8_t* code = r.channel->code.data();
+      const std::int8_t* code = r.code;
       const float* cos_table = lut.cos_table.data();
       const float* sin_table = lut.sin_table.data();
       size_t i = 0;
@@ -221,7 +199,7 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
         // Samples up to the next code period, whose data bit may differ.
         size_t segment = chip_fixed >= kCodeEnd ? 0 : static_cast<size_t>((kCodeEnd - chip_fixed + chip_step - 1) / chip_step);
         segment = std::min(segment, n - i);
-        const float a = amplitude * static_cast<float>(data_sign(r.prn, *r.channel, period));
+        const float a = amplitude * static_cast<float>(signals_->sign(r.id, period));
         float* re = re_.data() + i;
         float* im = im_.data() + i;
         for (size_t k = 0; k < segment; ++k) {
@@ -246,7 +224,7 @@ Status L1caSynthesizer::synthesize(const Instant& from, const Instant& to, std::
   return Ok{};
 }
 
-void L1caSynthesizer::quantize(const float* re, const float* im, size_t n, std::string& out) const {
+void BasebandSynthesizer::quantize(const float* re, const float* im, size_t n, std::string& out) const {
   const auto scale = static_cast<float>(output_scale(settings_.format));
   const size_t at = out.size();
   out.resize(at + n * static_cast<size_t>(bytes_per_sample(settings_.format)));

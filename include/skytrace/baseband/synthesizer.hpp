@@ -1,4 +1,4 @@
-// Complex baseband samples of GPS L1 C/A as an antenna delivers them: every satellite's code,
+// Complex baseband samples of one band as an antenna delivers them: every satellite's code,
 // navigation data and carrier on each of its paths (direct, reflected, diffracted) with the delay,
 // Doppler, phase and power the observation engine computed, in white Gaussian noise whose density
 // makes those powers the signals' C/N0, quantised to the chosen sample format.
@@ -9,10 +9,13 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "skytrace/baseband/gps_l1ca.hpp"
+#include "skytrace/baseband/glonass_l1of.hpp"
 #include "skytrace/core/random.hpp"
 #include "skytrace/core/time.hpp"
 
@@ -32,11 +35,13 @@ struct ArrivalPath {
   std::complex<double> amplitude{1.0, 0.0};
 };
 
-// A satellite's L1 C/A signal at one instant: the noise-free pseudorange (the satellite clock's
+// A satellite's signal at one instant: the noise-free pseudorange (the satellite clock's
 // transmission time follows from it), carrier phase and Doppler of its direct path, the C/N0 it would
-// have unobstructed at the antenna's output (the noise density of the samples), and its paths (empty: the direct one alone).
-struct L1caArrival {
-  int prn = 0;
+// have unobstructed at the antenna's output (the noise density of the samples), and its paths
+// (empty: the direct one alone).
+struct Arrival {
+  int id = 0;  // GPS: PRN; GLONASS: slot
+  double carrier_hz = 1575.42e6;
   double pseudorange_m = 0.0;
   double carrier_phase_cycles = 0.0;
   double doppler_hz = 0.0;
@@ -44,26 +49,45 @@ struct L1caArrival {
   std::vector<ArrivalPath> paths;
 };
 
+// The signals of one band: each satellite's spreading code (one period per millisecond), its data
+// symbols, and the band's centre (a carrier off it, GLONASS FDMA, sits at its offset).
+class BandSignals {
+ public:
+  virtual ~BandSignals() = default;
+  [[nodiscard]] virtual int code_length() const = 0;  // chips per 1 ms period
+  [[nodiscard]] virtual Result<const std::int8_t*> code(int id) = 0;
+  [[nodiscard]] virtual double centre_hz() const = 0;  // the band's centre: 0 Hz of the samples
+  // The data symbol (+1 / -1) of the code period that starts `period_ms` ms after the start of
+  // GPS week `first_week` (transmission time by the satellite's clock, GPST).
+  [[nodiscard]] virtual int sign(int id, std::int64_t period_ms) = 0;
+};
+
+// GPS L1 C/A, ids PRN 1-32: LNAV from the record `record_at` gives (nullptr: no data).
+[[nodiscard]] std::unique_ptr<BandSignals> make_gps_l1ca_signals(
+    LnavCommon lnav, int first_week,
+    std::function<const orbits::KeplerEphemeris*(int prn, const GnssTime& t)> record_at);
+// GLONASS L1OF, ids the slots: FDMA channel and navigation strings from the record `record_at`
+// gives (nullptr: no data), centred on 1602 MHz.
+[[nodiscard]] std::unique_ptr<BandSignals> make_glonass_l1of_signals(
+    GnavCommon gnav, int first_week,
+    std::function<const orbits::GlonassEphemeris*(int slot, const GnssTime& t)> record_at);
+
 struct SynthesizerSettings {
   double sample_rate_hz = 4e6;
   SampleFormat format = SampleFormat::kSc8;
   GnssTime start;  // receiver time of the first sample (GPST)
   std::uint64_t seed = 1;
   bool noise = true;
-  LnavCommon lnav;
-  // The LNAV record a satellite broadcasts at a time (nullptr: none; its signal then carries no
-  // data, as a satellite that is not set healthy would still transmit code).
-  std::function<const orbits::KeplerEphemeris*(int prn, const GnssTime& t)> record_at;
 };
 
-class L1caSynthesizer {
+class BasebandSynthesizer {
  public:
-  explicit L1caSynthesizer(SynthesizerSettings settings);
+  BasebandSynthesizer(SynthesizerSettings settings, std::unique_ptr<BandSignals> signals);
 
   // The satellites' signals at `time_s` (receiver time since the start, increasing). The samples
   // from the previous instant up to this one are appended to `out`: between two instants the
   // code and carrier phases follow cubic curves through both instants' values and rates.
-  [[nodiscard]] Status add_instant(double time_s, const std::vector<L1caArrival>& arrivals, std::string& out);
+  [[nodiscard]] Status add_instant(double time_s, const std::vector<Arrival>& arrivals, std::string& out);
 
   [[nodiscard]] std::int64_t samples_written() const { return samples_written_; }
   [[nodiscard]] size_t most_satellites() const { return most_satellites_; }
@@ -72,25 +96,16 @@ class L1caSynthesizer {
  private:
   struct Instant {
     double time_s = 0.0;
-    std::map<int, L1caArrival> arrivals;
-  };
-  struct Channel {
-    std::array<std::int8_t, kCaCodeLength> code{};
-    // The LNAV subframe in the buffer (start in seconds of the GPS week, week), for the data bits.
-    int subframe_start_sow = -1;
-    int subframe_week = -1;
-    std::array<std::uint8_t, kLnavBitsPerSubframe> subframe{};
+    std::map<int, Arrival> arrivals;
   };
   Status synthesize(const Instant& from, const Instant& to, std::string& out);
-  // The data bit (+1 / -1) of the code period that starts `period_ms` ms after the start of the run's
-  // first GPS week.
-  int data_sign(int prn, Channel& channel, std::int64_t period_ms);
   void quantize(const float* re, const float* im, size_t n, std::string& out) const;
 
   SynthesizerSettings settings_;
+  std::unique_ptr<BandSignals> signals_;
   int first_week_ = 0;
-  double start_sow_ = 0.0;  // start's seconds of that week (whole seconds expected)
-  std::map<int, Channel> channels_;
+  double start_sow_ = 0.0;  // start's seconds of that week
+  std::map<int, const std::int8_t*> codes_;
   std::optional<Instant> previous_;
   RandomStream noise_;
   std::int64_t samples_written_ = 0;

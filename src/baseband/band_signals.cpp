@@ -1,0 +1,140 @@
+// The bands' signals for the synthesizer: codes, data symbols by transmission time, FDMA offsets.
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+
+#include "skytrace/baseband/synthesizer.hpp"
+
+namespace skytrace::baseband {
+namespace {
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) {
+  const std::int64_t q = a / b;
+  return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
+}
+
+class GpsL1caSignals final : public BandSignals {
+ public:
+  GpsL1caSignals(LnavCommon lnav, int first_week,
+                 std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at)
+      : lnav_(std::move(lnav)), first_week_(first_week), record_at_(std::move(record_at)) {}
+
+  int code_length() const override { return kCaCodeLength; }
+  Result<const std::int8_t*> code(int prn) override {
+    auto it = satellites_.find(prn);
+    if (it == satellites_.end()) {
+      auto code = gps_ca_code(prn);
+      if (!code) return code.error();
+      it = satellites_.emplace(prn, Satellite{}).first;
+      it->second.code = *code;
+    }
+    return it->second.code.data();
+  }
+  double centre_hz() const override { return 1575.42e6; }
+  // 20 code periods per LNAV bit, 300 bits per 6 s subframe aligned to the GPS week.
+  int sign(int prn, std::int64_t period_ms) override {
+    Satellite& s = satellites_.at(prn);
+    const std::int64_t bit_in_run_weeks = floor_div(period_ms, 20);
+    const std::int64_t subframe_index = floor_div(bit_in_run_weeks, kLnavBitsPerSubframe);
+    const std::int64_t subframe_sow_total = subframe_index * 6;
+    const int week = first_week_ + static_cast<int>(floor_div(subframe_sow_total, 604800));
+    const int sow = static_cast<int>(subframe_sow_total - 604800 * floor_div(subframe_sow_total, 604800));
+    if (sow != s.subframe_start_sow || week != s.subframe_week) {
+      s.subframe_start_sow = sow;
+      s.subframe_week = week;
+      const orbits::KeplerEphemeris* record =
+          record_at_ ? record_at_(prn, GnssTime::from_week_tow(TimeScale::kGpst, week, sow)) : nullptr;
+      if (record != nullptr) {
+        s.subframe = lnav_subframe(*record, lnav_, week, sow);
+      } else {
+        s.subframe.fill(0);
+      }
+    }
+    const auto bit = static_cast<size_t>(bit_in_run_weeks - subframe_index * kLnavBitsPerSubframe);
+    return s.subframe[bit] != 0 ? -1 : 1;
+  }
+
+ private:
+  struct Satellite {
+    std::array<std::int8_t, kCaCodeLength> code{};
+    int subframe_start_sow = -1;
+    int subframe_week = -1;
+    std::array<std::uint8_t, kLnavBitsPerSubframe> subframe{};
+  };
+  LnavCommon lnav_;
+  int first_week_;
+  std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at_;
+  std::map<int, Satellite> satellites_;
+};
+
+class GlonassL1ofSignals final : public BandSignals {
+ public:
+  GlonassL1ofSignals(GnavCommon gnav, int first_week,
+                     std::function<const orbits::GlonassEphemeris*(int, const GnssTime&)> record_at)
+      : gnav_(gnav), first_week_(first_week), record_at_(std::move(record_at)) {}
+
+  int code_length() const override { return kGlonassCodeLength; }
+  Result<const std::int8_t*> code(int slot) override {
+    satellites_.try_emplace(slot);
+    return glonass_ranging_code().data();
+  }
+  double centre_hz() const override { return kGlonassBandCentre_hz; }
+  // Strings of 2 s aligned to the Moscow day (UTC(SU) + 3 h): 170 data symbols of 10 ms, then the
+  // 30 of the time mark; 15 strings a 30 s frame.
+  int sign(int slot, std::int64_t period_ms) override {
+    Satellite& s = satellites_.at(slot);
+    const std::int64_t gpst_ms = static_cast<std::int64_t>(first_week_) * 604800000LL + period_ms;
+    const GnssTime gpst = GnssTime::from_gpst_seconds(floor_div(gpst_ms, 1000), 0.0);
+    const std::int64_t mt_ms = gpst_ms + (10800 - gps_minus_utc_s(gpst)) * 1000LL;
+    const std::int64_t string_index = floor_div(mt_ms, 2000);
+    if (string_index != s.string_index) {
+      s.string_index = string_index;
+      const std::int64_t string_start_ms = string_index * 2000;
+      const GnssTime string_start_gpst = GnssTime::from_gpst_seconds(
+          floor_div(string_start_ms - (10800 - gps_minus_utc_s(gpst)) * 1000LL, 1000), 0.0);
+      const orbits::GlonassEphemeris* record = record_at_ ? record_at_(slot, string_start_gpst) : nullptr;
+      if (record != nullptr) {
+        // Moscow day and date: GPST seconds count from 1980-01-06, a Sunday; the Moscow calendar
+        // day number since 1996-01-01 gives N_4 and N_T.
+        const std::int64_t mt_day = floor_div(string_start_ms, 86400000LL);
+        const int second_of_day = static_cast<int>((string_start_ms - mt_day * 86400000LL) / 1000);
+        const int frame_start = second_of_day / 30 * 30;
+        const int string_number = (second_of_day % 30) / 2 + 1;
+        // Days from 1980-01-06 to 1996-01-01: 5839.
+        const std::int64_t days_since_1996 = mt_day - 5839;
+        const int four_year = static_cast<int>(floor_div(days_since_1996, 1461)) + 1;
+        const int day_in_four_years = static_cast<int>(days_since_1996 - (four_year - 1) * 1461LL) + 1;
+        s.symbols = gnav_symbols(gnav_string(*record, gnav_, string_number, frame_start, day_in_four_years, four_year));
+      } else {
+        s.symbols.fill(1);
+      }
+    }
+    const auto symbol = static_cast<size_t>((mt_ms - string_index * 2000) / 10);
+    return s.symbols[symbol];
+  }
+
+ private:
+  struct Satellite {
+    std::int64_t string_index = std::numeric_limits<std::int64_t>::min();
+    std::array<std::int8_t, kGlonassSymbolsPerString> symbols{};
+  };
+  GnavCommon gnav_;
+  int first_week_;
+  std::function<const orbits::GlonassEphemeris*(int, const GnssTime&)> record_at_;
+  std::map<int, Satellite> satellites_;
+};
+
+}  // namespace
+
+std::unique_ptr<BandSignals> make_gps_l1ca_signals(
+    LnavCommon lnav, int first_week, std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at) {
+  return std::make_unique<GpsL1caSignals>(std::move(lnav), first_week, std::move(record_at));
+}
+
+std::unique_ptr<BandSignals> make_glonass_l1of_signals(
+    GnavCommon gnav, int first_week, std::function<const orbits::GlonassEphemeris*(int, const GnssTime&)> record_at) {
+  return std::make_unique<GlonassL1ofSignals>(gnav, first_week, std::move(record_at));
+}
+
+}  // namespace skytrace::baseband
