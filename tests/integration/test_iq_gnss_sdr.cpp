@@ -449,6 +449,8 @@ TEST(IqBadInput, RatesBandsAndSignalsTheReceiverLacksAreRefusedWithNothingWritte
   };
   const std::vector<Case> cases = {
       {"--sample-rate 1e6", "output.iq.sample_rate_hz"},
+      {"--band G1 --sample-rate 4e6 --set 'receiver.signals=[R1C]'", "band G1 needs at least 8.9e+06 complex samples/s"},
+      {"--band G1 --sample-rate 9e6 --set 'receiver.signals=[G1C]'", "does not list signal R1C"},
       {"--band E1", "output.iq.bands"},
       {"--format sc4", "output.iq.format"},
       {"--set 'receiver.signals=[E1C]'", "does not list signal G1C"},
