@@ -1,4 +1,4 @@
-// IQ sample generation (baseband/l1ca_synthesizer): seconds of GPS L1 C/A samples per second of CPU
+// IQ sample generation (baseband/synthesizer): seconds of GPS L1 C/A and GLONASS L1OF samples per second of CPU
 // on one core, for the case (12 satellites, 3 paths each, 4 MS/s, sc8) and its parts.
 // Items processed = complex samples; "real time" is items_per_second >= the sample rate.
 #include <benchmark/benchmark.h>

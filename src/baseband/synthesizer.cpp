@@ -111,7 +111,6 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
   const double fs = settings_.sample_rate_hz;
   const auto block = static_cast<std::int64_t>(std::floor(fs * 1e-3));  // samples per block, at most 1 ms
   const auto end_sample = static_cast<std::int64_t>(std::ceil(to.time_s * fs - 1e-6));
-  const double scale = output_scale(settings_.format);
   const CarrierTable& lut = carrier_table();
   // start_sow_ * 1000 = whole ms + a fraction: transmission times are counted in ms from the run's
   // first week's start.
@@ -220,7 +219,6 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
     quantize(re_.data(), im_.data(), n, out);
     samples_written_ += static_cast<std::int64_t>(n);
   }
-  (void)scale;
   return Ok{};
 }
 
