@@ -4,6 +4,7 @@
 #include <map>
 #include <string>
 
+#include "skytrace/baseband/beidou_b1i.hpp"
 #include "skytrace/baseband/synthesizer.hpp"
 
 namespace skytrace::baseband {
@@ -125,6 +126,67 @@ class GlonassL1ofSignals final : public BandSignals {
   std::map<int, Satellite> satellites_;
 };
 
+class BeidouB1iSignals final : public BandSignals {
+ public:
+  BeidouB1iSignals(orbits::IonosphereCoefficients ionosphere, int first_week,
+                   std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at)
+      : ionosphere_(std::move(ionosphere)), first_week_(first_week), record_at_(std::move(record_at)) {}
+
+  int code_length() const override { return kB1iCodeLength; }
+  Result<const std::int8_t*> code(int prn) override {
+    if (beidou_geo_prn(prn)) {
+      return make_error(ErrorCode::kUnsupported, "BeiDou B1I samples: C" + std::to_string(prn) +
+                                                     " is a GEO satellite (D2 message), which is not generated");
+    }
+    auto it = satellites_.find(prn);
+    if (it == satellites_.end()) {
+      auto code = beidou_b1i_code(prn);
+      if (!code) return code.error();
+      it = satellites_.emplace(prn, Satellite{}).first;
+      it->second.code = *code;
+    }
+    return it->second.code.data();
+  }
+  double centre_hz() const override { return kB1iCarrier_hz; }
+  // BDT = GPST - 14 s, weeks from 2006-01-01 (GPS week 1356). D1: 6 s subframes of 300 bits, each
+  // 20 ms bit spread by the Neumann-Hoffman code's 20 chips.
+  int sign(int prn, std::int64_t period_ms) override {
+    Satellite& s = satellites_.at(prn);
+    const std::int64_t bdt_ms = period_ms + (static_cast<std::int64_t>(first_week_ - 1356) * 604800 - 14) * 1000;
+    const std::int64_t bit_index = floor_div(bdt_ms, 20);
+    const std::int64_t subframe_index = floor_div(bit_index, 300);
+    const std::int64_t subframe_sow_total = subframe_index * 6;
+    const int week = static_cast<int>(floor_div(subframe_sow_total, 604800));
+    const int sow = static_cast<int>(subframe_sow_total - 604800LL * week);
+    if (sow != s.subframe_start_sow || week != s.subframe_week) {
+      s.subframe_start_sow = sow;
+      s.subframe_week = week;
+      const GnssTime t = GnssTime::from_week_tow(TimeScale::kBdt, week, sow);
+      const orbits::KeplerEphemeris* record = record_at_ ? record_at_(prn, t) : nullptr;
+      if (record != nullptr) {
+        s.subframe = d1_subframe(*record, ionosphere_, week, sow);
+      } else {
+        s.subframe.fill(0);
+      }
+    }
+    const auto bit = static_cast<size_t>(bit_index - subframe_index * 300);
+    const auto nh_chip = static_cast<size_t>(bdt_ms - bit_index * 20);
+    return (s.subframe[bit] != 0 ? -1 : 1) * beidou_nh_code()[nh_chip];
+  }
+
+ private:
+  struct Satellite {
+    std::array<std::int8_t, kB1iCodeLength> code{};
+    int subframe_start_sow = -1;
+    int subframe_week = -1;
+    std::array<std::uint8_t, 300> subframe{};
+  };
+  orbits::IonosphereCoefficients ionosphere_;
+  int first_week_;
+  std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at_;
+  std::map<int, Satellite> satellites_;
+};
+
 }  // namespace
 
 std::unique_ptr<BandSignals> make_gps_l1ca_signals(
@@ -135,6 +197,12 @@ std::unique_ptr<BandSignals> make_gps_l1ca_signals(
 std::unique_ptr<BandSignals> make_glonass_l1of_signals(
     GnavCommon gnav, int first_week, std::function<const orbits::GlonassEphemeris*(int, const GnssTime&)> record_at) {
   return std::make_unique<GlonassL1ofSignals>(gnav, first_week, std::move(record_at));
+}
+
+std::unique_ptr<BandSignals> make_beidou_b1i_signals(
+    orbits::IonosphereCoefficients ionosphere, int first_week,
+    std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at) {
+  return std::make_unique<BeidouB1iSignals>(std::move(ionosphere), first_week, std::move(record_at));
 }
 
 }  // namespace skytrace::baseband

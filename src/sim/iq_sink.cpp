@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "skytrace/baseband/beidou_b1i.hpp"
 #include "skytrace/baseband/synthesizer.hpp"
 #include "skytrace/sim/sinks.hpp"
 
@@ -82,7 +83,7 @@ class IqSink final : public EpochSink {
       s.sample_rate_hz = iq.sample_rate_hz;
       s.format = *format;
       s.start = c.scenario->time.start;
-      s.seed = c.scenario->seed + (name == "L1" ? 0 : 1);  // independent noise per band
+      s.seed = c.scenario->seed + (name == "L1" ? 0 : name == "G1" ? 1 : 2);  // independent noise per band
       s.noise = true;
       std::unique_ptr<baseband::BandSignals> signals;
       if (name == "L1") {
@@ -91,6 +92,13 @@ class IqSink final : public EpochSink {
             lnav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
               return ephemerides->find_kepler(SatelliteId{GnssSystem::kGps, static_cast<std::uint8_t>(prn)}, t,
                                               orbits::NavMessage::kGpsLnav);
+            });
+      } else if (name == "B1") {
+        band.signal = "C2I";
+        signals = baseband::make_beidou_b1i_signals(
+            ephemerides->data().ionosphere, first_week, [ephemerides](int prn, const GnssTime& t) {
+              return ephemerides->find_kepler(SatelliteId{GnssSystem::kBeiDou, static_cast<std::uint8_t>(prn)}, t,
+                                              orbits::NavMessage::kBeiDouD1);
             });
       } else {
         band.signal = "R1C";
@@ -113,6 +121,8 @@ class IqSink final : public EpochSink {
       for (const receiver::SatelliteObservation& sat : obs.satellites) {
         for (const receiver::IncomingSignal& in : sat.incoming) {
           if (in.signal.to_string() != band.signal) continue;
+          // BeiDou GEO satellites send D2, which is not generated: they are left out of the samples.
+          if (band.name == "B1" && baseband::beidou_geo_prn(sat.satellite.prn())) continue;
           baseband::Arrival a;
           a.id = sat.satellite.prn();
           a.carrier_hz = in.carrier_hz;
@@ -154,11 +164,14 @@ class IqSink final : public EpochSink {
     const double fs = settings_.sample_rate_hz;
     const size_t channels = std::max<size_t>(4, band.synthesizer->most_satellites());
     const bool gps = band.name == "L1";
-    const std::string id = gps ? "1C" : "1G";
+    const bool beidou = band.name == "B1";
+    const std::string id = gps ? "1C" : beidou ? "B1" : "1G";
+    const char* system = gps ? "GPS_L1_CA" : beidou ? "BEIDOU_B1I" : "GLONASS_L1_CA";
     const std::string out_dir = "gnss-sdr-" + band.name;
     std::string t;
     t += "; GNSS-SDR configuration written by skytrace for " + band.file_name + " (" +
-         (gps ? "GPS L1 C/A" : "GLONASS L1OF, centred on 1602 MHz") + ")\n";
+         (gps ? "GPS L1 C/A" : beidou ? "BeiDou B1I of MEO and IGSO satellites" : "GLONASS L1OF, centred on 1602 MHz") +
+         ")\n";
     t += fmt::format("; {} complex samples at {:.0f} samples/s ({} bytes each); run from this folder:\n",
                      band.synthesizer->samples_written(), fs, baseband::bytes_per_sample(format_));
     t += ";   mkdir -p " + out_dir + " && gnss-sdr --config_file=gnss-sdr-" + band.name + ".conf\n";
@@ -181,30 +194,28 @@ class IqSink final : public EpochSink {
     t += "Resampler.implementation=Pass_Through\nResampler.item_type=gr_complex\n";
     t += "Channels_" + id + ".count=" + std::to_string(channels) + "\n";
     t += "Channels.in_acquisition=1\nChannel.signal=" + id + "\n";
-    if (gps) {
-      t += "Acquisition_1C.implementation=GPS_L1_CA_PCPS_Acquisition\n";
-    } else {
-      t += "Acquisition_1G.implementation=GLONASS_L1_CA_PCPS_Acquisition\n";
-    }
+    t += "Acquisition_" + id + ".implementation=" + system + "_PCPS_Acquisition\n";
     t += "Acquisition_" + id + ".item_type=gr_complex\n";
     t += "Acquisition_" + id + ".coherent_integration_time_ms=1\nAcquisition_" + id + ".pfa=0.01\n";
     t += "Acquisition_" + id + ".doppler_max=6000\nAcquisition_" + id + ".doppler_step=250\n";
     t += "Acquisition_" + id + ".max_dwells=1\nAcquisition_" + id + ".dump=false\n";
-    t += std::string("Tracking_") + id + ".implementation=" +
-         (gps ? "GPS_L1_CA_DLL_PLL_Tracking" : "GLONASS_L1_CA_DLL_PLL_Tracking") + "\n";
+    t += "Tracking_" + id + ".implementation=" + system + "_DLL_PLL_Tracking\n";
     t += "Tracking_" + id + ".item_type=gr_complex\n";
     // Wide loops to pull in, then 10 ms correlations with narrow ones (profiles/gnss-sdr.yaml).
     t += "Tracking_" + id + ".pll_bw_hz=20.0\nTracking_" + id + ".dll_bw_hz=2.0\n";
     t += "Tracking_" + id + ".early_late_space_chips=0.5\n";
-    t += "Tracking_" + id + ".extend_correlation_symbols=10\nTracking_" + id + ".pll_bw_narrow_hz=5.0\n";
-    t += "Tracking_" + id + ".dll_bw_narrow_hz=0.5\nTracking_" + id + ".dump=false\n";
-    t += std::string("TelemetryDecoder_") + id + ".implementation=" +
-         (gps ? "GPS_L1_CA_Telemetry_Decoder" : "GLONASS_L1_CA_Telemetry_Decoder") + "\n";
+    if (!beidou) {  // B1I's 1 ms symbols carry the Neumann-Hoffman code: plain loops
+      t += "Tracking_" + id + ".extend_correlation_symbols=10\nTracking_" + id + ".pll_bw_narrow_hz=5.0\n";
+      t += "Tracking_" + id + ".dll_bw_narrow_hz=0.5\n";
+    }
+    t += "Tracking_" + id + ".dump=false\n";
+    t += "TelemetryDecoder_" + id + ".implementation=" + system + "_Telemetry_Decoder\n";
     t += "TelemetryDecoder_" + id + ".dump=false\n";
     // Carrier-smoothed pseudoranges, as receivers report them.
     t += "Observables.implementation=Hybrid_Observables\nObservables.dump=false\n";
     t += "Observables.enable_carrier_smoothing=true\nObservables.smoothing_factor=200\n";
-    // L1OF carries no ionosphere model: GLONASS alone is solved without one.
+    // L1OF carries no ionosphere model: GLONASS alone is solved without one; GNSS-SDR's
+    // "Broadcast" model is GPS's, absent from a BeiDou-only run.
     t += std::string("PVT.implementation=RTKLIB_PVT\nPVT.positioning_mode=Single\nPVT.iono_model=") +
          (gps ? "Broadcast" : "OFF") + "\n";
     t += "PVT.trop_model=Saastamoinen\nPVT.output_rate_ms=1000\nPVT.display_rate_ms=1000\n";

@@ -414,7 +414,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
       if (auto c = iq->child("bands")) {
         settings.bands.clear();
         for (const auto& band : c->as_list_or_single()) {
-          const std::string name = band.as_choice({"L1", "G1"});
+          const std::string name = band.as_choice({"L1", "G1", "B1"});
           if (std::find(settings.bands.begin(), settings.bands.end(), name) == settings.bands.end()) {
             settings.bands.push_back(name);
           }
@@ -423,8 +423,9 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
       for (const std::string& band : settings.bands) {
         // L1: GPS L1 C/A. G1: GLONASS L1OF around 1602 MHz, channels -7..+6 at 562.5 kHz with their
         // main lobes (+-0.511 MHz): -4.45 to +3.89 MHz needs 8.9 MS/s complex.
-        const std::string signal = band == "L1" ? "G1C" : "R1C";
-        const double need_hz = band == "L1" ? 2.046e6 : 8.9e6;
+        // B1: BeiDou B1I, 2.046 Mchip/s: a main lobe 4.092 MHz wide.
+        const std::string signal = band == "L1" ? "G1C" : band == "B1" ? "C2I" : "R1C";
+        const double need_hz = band == "L1" ? 2.046e6 : band == "B1" ? 4.092e6 : 8.9e6;
         if (settings.sample_rate_hz < need_hz) {
           iq->fail(fmt::format("sample_rate_hz {:.6g}: band {} needs at least {:.4g} complex samples/s", settings.sample_rate_hz,
                                band, need_hz));
@@ -433,7 +434,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
                             std::any_of(s.receivers.front().signals.begin(), s.receivers.front().signals.end(),
                                         [&](const Signal& sig) { return sig.to_string() == signal; });
         if (!tracks) {
-          iq->fail("band " + band + " (" + (band == "L1" ? "GPS L1 C/A" : "GLONASS L1OF") +
+          iq->fail("band " + band + " (" + (band == "L1" ? "GPS L1 C/A" : band == "B1" ? "BeiDou B1I" : "GLONASS L1OF") +
                    "): the first receiver does not list signal " + signal + " in receiver.signals");
         }
       }

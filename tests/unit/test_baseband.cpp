@@ -10,6 +10,7 @@
 #include <numbers>
 #include <random>
 
+#include "skytrace/baseband/beidou_b1i.hpp"
 #include "skytrace/baseband/gps_l1ca.hpp"
 #include "skytrace/baseband/synthesizer.hpp"
 #include "skytrace/core/constants.hpp"
@@ -425,6 +426,108 @@ TEST(GlonassL1of, SymbolsUndoneAsReceiversDoGiveTheStringBack) {
   }
   for (int i = 1; i < kGlonassStringBits; ++i) {
     EXPECT_EQ(relative[static_cast<size_t>(i - 1)] ^ relative[static_cast<size_t>(i)], bits[static_cast<size_t>(i)]) << i;
+  }
+}
+
+}  // namespace
+}  // namespace skytrace::baseband
+
+namespace skytrace::baseband {
+namespace {
+
+// BeiDou B1I: the codes of PRN 1-37 from the ICD's G2 tap pairs (BDS-SIS-ICD-B1I Table 4-1), built
+// here with a register of this test; the BCH(15,11) words; a D1 subframe read back.
+TEST(BeidouB1i, CodesFollowTheIcdTapPairs) {
+  const std::array<std::pair<int, int>, 37> taps = {{{1, 3}, {1, 4}, {1, 5}, {1, 6}, {1, 8}, {1, 9}, {1, 10}, {1, 11},
+                                                    {2, 7}, {3, 4}, {3, 5}, {3, 6}, {3, 8}, {3, 9}, {3, 10}, {3, 11},
+                                                    {4, 5}, {4, 6}, {4, 8}, {4, 9}, {4, 10}, {4, 11}, {5, 6}, {5, 8},
+                                                    {5, 9}, {5, 10}, {5, 11}, {6, 8}, {6, 9}, {6, 10}, {6, 11}, {8, 9},
+                                                    {8, 10}, {8, 11}, {9, 10}, {9, 11}, {10, 11}}};
+  // Registers as strings of stages 1..11, 01010101010 at the start.
+  for (int prn = 1; prn <= 37; ++prn) {
+    std::array<int, 12> g1{}, g2{};
+    for (int s = 1; s <= 11; ++s) g1[static_cast<size_t>(s)] = g2[static_cast<size_t>(s)] = (s % 2 == 0) ? 1 : 0;
+    auto code = beidou_b1i_code(prn);
+    ASSERT_TRUE(code);
+    const auto [a, b] = taps[static_cast<size_t>(prn - 1)];
+    for (int n = 0; n < kB1iCodeLength; ++n) {
+      const int chip = g1[11] ^ g2[static_cast<size_t>(a)] ^ g2[static_cast<size_t>(b)];
+      ASSERT_EQ((*code)[static_cast<size_t>(n)], chip == 0 ? 1 : -1) << "PRN " << prn << " chip " << n;
+      const int f1 = g1[1] ^ g1[7] ^ g1[8] ^ g1[9] ^ g1[10] ^ g1[11];
+      const int f2 = g2[1] ^ g2[2] ^ g2[3] ^ g2[4] ^ g2[5] ^ g2[8] ^ g2[9] ^ g2[11];
+      for (int s = 11; s > 1; --s) {
+        g1[static_cast<size_t>(s)] = g1[static_cast<size_t>(s - 1)];
+        g2[static_cast<size_t>(s)] = g2[static_cast<size_t>(s - 1)];
+      }
+      g1[1] = f1;
+      g2[1] = f2;
+    }
+  }
+  EXPECT_TRUE(beidou_geo_prn(1) && beidou_geo_prn(5) && beidou_geo_prn(60) && !beidou_geo_prn(19));
+  EXPECT_FALSE(beidou_b1i_code(64));
+}
+
+std::uint32_t bch_remainder(std::uint32_t word15) {
+  for (int bit = 14; bit >= 4; --bit) {
+    if ((word15 >> bit) & 1U) word15 ^= 0x13U << (bit - 4);
+  }
+  return word15 & 0xF;
+}
+
+TEST(BeidouB1i, BchWordsAreMultiplesOfTheGeneratorAndDetectEveryOneBitError) {
+  for (std::uint32_t info = 0; info < 2048; info += 7) {
+    const std::uint32_t word = (info << 4) | bch15_11_parity(info);
+    EXPECT_EQ(bch_remainder(word), 0u) << info;
+    for (int bit = 0; bit < 15; ++bit) EXPECT_NE(bch_remainder(word ^ (1U << bit)), 0u);
+  }
+}
+
+TEST(BeidouB1i, D1SubframesReadBack) {
+  orbits::KeplerEphemeris e;
+  e.satellite = SatelliteId{GnssSystem::kBeiDou, 19};
+  e.sqrt_a_sqrtm = 5282.62580490112;
+  e.toe_sow = 345600.0;
+  e.eccentricity = 0.00123456;
+  e.iode = 1;
+  for (const int start : {345606, 345612}) {  // subframes 2 and 3: (start / 6) % 5 + 1
+    const auto bits = d1_subframe(e, {}, 758, start);
+    // Undo the interleaving and check every BCH word.
+    std::array<int, 300> data{};
+    for (int i = 0; i < 30; ++i) data[static_cast<size_t>(i)] = bits[static_cast<size_t>(i)];
+    std::uint32_t w1 = 0;
+    for (int i = 15; i < 30; ++i) w1 = (w1 << 1) | bits[static_cast<size_t>(i)];
+    EXPECT_EQ(bch_remainder(w1), 0u);
+    for (int w = 1; w < 10; ++w) {
+      std::uint32_t a = 0, b = 0;
+      for (int c = 0; c < 15; ++c) {
+        a = (a << 1) | bits[static_cast<size_t>(30 * w + 2 * c)];
+        b = (b << 1) | bits[static_cast<size_t>(30 * w + 2 * c + 1)];
+      }
+      EXPECT_EQ(bch_remainder(a), 0u) << "word " << w + 1;
+      EXPECT_EQ(bch_remainder(b), 0u) << "word " << w + 1;
+      for (int i = 0; i < 11; ++i) {
+        data[static_cast<size_t>(30 * w + i)] = static_cast<int>((a >> (14 - i)) & 1U);
+        data[static_cast<size_t>(30 * w + 11 + i)] = static_cast<int>((b >> (14 - i)) & 1U);
+      }
+    }
+    auto field = [&](std::initializer_list<std::pair<int, int>> parts) {
+      std::uint64_t v = 0;
+      for (auto [first, n] : parts) {
+        for (int i = 0; i < n; ++i) v = (v << 1) | static_cast<std::uint64_t>(data[static_cast<size_t>(first - 1 + i)]);
+      }
+      return v;
+    };
+    EXPECT_EQ(field({{1, 11}}), 0b11100010010u);
+    const auto subframe = static_cast<int>(field({{16, 3}}));
+    EXPECT_EQ(static_cast<int>(field({{19, 8}, {31, 12}})), start);
+    if (subframe == 2) {
+      EXPECT_NEAR(static_cast<double>(field({{251, 12}, {271, 20}})) * std::ldexp(1.0, -19), e.sqrt_a_sqrtm, std::ldexp(1.0, -20));
+      EXPECT_NEAR(static_cast<double>(field({{133, 10}, {151, 22}})) * std::ldexp(1.0, -33), e.eccentricity, std::ldexp(1.0, -34));
+      EXPECT_EQ(field({{291, 2}}), (345600u / 8u) >> 15);
+    } else {
+      EXPECT_EQ(subframe, 3);
+      EXPECT_EQ(field({{43, 10}, {61, 5}}), (345600u / 8u) & 0x7FFFu);
+    }
   }
 }
 
