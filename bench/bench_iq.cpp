@@ -1,4 +1,4 @@
-// IQ sample generation (baseband/synthesizer): seconds of GPS L1 C/A and GLONASS L1OF samples per second of CPU
+// IQ sample generation (baseband/synthesizer): seconds of GPS L1 C/A, GLONASS L1OF and BeiDou B1I samples per second of CPU
 // on one core, for the case (12 satellites, 3 paths each, 4 MS/s, sc8) and its parts.
 // Items processed = complex samples; "real time" is items_per_second >= the sample rate.
 #include <benchmark/benchmark.h>
@@ -110,6 +110,46 @@ void BM_GlonassSamples(benchmark::State& state) {
   state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(samples) / fs, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_GlonassSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// BeiDou B1I: `satellites` MEO satellites (PRN 19..) at 5 MS/s, one path each, D1 without records.
+void BM_BeidouB1iSamples(benchmark::State& state) {
+  const int satellites = static_cast<int>(state.range(0));
+  const double fs = 5e6;
+  SynthesizerSettings settings;
+  settings.sample_rate_hz = fs;
+  settings.format = SampleFormat::kSc8;
+  settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
+  BasebandSynthesizer synthesizer(settings, make_beidou_b1i_signals({}, 2111, nullptr));
+  const double wavelength_m = constants::kSpeedOfLight_mps / 1561.098e6;
+  auto arrivals = [&](double t) {
+    std::vector<Arrival> out;
+    for (int k = 0; k < satellites; ++k) {
+      Arrival a;
+      a.id = 19 + k;
+      a.carrier_hz = 1561.098e6;
+      a.doppler_hz = -3000.0 + 600.0 * k;
+      a.pseudorange_m = 21.5e6 + 3.0e5 * k - a.doppler_hz * wavelength_m * t;
+      a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
+      a.antenna_cn0_dbhz = 45.0;
+      out.push_back(std::move(a));
+    }
+    return out;
+  };
+  std::string bytes;
+  double t = 0.0;
+  (void)synthesizer.add_instant(t, arrivals(t), bytes);
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    bytes.clear();
+    t += 1.0;
+    if (!synthesizer.add_instant(t, arrivals(t), bytes)) state.SkipWithError("failed");
+    benchmark::DoNotOptimize(bytes.data());
+    samples += static_cast<std::int64_t>(bytes.size() / 2);
+  }
+  state.SetItemsProcessed(samples);
+  state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(samples) / fs, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BeidouB1iSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 
