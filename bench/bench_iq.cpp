@@ -3,6 +3,7 @@
 // Items processed = complex samples; "real time" is items_per_second >= the sample rate.
 #include <benchmark/benchmark.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -35,30 +36,38 @@ std::vector<Arrival> arrivals_at(double t, int satellites, int paths) {
   return out;
 }
 
-void BM_L1caSamples(benchmark::State& state) {
-  const int satellites = static_cast<int>(state.range(0));
-  const int paths = static_cast<int>(state.range(1));
-  const double fs = static_cast<double>(state.range(2));
-  const bool noise = state.range(3) != 0;
+// One second of samples per iteration from `arrivals(t)`; items = complex samples, and the
+// speed against real time at `sample_rate_hz`.
+template <typename Arrivals>
+void run_seconds(benchmark::State& state, double sample_rate_hz, std::unique_ptr<BandSignals> signals,
+                 Arrivals arrivals, bool noise = true) {
   SynthesizerSettings settings;
-  settings.sample_rate_hz = fs;
+  settings.sample_rate_hz = sample_rate_hz;
   settings.format = SampleFormat::kSc8;
   settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
   settings.noise = noise;
-  BasebandSynthesizer synthesizer(settings, make_gps_l1ca_signals({}, 2111, nullptr));
+  BasebandSynthesizer synthesizer(settings, std::move(signals));
   std::string bytes;
   double t = 0.0;
-  (void)synthesizer.add_instant(t, arrivals_at(t, satellites, paths), bytes);
+  (void)synthesizer.add_instant(t, arrivals(t), bytes);
   std::int64_t samples = 0;
   for (auto _ : state) {
     bytes.clear();
-    t += 1.0;  // one second of samples per iteration
-    if (!synthesizer.add_instant(t, arrivals_at(t, satellites, paths), bytes)) state.SkipWithError("failed");
+    t += 1.0;
+    if (!synthesizer.add_instant(t, arrivals(t), bytes)) state.SkipWithError("failed");
     benchmark::DoNotOptimize(bytes.data());
     samples += static_cast<std::int64_t>(bytes.size() / 2);
   }
   state.SetItemsProcessed(samples);
-  state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(samples) / fs, benchmark::Counter::kIsRate);
+  state.counters["realtime_x"] =
+      benchmark::Counter(static_cast<double>(samples) / sample_rate_hz, benchmark::Counter::kIsRate);
+}
+
+void BM_L1caSamples(benchmark::State& state) {
+  const int satellites = static_cast<int>(state.range(0));
+  const int paths = static_cast<int>(state.range(1));
+  run_seconds(state, static_cast<double>(state.range(2)), make_gps_l1ca_signals({}, 2111, nullptr),
+              [&](double t) { return arrivals_at(t, satellites, paths); }, state.range(3) != 0);
 }
 // satellites, paths, sample rate, noise
 BENCHMARK(BM_L1caSamples)
@@ -74,13 +83,7 @@ BENCHMARK(BM_L1caSamples)
 // path each, without data (the strings' cost is per 10 ms symbol).
 void BM_GlonassSamples(benchmark::State& state) {
   const int satellites = static_cast<int>(state.range(0));
-  const double fs = 9e6;
-  SynthesizerSettings settings;
-  settings.sample_rate_hz = fs;
-  settings.format = SampleFormat::kSc8;
-  settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
-  BasebandSynthesizer synthesizer(settings, make_glonass_l1of_signals({}, 2111, nullptr));
-  auto arrivals = [&](double t) {
+  run_seconds(state, 9e6, make_glonass_l1of_signals({}, 2111, nullptr), [&](double t) {
     std::vector<Arrival> out;
     for (int k = 0; k < satellites; ++k) {
       Arrival a;
@@ -94,34 +97,15 @@ void BM_GlonassSamples(benchmark::State& state) {
       out.push_back(std::move(a));
     }
     return out;
-  };
-  std::string bytes;
-  double t = 0.0;
-  (void)synthesizer.add_instant(t, arrivals(t), bytes);
-  std::int64_t samples = 0;
-  for (auto _ : state) {
-    bytes.clear();
-    t += 1.0;
-    if (!synthesizer.add_instant(t, arrivals(t), bytes)) state.SkipWithError("failed");
-    benchmark::DoNotOptimize(bytes.data());
-    samples += static_cast<std::int64_t>(bytes.size() / 2);
-  }
-  state.SetItemsProcessed(samples);
-  state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(samples) / fs, benchmark::Counter::kIsRate);
+  });
 }
 BENCHMARK(BM_GlonassSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 // BeiDou B1I: `satellites` MEO satellites (PRN 19..) at 5 MS/s, one path each, D1 without records.
 void BM_BeidouB1iSamples(benchmark::State& state) {
   const int satellites = static_cast<int>(state.range(0));
-  const double fs = 5e6;
-  SynthesizerSettings settings;
-  settings.sample_rate_hz = fs;
-  settings.format = SampleFormat::kSc8;
-  settings.start = GnssTime::from_week_tow(TimeScale::kGpst, 2111, 345600.0);
-  BasebandSynthesizer synthesizer(settings, make_beidou_b1i_signals({}, 2111, nullptr));
   const double wavelength_m = constants::kSpeedOfLight_mps / 1561.098e6;
-  auto arrivals = [&](double t) {
+  run_seconds(state, 5e6, make_beidou_b1i_signals({}, 2111, nullptr), [&](double t) {
     std::vector<Arrival> out;
     for (int k = 0; k < satellites; ++k) {
       Arrival a;
@@ -134,20 +118,7 @@ void BM_BeidouB1iSamples(benchmark::State& state) {
       out.push_back(std::move(a));
     }
     return out;
-  };
-  std::string bytes;
-  double t = 0.0;
-  (void)synthesizer.add_instant(t, arrivals(t), bytes);
-  std::int64_t samples = 0;
-  for (auto _ : state) {
-    bytes.clear();
-    t += 1.0;
-    if (!synthesizer.add_instant(t, arrivals(t), bytes)) state.SkipWithError("failed");
-    benchmark::DoNotOptimize(bytes.data());
-    samples += static_cast<std::int64_t>(bytes.size() / 2);
-  }
-  state.SetItemsProcessed(samples);
-  state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(samples) / fs, benchmark::Counter::kIsRate);
+  });
 }
 BENCHMARK(BM_BeidouB1iSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 

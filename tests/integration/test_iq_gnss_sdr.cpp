@@ -245,6 +245,24 @@ std::pair<double, double> code_after_time_tag_fit(const io::ObservationFile& rea
   return {tag_offset_s, residual[residual.size() * 68 / 100]};
 }
 
+// A copy of a GNSS-SDR RINEX file without the header lines of `labels` (and with `replace` applied
+// to TIME OF FIRST OBS), for the fields GNSS-SDR writes malformed (docs/iq.md).
+void copy_repaired(const std::filesystem::path& from, const std::filesystem::path& to,
+                   const std::vector<std::string>& labels, const std::pair<std::string, std::string>& replace = {}) {
+  std::ifstream in(from);
+  std::ofstream out(to);
+  for (std::string line; std::getline(in, line);) {
+    bool drop = false;
+    for (const auto& label : labels) drop = drop || line.find(label) != std::string::npos;
+    if (drop) continue;
+    if (!replace.first.empty() && line.find("TIME OF FIRST OBS") != std::string::npos &&
+        line.find(replace.first) != std::string::npos) {
+      line.replace(line.find(replace.first), replace.first.size(), replace.second);
+    }
+    out << line << "\n";
+  }
+}
+
 // GLONASS L1OF (FDMA around 1602 MHz, 9 MS/s, 60 s): GNSS-SDR tracks every satellite, decodes the
 // strings into nav.rnx's records and fixes. Its GLONASS observation epochs are tagged about 60 ms
 // off the instant it measures (GNSS-SDR's receiver time, not steered for GLONASS): that offset
@@ -279,13 +297,7 @@ TEST_F(IqGnssSdr, GlonassStringsDecodeToTheRecordsAndItFixes) {
   // as malformed: those header lines are dropped before reading.
   const auto real_nav_path = file_ending(dir / "gnss-sdr-G1", 'G');
   ASSERT_TRUE(real_nav_path) << log.substr(log.size() > 4000 ? log.size() - 4000 : 0);
-  {
-    std::ifstream in(*real_nav_path);
-    std::ofstream out(dir / "gnss-sdr-nav.rnx");
-    for (std::string line; std::getline(in, line);) {
-      if (line.find("TIME SYSTEM CORR") == std::string::npos) out << line << "\n";
-    }
-  }
+  copy_repaired(*real_nav_path, dir / "gnss-sdr-nav.rnx", {"TIME SYSTEM CORR"});
   auto real_nav = orbits::read_rinex_nav(dir / "gnss-sdr-nav.rnx");
   ASSERT_TRUE(real_nav) << real_nav.error().message;
   ASSERT_GE(real_nav->glonass.size(), 4u);
@@ -357,21 +369,8 @@ TEST_F(IqGnssSdr, BeidouD1DecodesToTheRecordsAndItFixesWithinFiveMetres) {
   const auto nav_path = file_ending(dir / "gnss-sdr-B1", 'N');
   const auto obs_path = file_ending(dir / "gnss-sdr-B1", 'O');
   ASSERT_TRUE(nav_path && obs_path) << log.substr(log.size() > 4000 ? log.size() - 4000 : 0);
-  {
-    std::ifstream in(*nav_path);
-    std::ofstream out(dir / "gnss-sdr-nav.rnx");
-    for (std::string line; std::getline(in, line);) {
-      if (line.find("TIME SYSTEM CORR") == std::string::npos && line.find("LEAP SECONDS") == std::string::npos) {
-        out << line << "\n";
-      }
-    }
-    std::ifstream obs_in(*obs_path);
-    std::ofstream obs_out(dir / "gnss-sdr-obs.rnx");
-    for (std::string line; std::getline(obs_in, line);) {
-      if (line.find("TIME OF FIRST OBS") != std::string::npos) line.replace(line.find("BDT"), 3, "GPS");
-      obs_out << line << "\n";
-    }
-  }
+  copy_repaired(*nav_path, dir / "gnss-sdr-nav.rnx", {"TIME SYSTEM CORR", "LEAP SECONDS"});
+  copy_repaired(*obs_path, dir / "gnss-sdr-obs.rnx", {}, {"BDT", "GPS"});
   auto real_nav = orbits::read_rinex_nav(dir / "gnss-sdr-nav.rnx");
   ASSERT_TRUE(real_nav) << real_nav.error().message;
   ASSERT_GE(real_nav->kepler.size(), 4u);
