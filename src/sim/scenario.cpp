@@ -288,6 +288,11 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   if (auto c = time.child("duration_s")) s.time.duration_s = c->as_double_in(0.0, 366.0 * 86400.0);
   if (auto c = time.child("interval_s")) s.time.interval_s = c->as_double_in(1e-3, 86400.0);
 
+  // One or the other (docs/scenario.md): with both, the receivers' places in the file and in the
+  // list would no longer match (found by the scenario fuzzer).
+  if (root.child("receiver") && root.child("receivers")) {
+    root.fail("give 'receiver' (one receiver) or 'receivers' (a list), not both");
+  }
   if (auto c = root.child("receiver")) s.receivers.push_back(parse_receiver(*c, base, s.name.substr(0, 4)));
   if (auto c = root.child("receivers")) {
     int index = 0;
