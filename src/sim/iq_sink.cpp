@@ -53,7 +53,7 @@ baseband::GnavCommon gnav_common(const orbits::BroadcastEphemerides& ephemerides
 // One band of the samples: its file, its synthesizer and the signal of the observations it takes.
 struct IqBand {
   std::string name;  // L1 | G1
-  std::string signal;  // G1C | R1C
+  Signal signal;  // G1C | C2I | R1C: the observations it takes
   std::string file_name;
   std::unique_ptr<StagedFile> file;
   std::unique_ptr<baseband::BasebandSynthesizer> synthesizer;
@@ -87,21 +87,21 @@ class IqSink final : public EpochSink {
       s.noise = true;
       std::unique_ptr<baseband::BandSignals> signals;
       if (name == "L1") {
-        band.signal = "G1C";
+        band.signal = Signal{GnssSystem::kGps, '1', 'C'};
         signals = baseband::make_gps_l1ca_signals(
             lnav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
               return ephemerides->find_kepler(SatelliteId{GnssSystem::kGps, static_cast<std::uint8_t>(prn)}, t,
                                               orbits::NavMessage::kGpsLnav);
             });
       } else if (name == "B1") {
-        band.signal = "C2I";
+        band.signal = Signal{GnssSystem::kBeiDou, '2', 'I'};
         signals = baseband::make_beidou_b1i_signals(
             ephemerides->data().ionosphere, first_week, [ephemerides](int prn, const GnssTime& t) {
               return ephemerides->find_kepler(SatelliteId{GnssSystem::kBeiDou, static_cast<std::uint8_t>(prn)}, t,
                                               orbits::NavMessage::kBeiDouD1);
             });
       } else {
-        band.signal = "R1C";
+        band.signal = Signal{GnssSystem::kGlonass, '1', 'C'};
         signals = baseband::make_glonass_l1of_signals(
             gnav_common(*ephemerides), first_week, [ephemerides](int slot, const GnssTime& t) {
               return ephemerides->find_glonass(SatelliteId{GnssSystem::kGlonass, static_cast<std::uint8_t>(slot)}, t);
@@ -120,7 +120,7 @@ class IqSink final : public EpochSink {
       arrivals_.clear();
       for (const receiver::SatelliteObservation& sat : obs.satellites) {
         for (const receiver::IncomingSignal& in : sat.incoming) {
-          if (in.signal.to_string() != band.signal) continue;
+          if (in.signal != band.signal) continue;  // compared as a value: no text per signal and epoch
           // BeiDou GEO satellites send D2, which is not generated: they are left out of the samples.
           if (band.name == "B1" && baseband::beidou_geo_prn(sat.satellite.prn())) continue;
           baseband::Arrival a;
