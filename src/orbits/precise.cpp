@@ -11,6 +11,7 @@
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/orbits/precise.hpp"
+#include "skytrace/orbits/precise_cache.hpp"
 
 namespace skytrace::orbits {
 namespace {
@@ -461,11 +462,15 @@ Result<SatelliteState> PreciseEphemerides::state(const SatelliteId& satellite, c
   if (!orbit_here) return orbit_here.error();
   auto clock_here = clock(satellite, t);
   if (!clock_here) return clock_here.error();
+  return state_from(*orbit_here, *clock_here);
+}
+
+SatelliteState PreciseEphemerides::state_from(const Orbit& orbit, const Clock& clock) {
   SatelliteState s;
-  s.position_m = orbit_here->position_m;
-  s.velocity_mps = orbit_here->velocity_mps;
-  s.clock_bias_s = clock_here->bias_s;
-  s.clock_drift_s_per_s = clock_here->drift_s_per_s;
+  s.position_m = orbit.position_m;
+  s.velocity_mps = orbit.velocity_mps;
+  s.clock_bias_s = clock.bias_s;
+  s.clock_drift_s_per_s = clock.drift_s_per_s;
   // IGS clocks exclude the periodic relativistic term for every system (GLONASS included):
   // dt_rel = -2 r.v / c^2. r.v is the same with Earth-fixed or inertial velocity (r.(w x r) = 0).
   // Its rate -2 (|v_i|^2 + r.a) / c^2 with the inertial velocity and, at this level, the
@@ -476,6 +481,10 @@ Result<SatelliteState> PreciseEphemerides::state(const SatelliteId& satellite, c
   const Eigen::Vector3d v_inertial = s.velocity_mps + omega_cross(r);
   s.relativistic_drift_s_per_s = -2.0 * (v_inertial.squaredNorm() - constants::kGmGps_m3ps2 / r.norm()) / c2;
   return s;
+}
+
+std::unique_ptr<SatelliteStateSource> PreciseEphemerides::sequential_view() const {
+  return std::make_unique<PreciseOrbitCache>(*this);
 }
 
 PreciseEphemerides::Span PreciseEphemerides::orbit_span() const {

@@ -55,6 +55,10 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
       tracking_(settings_.seed, settings_.receiver_index, settings_.noise),
       loop_noise_(settings_.seed, settings_.receiver_index),
       foliage_fading_(settings_.seed, settings_.receiver_index, settings_.foliage) {
+  if (truth_orbits_ != nullptr) {
+    truth_view_ = truth_orbits_->sequential_view();
+    if (truth_view_ != nullptr) truth_orbits_ = truth_view_.get();
+  }
   // The scenario's signals the receiver can track; the others are left out (run: a warning).
   std::vector<Signal> trackable;
   for (const Signal& signal : settings_.signals) {

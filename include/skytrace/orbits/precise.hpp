@@ -197,6 +197,10 @@ class PreciseEphemerides final : public SatelliteStateSource {
   [[nodiscard]] Result<Clock> clock(const SatelliteId& satellite, const GnssTime& t) const;
 
   [[nodiscard]] Result<SatelliteState> state(const SatelliteId& satellite, const GnssTime& t) const override;
+  // The state of an orbit and clock: with the periodic relativistic term that IGS clocks exclude.
+  [[nodiscard]] static SatelliteState state_from(const Orbit& orbit, const Clock& clock);
+  // A PreciseOrbitCache over this source.
+  [[nodiscard]] std::unique_ptr<SatelliteStateSource> sequential_view() const override;
 
   // First and last SP3 epoch, and first and last sample of the clock file (any satellite; nullopt
   // without a clock file), on the GPST timeline.

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 
+#include <memory>
 #include <string_view>
 #include <vector>
 
@@ -39,6 +40,9 @@ class SatelliteStateSource {
   // The satellites this source knows.
   [[nodiscard]] virtual std::vector<SatelliteId> satellites() const = 0;
   [[nodiscard]] virtual std::string_view name() const = 0;
+  // A source for one thread whose queries move forward in time (a run's generator), faster where
+  // this source can reuse work between nearby times; nullptr: query this source itself.
+  [[nodiscard]] virtual std::unique_ptr<SatelliteStateSource> sequential_view() const { return nullptr; }
 };
 
 }  // namespace skytrace::orbits

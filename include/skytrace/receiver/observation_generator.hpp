@@ -138,6 +138,9 @@ class ObservationGenerator {
   std::map<SatelliteId, double> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
+  // The truth source's view for this generator's forward-moving queries (precise orbits: fits per
+  // SP3 interval), when it has one; truth_orbits_ then points to it.
+  std::unique_ptr<orbits::SatelliteStateSource> truth_view_;
   const PathQuery* world_ = nullptr;
   LocalFrame world_frame_;
   std::shared_ptr<const KinematicsSource> kinematics_;
