@@ -3,9 +3,14 @@
 #include <zstd.h>
 
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
 #include <fstream>
+#include <mutex>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include "skytrace/core/output_file.hpp"
 
@@ -22,7 +27,24 @@ ZstdFileWriter::ZstdFileWriter(std::filesystem::path path, std::FILE* file, std:
     : path_(std::move(path)), file_(file), context_(std::move(context)), out_(ZSTD_CStreamOutSize(), '\0'),
       workers_(workers) {}
 
+namespace {
+constexpr size_t kChunkBytes = size_t{1} << 20;
+constexpr size_t kMaxQueuedChunks = 2;
+}  // namespace
+
+// The chunks waiting for the background thread, and what it found.
+struct ZstdFileWriter::Background {
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::deque<std::string> queue;
+  std::vector<std::string> spent;  // emptied chunks, their capacity reused
+  bool closing = false;
+  Status status = Ok{};  // the first failure
+  std::thread thread;
+};
+
 ZstdFileWriter::~ZstdFileWriter() {
+  if (background_ != nullptr) (void)stop_background();
   // The context first: its worker threads stop before the file they feed is closed.
   context_.reset();
   if (file_ != nullptr) std::fclose(file_);
@@ -46,7 +68,59 @@ Result<std::unique_ptr<ZstdFileWriter>> ZstdFileWriter::create(const std::filesy
   if (file == nullptr) {
     return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + output_errno_text(errno) + ")");
   }
-  return std::unique_ptr<ZstdFileWriter>(new ZstdFileWriter(path, file, std::move(context), workers));
+  std::unique_ptr<ZstdFileWriter> writer(new ZstdFileWriter(path, file, std::move(context), workers));
+  if (options.background_thread) {
+    writer->background_ = std::make_unique<Background>();
+    Background& b = *writer->background_;
+    ZstdFileWriter* self = writer.get();
+    b.thread = std::thread([self, &b] {
+      std::unique_lock lock(b.mutex);
+      for (;;) {
+        b.changed.wait(lock, [&] { return !b.queue.empty() || b.closing; });
+        if (b.queue.empty()) return;
+        std::string chunk = std::move(b.queue.front());
+        b.queue.pop_front();
+        const bool failed = !b.status;
+        lock.unlock();
+        Status st = failed ? Status(Ok{}) : self->drain(ZSTD_e_continue, chunk);
+        chunk.clear();
+        lock.lock();
+        if (!st && b.status) b.status = std::move(st);
+        b.spent.push_back(std::move(chunk));
+        b.changed.notify_all();
+      }
+    });
+    writer->pending_.reserve(kChunkBytes + 65536);
+  }
+  return writer;
+}
+
+Status ZstdFileWriter::hand_over() {
+  Background& b = *background_;
+  std::unique_lock lock(b.mutex);
+  b.changed.wait(lock, [&] { return b.queue.size() < kMaxQueuedChunks; });
+  if (!b.status) return b.status;
+  b.queue.push_back(std::move(pending_));
+  pending_.clear();
+  if (!b.spent.empty()) {
+    pending_ = std::move(b.spent.back());
+    b.spent.pop_back();
+  }
+  b.changed.notify_all();
+  return Ok{};
+}
+
+Status ZstdFileWriter::stop_background() {
+  Background& b = *background_;
+  {
+    std::lock_guard lock(b.mutex);
+    b.closing = true;
+    b.changed.notify_all();
+  }
+  if (b.thread.joinable()) b.thread.join();
+  Status st = std::move(b.status);
+  background_.reset();
+  return st;
 }
 
 Status ZstdFileWriter::error(const std::string& what) const {
@@ -72,11 +146,24 @@ Status ZstdFileWriter::drain(int end_op, std::string_view bytes) {
 
 Status ZstdFileWriter::write(std::string_view bytes) {
   if (bytes.empty()) return Ok{};
-  return drain(ZSTD_e_continue, bytes);
+  if (background_ == nullptr) return drain(ZSTD_e_continue, bytes);
+  if (file_ == nullptr) return error("written after it was closed");
+  pending_.append(bytes);
+  return pending_.size() >= kChunkBytes ? hand_over() : Status(Ok{});
 }
 
 Status ZstdFileWriter::close() {
   if (file_ == nullptr) return Ok{};
+  if (background_ != nullptr) {
+    Status queued = pending_.empty() ? Status(Ok{}) : hand_over();
+    Status compressed = stop_background();
+    if (!queued || !compressed) {
+      std::fclose(file_);
+      file_ = nullptr;
+      context_.reset();
+      return !compressed ? compressed : queued;
+    }
+  }
   auto st = drain(ZSTD_e_end, {});
   const bool flushed = std::fflush(file_) == 0;
   const int saved_errno = errno;

@@ -379,6 +379,21 @@ double mean_time_to_slip_s(double jitter_rad, double bandwidth_hz, bool costas) 
   return std::numbers::pi * std::numbers::pi * rho * i0 * i0 / (2.0 * bandwidth_hz);
 }
 
+double slip_probability(double jitter_rad, double bandwidth_hz, bool costas, double interval_s) {
+  if (jitter_rad > 0.0 && bandwidth_hz > 0.0) {
+    const double rho = costas ? 1.0 / (4.0 * jitter_rad * jitter_rad) : 1.0 / (jitter_rad * jitter_rad);
+    // Beyond rho 300, T is infinite (mean_time_to_slip_s) and the probability zero.
+    if (rho >= 1.0 && rho <= 300.0) {
+      // I0(x) > e^x / sqrt(2 pi x) for x >= 1 (sqrt(2 pi x) e^-x I0(x) falls from 1.17 at x = 1
+      // towards its limit 1; test), so T > pi^2 rho e^(2 rho) / (2 pi rho 2 B) = pi e^(2 rho) / (4 B).
+      const double lower_bound_s = std::numbers::pi * std::exp(2.0 * rho) / (4.0 * bandwidth_hz);
+      const double upper_bound = -std::expm1(-interval_s / lower_bound_s);
+      if (upper_bound > 0.0 && upper_bound < 0x1p-60) return upper_bound;
+    }
+  }
+  return -std::expm1(-interval_s / mean_time_to_slip_s(jitter_rad, bandwidth_hz, costas));
+}
+
 bool has_data_modulation(const SignalInfo& signal) {
   // Pilot components, and data+pilot tracking (which follows the pilot), carry no navigation data
   // bits, hence no half-cycle ambiguity. RINEX 3 attributes of the pilot-tracked signals:

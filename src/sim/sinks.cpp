@@ -470,7 +470,11 @@ Result<std::unique_ptr<EpochSink>> make_table_sink(const RunContext& c, const ch
     if (!file) return file.error();
     stream = std::move(*file);
   } else {
-    auto file = io::ZstdFileWriter::create(c.staging_dir / (std::string(name) + ".zst"));
+    // With threads to spare, compressed on a thread of its own while the writer formats the next
+    // rows (the writer thread sets the pace of a run with truth: docs/performance.md).
+    io::ZstdWriteOptions options;
+    options.background_thread = c.threads >= 2;
+    auto file = io::ZstdFileWriter::create(c.staging_dir / (std::string(name) + ".zst"), options);
     if (!file) return file.error();
     stream = std::make_unique<CompressedFile>(std::move(*file));
   }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -237,6 +238,25 @@ TEST(ReceiverProfiles, CycleSlipTimeFollowsViterbi) {
   EXPECT_NEAR(mean_time_to_slip_s(0.25, 10.0, true), 252.13, 0.01);
   EXPECT_TRUE(std::isinf(mean_time_to_slip_s(0.01, 10.0, true)));
   EXPECT_TRUE(std::isinf(mean_time_to_slip_s(0.0, 10.0, true)));
+  // The slip probability's shortcut: the lower bound of T it rests on holds, and every draw on
+  // the uniform grid decides as with the exact probability, over the loop SNRs a run meets.
+  for (double rho = 0.05; rho < 320.0; rho *= 1.01) {
+    const double jitter_rad = 1.0 / std::sqrt(rho);
+    const double exact_s = mean_time_to_slip_s(jitter_rad, 15.0, false);
+    if (rho >= 1.0 && std::isfinite(exact_s)) {
+      EXPECT_GT(exact_s, std::numbers::pi * std::exp(2.0 * rho) / (4.0 * 15.0) * (1.0 - 1e-12)) << rho;
+    }
+    for (const double interval_s : {0.05, 1.0, 30.0}) {
+      const double exact = -std::expm1(-interval_s / exact_s);
+      const double fast = slip_probability(jitter_rad, 15.0, false, interval_s);
+      EXPECT_EQ(fast > 0.0, exact > 0.0) << rho;
+      if (exact >= 0x1p-60) EXPECT_EQ(fast, exact) << rho;
+      // The draws u = k 2^-53 nearest to the probabilities decide alike.
+      for (const double u : {0.0, 0x1p-53, 0x1p-52, std::floor(exact * 0x1p53) * 0x1p-53}) {
+        EXPECT_EQ(u < fast, u < exact) << rho << " " << u;
+      }
+    }
+  }
   // Jitter grows as C/N0 falls.
   const ReceiverProfile p = parse_profile(kValid, "mine.yaml").value();
   EXPECT_GT(pll_jitter_rad(p, 25.0), pll_jitter_rad(p, 45.0));

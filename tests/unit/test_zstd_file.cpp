@@ -53,6 +53,41 @@ TEST(ZstdFile, RoundTripInPiecesWithAndWithoutWorkers) {
   }
 }
 
+// The background thread compresses the same stream: the same bytes as the caller's thread, however
+// the writes are cut.
+TEST(ZstdFile, BackgroundThreadWritesTheSameBytes) {
+  const auto dir = test::make_temp_dir("zstd_file_background");
+  const std::string text = sample_table(300000);  // about 12 MB: a dozen chunks handed over
+  std::string reference;
+  for (const bool background : {false, true}) {
+    for (const size_t piece : {size_t{97}, size_t{4093}, size_t{3} << 20}) {
+      const auto path = dir / ("b" + std::to_string(background) + "_" + std::to_string(piece) + ".zst");
+      ZstdWriteOptions options;
+      options.background_thread = background;
+      auto writer = ZstdFileWriter::create(path, options);
+      ASSERT_TRUE(writer) << writer.error().message;
+      for (size_t at = 0; at < text.size(); at += piece) {
+        ASSERT_TRUE((*writer)->write(std::string_view(text).substr(at, piece)));
+      }
+      ASSERT_TRUE((*writer)->close());
+      EXPECT_FALSE((*writer)->write("late"));
+      const std::string bytes = read_bytes(path);
+      if (reference.empty()) reference = bytes;
+      EXPECT_TRUE(bytes == reference) << "background " << background << ", pieces of " << piece;
+    }
+  }
+  auto back = zstd_decompress(reference);
+  ASSERT_TRUE(back) << back.error().message;
+  EXPECT_TRUE(*back == text);
+  // A writer dropped unclosed stops its thread (no hang, no crash).
+  ZstdWriteOptions options;
+  options.background_thread = true;
+  auto dropped = ZstdFileWriter::create(dir / "dropped.zst", options);
+  ASSERT_TRUE(dropped);
+  ASSERT_TRUE((*dropped)->write(text));
+  dropped->reset();
+}
+
 TEST(ZstdFile, EmptyFileIsAFrameOfNothing) {
   const auto path = test::make_temp_dir("zstd_file_empty") / "e.zst";
   auto writer = ZstdFileWriter::create(path);
@@ -79,13 +114,21 @@ TEST(ZstdFile, TruncatedOrCorruptFramesAreRefused) {
 
 TEST(ZstdFile, FullDiskNamesTheFile) {
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
-  auto writer = ZstdFileWriter::create("/dev/full");
-  ASSERT_TRUE(writer) << writer.error().message;
-  Status st = (*writer)->write(sample_table(100000));
-  if (st) st = (*writer)->close();
-  ASSERT_FALSE(st);
-  EXPECT_NE(st.error().message.find("/dev/full: write failed (no space left on the device)"), std::string::npos)
-      << st.error().message;
+  for (const bool background : {false, true}) {
+    ZstdWriteOptions options;
+    options.background_thread = background;
+    auto writer = ZstdFileWriter::create("/dev/full", options);
+    ASSERT_TRUE(writer) << writer.error().message;
+    // Written in pieces, as a run does: with the background thread the failure comes back from a
+    // later write or from close().
+    Status st = Ok{};
+    const std::string text = sample_table(100000);
+    for (size_t at = 0; at < text.size() && st; at += 4096) st = (*writer)->write(std::string_view(text).substr(at, 4096));
+    if (st) st = (*writer)->close();
+    ASSERT_FALSE(st) << background;
+    EXPECT_NE(st.error().message.find("/dev/full: write failed (no space left on the device)"), std::string::npos)
+        << st.error().message;
+  }
 }
 
 TEST(ZstdFile, UncreatableFileIsRefused) {

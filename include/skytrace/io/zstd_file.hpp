@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdio>
+#include <condition_variable>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -23,6 +24,10 @@ struct ZstdWriteOptions {
   // own while write() returns. The decompressed content is the same either way; the compressed
   // bytes may differ between 0 and >= 1.
   int workers = 0;
+  // Compress on a thread of this writer's own, fed in chunks of about 1 MiB: the same bytes as on
+  // the caller's thread (libzstd's single-threaded stream does not depend on how its input is
+  // cut), while write() only copies (a run's writer thread formats the next rows meanwhile).
+  bool background_thread = false;
 };
 
 // Errors (ErrorCode::kOutput) name the file; a failed file is left for its caller to remove (the
@@ -43,14 +48,21 @@ class ZstdFileWriter {
 
  private:
   struct Context;
+  struct Background;
   ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context, int workers);
   [[nodiscard]] Status drain(int end_op, std::string_view bytes);
+  // Background thread: hands the pending chunk over (waiting while two are queued).
+  [[nodiscard]] Status hand_over();
+  // Background thread: waits until every chunk is compressed, stops the thread; its status.
+  [[nodiscard]] Status stop_background();
   [[nodiscard]] Status error(const std::string& what) const;
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::unique_ptr<Context> context_;
   std::string out_;  // one output block of ZSTD_CStreamOutSize()
   int workers_ = 0;
+  std::unique_ptr<Background> background_;
+  std::string pending_;  // bytes not yet handed to the background thread
 };
 
 // The decompressed content of a file of one or more zstd frames (checksums checked).

@@ -194,6 +194,12 @@ struct LoopNoiseState {
 // A Costas loop (data signals) slips by half cycles: its SNR is 1 / (4 sigma^2) instead of 1 / sigma^2.
 [[nodiscard]] double mean_time_to_slip_s(double jitter_rad, double bandwidth_hz, bool costas);
 
+// The probability of a slip within `interval_s`, 1 - exp(-interval_s / T), for a draw against a
+// uniform number on the grid k 2^-53 (RandomStream::uniform). Where a lower bound of T shows the
+// probability below 2^-60, the bound's probability (as far below the grid, and as non-zero) is
+// returned instead: every draw decides the same, without evaluating the Bessel function.
+[[nodiscard]] double slip_probability(double jitter_rad, double bandwidth_hz, bool costas, double interval_s);
+
 // Whether the signal carries navigation data on the tracked component (a Costas loop with a
 // half-cycle ambiguity) rather than a pilot.
 [[nodiscard]] bool has_data_modulation(const SignalInfo& signal);

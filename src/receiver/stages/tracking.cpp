@@ -159,9 +159,8 @@ TrackingState::CarrierArc TrackingState::carrier_arc(const ReceiverProfile& prof
     }
     RandomStream& slips = stream->second;
     const double loop_bandwidth_hz = aided ? profile.semicodeless_aiding_bandwidth_hz : profile.pll_bandwidth_hz;
-    const double mean_s =
-        mean_time_to_slip_s(pll_jitter_rad(profile, cn0_dbhz, loop_bandwidth_hz), loop_bandwidth_hz, data);
-    const double probability = -std::expm1(-(tag - *last_tag) / mean_s);
+    const double probability = slip_probability(pll_jitter_rad(profile, cn0_dbhz, loop_bandwidth_hz),
+                                                loop_bandwidth_hz, data, tag - *last_tag);
     if (slips.uniform() < probability) {
       // The slip is a whole number of cycles (half cycles of a Costas loop resolve again).
       const std::int64_t size = slips.uniform_int(1, 5);
