@@ -141,21 +141,27 @@ class ClockParser {
       offset = other;
     }
     const std::string_view name = field(line, 3, 4 + offset);
-    CalendarTime c;
-    const std::pair<const char*, std::pair<size_t, size_t>> int_fields[] = {
-        {"year", {8, 4}}, {"month", {12, 3}}, {"day", {15, 3}}, {"hour", {18, 3}}, {"minute", {21, 3}}};
-    int* targets[] = {&c.year, &c.month, &c.day, &c.hour, &c.minute};
-    for (size_t k = 0; k < 5; ++k) {
-      auto value = parse_integer(field(line, int_fields[k].second.first + offset, int_fields[k].second.second));
-      if (!value) return lines_.error_at(i, std::string(type) + " " + std::string(name) + " epoch " + int_fields[k].first + ": " + value.error().message);
-      *targets[k] = static_cast<int>(*value);
-    }
-    auto second = parse_fortran_double(field(line, 24 + offset, 10));
-    if (!second) return lines_.error_at(i, std::string(type) + " " + std::string(name) + " epoch second: " + second.error().message);
-    c.second = *second;
-    if (c.month < 1 || c.month > 12 || c.day < 1 || c.day > 31 || c.hour < 0 || c.hour > 24 || c.minute < 0 ||
-        c.minute > 59 || c.second < 0.0 || c.second >= 61.0) {
-      return lines_.error_at(i, std::string(type) + " " + std::string(name) + ": epoch out of range");
+    // Every record of an epoch repeats its time: parsed once per epoch.
+    const std::string_view epoch_text = line.substr(8 + offset, std::min<size_t>(line.size() - (8 + offset), 29));
+    if (epoch_text != last_epoch_text_) {
+      CalendarTime c;
+      const std::pair<const char*, std::pair<size_t, size_t>> int_fields[] = {
+          {"year", {8, 4}}, {"month", {12, 3}}, {"day", {15, 3}}, {"hour", {18, 3}}, {"minute", {21, 3}}};
+      int* targets[] = {&c.year, &c.month, &c.day, &c.hour, &c.minute};
+      for (size_t k = 0; k < 5; ++k) {
+        auto value = parse_integer(field(line, int_fields[k].second.first + offset, int_fields[k].second.second));
+        if (!value) return lines_.error_at(i, std::string(type) + " " + std::string(name) + " epoch " + int_fields[k].first + ": " + value.error().message);
+        *targets[k] = static_cast<int>(*value);
+      }
+      auto second = parse_fortran_double(field(line, 24 + offset, 10));
+      if (!second) return lines_.error_at(i, std::string(type) + " " + std::string(name) + " epoch second: " + second.error().message);
+      c.second = *second;
+      if (c.month < 1 || c.month > 12 || c.day < 1 || c.day > 31 || c.hour < 0 || c.hour > 24 || c.minute < 0 ||
+          c.minute > 59 || c.second < 0.0 || c.second >= 61.0) {
+        return lines_.error_at(i, std::string(type) + " " + std::string(name) + ": epoch out of range");
+      }
+      last_epoch_text_ = epoch_text;
+      last_epoch_ = GnssTime::from_calendar(c, data_.time_scale);
     }
     auto count = parse_integer(field(line, 34 + offset, 3));
     if (!count || *count < 1 || *count > 6) {
@@ -170,16 +176,27 @@ class ClockParser {
 
     auto satellite = SatelliteId::parse(name);
     if (!satellite) return lines_.error_at(i, "AS satellite: " + satellite.error().message);
-    // Values are separated by at least one blank (D19.12 with 1X), so tokens are safe.
-    const auto values = tokens(line.size() > 37 + offset ? line.substr(37 + offset) : std::string_view{});
-    if (values.empty()) return lines_.error_at(i, "AS " + satellite->to_string() + ": clock bias missing");
-    auto bias = parse_fortran_double(values[0]);
+    // Values are separated by at least one blank (D19.12 with 1X), so blank-separated words are
+    // safe; the first two are the bias and its sigma.
+    std::string_view rest = line.size() > 37 + offset ? line.substr(37 + offset) : std::string_view{};
+    const auto next_word = [&rest] {
+      const size_t start = rest.find_first_not_of(' ');
+      if (start == std::string_view::npos) return std::string_view{};
+      const size_t end = std::min(rest.find(' ', start), rest.size());
+      const std::string_view word = rest.substr(start, end - start);
+      rest.remove_prefix(end);
+      return word;
+    };
+    const std::string_view bias_text = next_word();
+    if (bias_text.empty()) return lines_.error_at(i, "AS " + satellite->to_string() + ": clock bias missing");
+    auto bias = parse_fortran_double(bias_text);
     if (!bias) return lines_.error_at(i, "AS " + satellite->to_string() + " clock bias: " + bias.error().message);
     ClockSample sample;
-    sample.time = GnssTime::from_calendar(c, data_.time_scale);
+    sample.time = last_epoch_;
     sample.bias_s = *bias;
-    if (*count >= 2 && values.size() >= 2) {
-      auto sigma = parse_fortran_double(values[1]);
+    const std::string_view sigma_text = *count >= 2 ? next_word() : std::string_view{};
+    if (!sigma_text.empty()) {
+      auto sigma = parse_fortran_double(sigma_text);
       if (!sigma) return lines_.error_at(i, "AS " + satellite->to_string() + " clock sigma: " + sigma.error().message);
       sample.sigma_s = *sigma;
     }
@@ -189,6 +206,8 @@ class ClockParser {
 
   const TextLines& lines_;
   RinexClockData data_;
+  std::string_view last_epoch_text_;  // columns of the last record's epoch, and its time
+  GnssTime last_epoch_;
   bool wide_ = false;
   size_t name_offset_ = 0;
 };

@@ -126,12 +126,15 @@ Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, co
   double step_s = move_to(c.clock_step_s());
   const double pseudorange_s = c.measurement->pseudorange_m / kC;
   double flight_time_s = (g.satellite_m - receiver_m).norm() / kC;
+  // Four passes at most; once the flight time repeats exactly, further passes would repeat too.
   for (int iteration = 0; iteration < 4; ++iteration) {
     if (receiver_clock_m) step_s = move_to(pseudorange_s - *receiver_clock_m / kC - flight_time_s);
     const Eigen::Vector3d at_transmission = g.satellite_m;
     g.satellite_m = rotate_earth_frame(at_transmission, kEarthRotation_radps * flight_time_s);
     g.range_m = (g.satellite_m - receiver_m).norm();
+    const double previous_flight_time_s = flight_time_s;
     flight_time_s = g.range_m / kC;
+    if (flight_time_s == previous_flight_time_s) break;
     if (iteration < 3) g.satellite_m = at_transmission;
   }
   g.satellite_velocity_mps =
@@ -374,8 +377,46 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     double variance_m2 = 0.0;
     Geometry geometry;
     std::string note;
+    // The model delays and the positions they were computed at.
+    std::optional<Eigen::Vector3d> ionosphere_at_m, troposphere_at_m;
+    double ionosphere_m = 0.0, troposphere_m = 0.0;
   };
   std::vector<State> states(candidates.size());
+
+  // The ionospheric (Klobuchar, scaled to the carrier) and tropospheric (Saastamoinen) delays of a
+  // candidate seen from a position on the Earth, reused near where they were last computed:
+  // - the ionosphere within 10 m: the pierce point 350 km up moves by as much, where the delay
+  //   changes by about 1e-6 of its value per metre of horizontal gradient (micrometres);
+  // - the troposphere within 1 mm: it follows the height directly (about 3e-4 of a height change
+  //   at the zenith, ten times that at 5 degrees), so only the final residuals, within the 0.1 mm
+  //   convergence step of the last iteration's position, reuse it.
+  constexpr double kIonosphereReuse_m = 10.0;
+  constexpr double kTroposphereReuse_m = 1e-3;
+  const auto atmosphere_delays = [&](State& st, const Candidate& c, const Eigen::Vector3d& position_m,
+                                     const Geodetic& geodetic, const GnssTime& reception, double& ionosphere_m,
+                                     double& troposphere_m) {
+    const auto moved_m = [&](const std::optional<Eigen::Vector3d>& from_m) {
+      return from_m ? (*from_m - position_m).norm() : std::numeric_limits<double>::infinity();
+    };
+    if (moved_m(st.ionosphere_at_m) > kIonosphereReuse_m) {
+      st.ionosphere_m = 0.0;
+      if (settings_.ionosphere_klobuchar && klobuchar_) {
+        const AzimuthElevation direction{st.geometry.azimuth_deg, st.geometry.elevation_deg};
+        st.ionosphere_m = atmosphere::klobuchar_delay_l1_m(*klobuchar_, reception, geodetic, direction).value_or(0.0) *
+                          std::pow(kFrequencyL1_Hz / c.carrier_hz, 2);
+      }
+      st.ionosphere_at_m = position_m;
+    }
+    if (moved_m(st.troposphere_at_m) > kTroposphereReuse_m) {
+      st.troposphere_m = 0.0;
+      if (settings_.troposphere_saastamoinen) {
+        st.troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, st.geometry.elevation_deg).value_or(0.0);
+      }
+      st.troposphere_at_m = position_m;
+    }
+    ionosphere_m = st.ionosphere_m;
+    troposphere_m = st.troposphere_m;
+  };
 
   const auto solve_code = [&](Eigen::Vector3d start_m, int max_iterations) {
     CodeSolution s;
@@ -408,14 +449,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
           continue;
         }
         double ionosphere_m = 0.0, troposphere_m = 0.0;
-        const AzimuthElevation direction{st.geometry.azimuth_deg, elevation_deg};
-        if (on_earth && settings_.ionosphere_klobuchar && klobuchar_) {
-          ionosphere_m = atmosphere::klobuchar_delay_l1_m(*klobuchar_, reception, geodetic, direction).value_or(0.0) *
-                         std::pow(kFrequencyL1_Hz / c.carrier_hz, 2);
-        }
-        if (on_earth && settings_.troposphere_saastamoinen) {
-          troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, elevation_deg).value_or(0.0);
-        }
+        if (on_earth) atmosphere_delays(st, c, s.position_m, geodetic, reception, ionosphere_m, troposphere_m);
         const double sin_el = std::max(std::sin(elevation_deg / kDegPerRad), 0.05);
         double variance_m2 = settings_.sigma_code_zenith_m * settings_.sigma_code_zenith_m +
                              std::pow(settings_.sigma_code_elevation_m / sin_el, 2);
@@ -543,15 +577,8 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       if (!st.used) continue;
       const Candidate& c = candidates[i];
       st.geometry = geometry_from(c, solution.position_m, &to_enu, solution.clock_m[solution.systems.front()]);
-      const AzimuthElevation direction{st.geometry.azimuth_deg, st.geometry.elevation_deg};
       double ionosphere_m = 0.0, troposphere_m = 0.0;
-      if (settings_.ionosphere_klobuchar && klobuchar_) {
-        ionosphere_m = atmosphere::klobuchar_delay_l1_m(*klobuchar_, reception, geodetic, direction).value_or(0.0) *
-                       std::pow(kFrequencyL1_Hz / c.carrier_hz, 2);
-      }
-      if (settings_.troposphere_saastamoinen) {
-        troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, st.geometry.elevation_deg).value_or(0.0);
-      }
+      atmosphere_delays(st, c, solution.position_m, geodetic, reception, ionosphere_m, troposphere_m);
       st.residual_m = c.measurement->pseudorange_m + st.geometry.clock_correction_m - ionosphere_m - troposphere_m -
                       st.geometry.range_m - solution.clock_m[c.system];
       h.block<1, 3>(row, 0) = -st.geometry.line_of_sight.transpose();

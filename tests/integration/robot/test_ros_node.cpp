@@ -80,6 +80,9 @@ class RosMaster {
       problem_ = "cannot start roscore";
       return;
     }
+    // The tests' main ends by std::quick_exit, without this object's destructor: stop roscore
+    // (and its rosmaster and rosout) there.
+    std::at_quick_exit([] { (void)instance().roscore_.stop(); });
     int argc = 0;
     ros::init(argc, nullptr, "skytrace_test", ros::init_options::AnonymousName | ros::init_options::NoSigintHandler);
     // A NodeHandle blocks until the master answers: wait for it first.
