@@ -9,8 +9,11 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
+#include <algorithm>
 
 #include "skytrace/orbits/precise.hpp"
+#include "skytrace/orbits/precise_cache.hpp"
 
 namespace {
 
@@ -55,6 +58,33 @@ void BM_State(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_State)->Arg(1)->Arg(0)->ArgName("two_body");
+
+// The same states as a run's generator asks for them: 40 satellites each 1 s (the fits per SP3
+// interval of PreciseOrbitCache, refitted every 900 s; Arg 0: the full interpolation every time).
+void BM_StateSequential(benchmark::State& state) {
+  const auto orbit_path = shared_file(kOrbit);
+  const auto clock_path = shared_file(kClock);
+  if (!std::filesystem::exists(orbit_path) || !std::filesystem::exists(clock_path)) {
+    return state.SkipWithError("shared data absent");
+  }
+  auto source = PreciseEphemerides::create(read_sp3(orbit_path).value(), read_rinex_clock(clock_path).value());
+  if (!source.ok()) return state.SkipWithError(source.error().message.c_str());
+  const auto view = state.range(0) != 0 ? source->sequential_view() : nullptr;
+  const SatelliteStateSource& states = view != nullptr ? *view : *source;
+  std::vector<SatelliteId> satellites = source->satellites();
+  satellites.resize(std::min<size_t>(satellites.size(), 40));
+  const GnssTime start = GnssTime::from_calendar({2020, 6, 25, 2, 0, 0.0}, TimeScale::kGpst);
+  double offset_s = 0.0;
+  size_t next = 0;
+  for (auto _ : state) {
+    if (next == satellites.size()) {
+      next = 0;
+      offset_s = offset_s > 72000.0 ? 0.0 : offset_s + 1.0;
+    }
+    benchmark::DoNotOptimize(states.state(satellites[next++], start + offset_s));
+  }
+}
+BENCHMARK(BM_StateSequential)->Arg(1)->Arg(0)->ArgName("cache");
 
 }  // namespace
 
