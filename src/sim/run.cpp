@@ -14,6 +14,7 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <future>
 #include <thread>
 #include <cmath>
 #include <random>
@@ -554,8 +555,22 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (fixer_error) return *fixer_error;
     if (!consumed) return consumed.error();
   }
-  for (auto& sink : *sinks) {
-    if (auto st = sink->finish(); !st) return st.error();
+  // The sinks end their files (the report draws its pages then, the bag and the compressed truth
+  // write their last blocks): side by side when threads allow; errors in the sinks' order.
+  if (threads >= 2 && sinks->size() > 1) {
+    std::vector<std::future<Status>> finishing;
+    finishing.reserve(sinks->size());
+    for (auto& sink : *sinks) finishing.push_back(std::async(std::launch::async, [&sink] { return sink->finish(); }));
+    std::optional<Error> first_error;
+    for (auto& f : finishing) {
+      Status st = f.get();
+      if (!st && !first_error) first_error = st.error();
+    }
+    if (first_error) return *first_error;
+  } else {
+    for (auto& sink : *sinks) {
+      if (auto st = sink->finish(); !st) return st.error();
+    }
   }
   const orbits::NavigationData used = used_navigation(ephemerides.data(), receivers);
   orbits::RinexNavWriteOptions nav_options;

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <future>
 #include <cmath>
 #include <cstdlib>
 #include <ctime>
@@ -249,6 +250,13 @@ std::vector<Signal> served_signals(const ReceiverSettings& receiver, const std::
 
 Result<ScenarioResources> prepare_resources(const Scenario& s) {
   ScenarioResources r;
+  // The precise clock file, the largest input of most runs (a day at 30 s: 17 MB), is read on a
+  // thread of its own while the world and the navigation files load; its error, if any, comes
+  // where it would come reading in order.
+  std::future<Result<orbits::RinexClockData>> clock_file;
+  if (!s.ephemeris.precise_orbits.empty() && !s.ephemeris.precise_clocks.empty()) {
+    clock_file = std::async(std::launch::async, [&s] { return orbits::read_rinex_clock(s.ephemeris.precise_clocks); });
+  }
   auto world = load_world(s);
   if (!world) return world.error();
   r.world = std::move(*world);
@@ -288,7 +296,7 @@ Result<ScenarioResources> prepare_resources(const Scenario& s) {
     if (!orbits_data) return orbits_data.error();
     std::optional<orbits::RinexClockData> clocks;
     if (!s.ephemeris.precise_clocks.empty()) {
-      auto clock_data = orbits::read_rinex_clock(s.ephemeris.precise_clocks);
+      auto clock_data = clock_file.get();
       if (!clock_data) return clock_data.error();
       clocks = std::move(*clock_data);
     }
