@@ -72,5 +72,29 @@ TEST(DecimalText, SpecialValuesAndLimits) {
   EXPECT_EQ(fast(22709884.44575, 4), reference(22709884.44575, 4));
 }
 
+TEST(DecimalText, CsvRowsBuiltInTheirBufferComeOutWhole) {
+  std::string out = "head\n";
+  {
+    CsvRow row(out);
+    row.empty(2).text("a").fixed(-1.25, 1).integer(-42).raw(",,").empty().fixed(0.5, 0).end();
+  }
+  EXPECT_EQ(out, "head\n,,a,-1.2,-42,,,,,0\n");  // -1.25 and 0.5 are exact ties: to_chars's rounding
+  // A row longer than the buffer, and a text cell longer than half of it.
+  out.clear();
+  const std::string long_text(1500, 'x');
+  {
+    CsvRow row(out);
+    for (int i = 0; i < 400; ++i) row.fixed(22709884.4458 + i, 4);
+    row.text(long_text).text("end");
+  }  // no end(): the cells come out when the row goes
+  std::string expected;
+  for (int i = 0; i < 400; ++i) {
+    if (i > 0) expected += ',';
+    append_fixed_slow(expected, 22709884.4458 + i, 4);
+  }
+  expected += "," + long_text + ",end";
+  EXPECT_EQ(out, expected);
+}
+
 }  // namespace
 }  // namespace skytrace

@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 
@@ -19,49 +20,62 @@ inline void append_fixed_slow(std::string& out, double value, int decimals) {
   out.append(buffer, written.ptr);
 }
 
-// The same characters, about three times faster for the table's usual values: value * 10^decimals
-// is one correctly rounded product, so where it is not within its own rounding error of a
-// half-integer, rounding it to the nearest integer rounds the exact decimal value the same way;
-// other values (near a tie, too large, nan, inf) go to std::to_chars.
-inline void append_fixed(std::string& out, double value, int decimals) {
+// The same characters written at `p` (room for 352 bytes), returning the end, about three times
+// faster for the table's usual values: value * 10^decimals is one correctly rounded product, so
+// where it is not within its own rounding error of a half-integer, rounding it to the nearest
+// integer rounds the exact decimal value the same way; other values (near a tie, too large, nan,
+// inf) go to std::to_chars.
+inline char* write_fixed(char* p, double value, int decimals) {
   static constexpr double kPowerOfTen[] = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
   static constexpr std::uint64_t kIntegerPowerOfTen[] = {1,         10,         100,         1000,     10000,
                                                          100000,    1000000,    10000000,    100000000, 1000000000};
   constexpr double kLargest = 4.0e15;  // below 2^53: every integer up to it is a double
-  if (decimals < 0 || decimals > 9) {
-    append_fixed_slow(out, value, decimals);
-    return;
-  }
+  const auto slow = [&] { return std::to_chars(p, p + 352, value, std::chars_format::fixed, decimals).ptr; };
+  if (decimals < 0 || decimals > 9) return slow();
   const double scaled = std::abs(value) * kPowerOfTen[decimals];  // NaN fails the test below
-  if (!(scaled < kLargest)) {
-    append_fixed_slow(out, value, decimals);
-    return;
+  if (!(scaled < kLargest)) return slow();
+  const auto whole = static_cast<std::uint64_t>(scaled);  // the floor: scaled is not negative
+  const double remainder = scaled - static_cast<double>(whole);
+  if (std::abs(remainder - 0.5) <= scaled * 0x1p-51 + 0x1p-60) return slow();
+  std::uint64_t digits = remainder > 0.5 ? whole + 1 : whole;
+  // Written from the last digit, two at a time, straight into place: first the length.
+  static constexpr char kPairs[] =
+      "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+      "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+      "8081828384858687888990919293949596979899";
+  std::uint64_t fraction = digits % kIntegerPowerOfTen[decimals];
+  std::uint64_t integer = digits / kIntegerPowerOfTen[decimals];
+  int integer_digits = 1;
+  for (std::uint64_t rest = integer; rest >= 10; rest /= 10) ++integer_digits;
+  if (std::signbit(value)) *p++ = '-';
+  char* const end = p + integer_digits + (decimals > 0 ? decimals + 1 : 0);
+  char* q = end;
+  int left = decimals;
+  for (; left >= 2; left -= 2) {
+    q -= 2;
+    std::memcpy(q, kPairs + 2 * (fraction % 100), 2);
+    fraction /= 100;
   }
-  const double whole = std::floor(scaled);
-  const double distance_from_tie = std::abs(scaled - whole - 0.5);
-  if (distance_from_tie <= scaled * 0x1p-51 + 0x1p-60) {
-    append_fixed_slow(out, value, decimals);
-    return;
+  if (left == 1) *--q = static_cast<char>('0' + fraction);
+  if (decimals > 0) *--q = '.';
+  while (integer >= 100) {
+    q -= 2;
+    std::memcpy(q, kPairs + 2 * (integer % 100), 2);
+    integer /= 100;
   }
-  auto digits = static_cast<std::uint64_t>(scaled - whole > 0.5 ? whole + 1.0 : whole);
-  char buffer[40];
-  char* end = buffer + sizeof buffer;
-  char* p = end;
-  if (decimals > 0) {
-    std::uint64_t fraction = digits % kIntegerPowerOfTen[decimals];
-    digits /= kIntegerPowerOfTen[decimals];
-    for (int i = 0; i < decimals; ++i) {
-      *--p = static_cast<char>('0' + fraction % 10);
-      fraction /= 10;
-    }
-    *--p = '.';
+  if (integer >= 10) {
+    q -= 2;
+    std::memcpy(q, kPairs + 2 * integer, 2);
+  } else {
+    *--q = static_cast<char>('0' + integer);
   }
-  do {
-    *--p = static_cast<char>('0' + digits % 10);
-    digits /= 10;
-  } while (digits != 0);
-  if (std::signbit(value)) *--p = '-';
-  out.append(p, end);
+  return end;
+}
+
+// `value` with `decimals` digits after the point, appended to `out` (write_fixed's characters).
+inline void append_fixed(std::string& out, double value, int decimals) {
+  char buffer[360];
+  out.append(buffer, write_fixed(buffer, value, decimals));
 }
 
 inline void append_integer(std::string& out, std::int64_t value) {
@@ -71,47 +85,78 @@ inline void append_integer(std::string& out, std::int64_t value) {
 }
 
 // Cells of a comma-separated row: each call appends one cell after a separator (none before the
-// first cell of the row). end() ends the row.
+// first cell of the row). end() ends the row. The row is built in a buffer of its own and appended
+// to `out` once (at end() or when the row object goes), not cell by cell.
 class CsvRow {
  public:
-  explicit CsvRow(std::string& out) : out_(out) {}
+  explicit CsvRow(std::string& out) : out_(out), cursor_(buffer_) {}
+  ~CsvRow() { flush(); }
+  CsvRow(const CsvRow&) = delete;
+  CsvRow& operator=(const CsvRow&) = delete;
+
   CsvRow& fixed(double value, int decimals) {
+    make_room(kNumberRoom);
     separate();
-    append_fixed(out_, value, decimals);
+    cursor_ = write_fixed(cursor_, value, decimals);
     return *this;
   }
   CsvRow& integer(std::int64_t value) {
+    make_room(32);
     separate();
-    append_integer(out_, value);
+    cursor_ = std::to_chars(cursor_, cursor_ + 24, value).ptr;
     return *this;
   }
   // Text as it is (the caller quotes it when it may hold a comma).
   CsvRow& text(std::string_view value) {
+    if (value.size() + 1 > kBufferBytes / 2) {
+      separate_into_out();
+      out_.append(value);
+      return *this;
+    }
+    make_room(value.size() + 1);
     separate();
-    out_.append(value);
+    std::memcpy(cursor_, value.data(), value.size());
+    cursor_ += value.size();
     return *this;
   }
   // Several cells already joined by commas (or empty cells: ",,,").
-  CsvRow& raw(std::string_view cells) {
-    separate();
-    out_.append(cells);
-    return *this;
-  }
+  CsvRow& raw(std::string_view cells) { return text(cells); }
   CsvRow& empty(int count = 1) {
-    for (int i = 0; i < count; ++i) separate();
+    for (int i = 0; i < count; ++i) {
+      make_room(1);
+      separate();
+    }
     return *this;
   }
   void end() {
-    out_.push_back('\n');
+    make_room(1);
+    *cursor_++ = '\n';
     first_ = true;
+    flush();
   }
 
  private:
+  static constexpr size_t kBufferBytes = 2048;
+  static constexpr size_t kNumberRoom = 360;  // a separator and write_fixed's longest text
   void separate() {
+    if (!first_) *cursor_++ = ',';
+    first_ = false;
+  }
+  void separate_into_out() {
+    flush();
     if (!first_) out_.push_back(',');
     first_ = false;
   }
+  void make_room(size_t bytes) {
+    if (static_cast<size_t>(buffer_ + kBufferBytes - cursor_) < bytes) flush();
+  }
+  void flush() {
+    if (cursor_ != buffer_) out_.append(buffer_, cursor_);
+    cursor_ = buffer_;
+  }
   std::string& out_;
+  char buffer_[kBufferBytes];
+  char* cursor_;
   bool first_ = true;
 };
 
