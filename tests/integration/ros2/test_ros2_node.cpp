@@ -401,6 +401,10 @@ TEST_F(Ros2NodeTest, SimTimeClockDrivesTheEpochsAndAJumpBackRestartsTheReceiver)
   auto& clock = peer_->advertise("rt/clock", dds_type("rosgraph_msgs", "Clock"), Qos::default_profile());
   start_node({"-p", "use_sim_time:=true", "-p", "rate_hz:=2"});
   ASSERT_TRUE(wait_until([&] { return log_has("waiting for the clock"); }, 20s)) << log_text();
+  // /clock is volatile: what is written before discovery matched the node's reader is lost (under
+  // load, discovery took longer than the 1.2 s of clock below, and the node saw no clock at all).
+  ASSERT_TRUE(wait_until([&] { return clock.matched() >= 1; }, 20s)) << "the node's /clock reader was not discovered";
+  std::this_thread::sleep_for(300ms);  // the reader's side of the match
 
   // Simulation time from 100 s, 0.1 s per publication (faster than wall time).
   double sim_s = 100.0;
