@@ -13,11 +13,16 @@
 
 namespace skytrace {
 
-// `value` with `decimals` digits after the point (0-17), exactly as std::to_chars writes it.
+// `value` with `decimals` digits after the point (0-17) written at `p` (room for 352 bytes: 309
+// digits, sign, point, 17 decimals) by std::to_chars, the reference; returns the end.
+inline char* write_fixed_to_chars(char* p, double value, int decimals) {
+  return std::to_chars(p, p + 352, value, std::chars_format::fixed, decimals).ptr;
+}
+
+// The same, appended to `out` (the tests' reference).
 inline void append_fixed_slow(std::string& out, double value, int decimals) {
-  char buffer[352];  // the longest fixed text of a double: 309 digits, sign, point, 17 decimals
-  const auto written = std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::fixed, decimals);
-  out.append(buffer, written.ptr);
+  char buffer[352];
+  out.append(buffer, write_fixed_to_chars(buffer, value, decimals));
 }
 
 // The same characters written at `p` (room for 352 bytes), returning the end, about three times
@@ -30,7 +35,7 @@ inline char* write_fixed(char* p, double value, int decimals) {
   static constexpr std::uint64_t kIntegerPowerOfTen[] = {1,         10,         100,         1000,     10000,
                                                          100000,    1000000,    10000000,    100000000, 1000000000};
   constexpr double kLargest = 4.0e15;  // below 2^53: every integer up to it is a double
-  const auto slow = [&] { return std::to_chars(p, p + 352, value, std::chars_format::fixed, decimals).ptr; };
+  const auto slow = [&] { return write_fixed_to_chars(p, value, decimals); };
   if (decimals < 0 || decimals > 9) return slow();
   const double scaled = std::abs(value) * kPowerOfTen[decimals];  // NaN fails the test below
   if (!(scaled < kLargest)) return slow();
@@ -76,12 +81,6 @@ inline char* write_fixed(char* p, double value, int decimals) {
 inline void append_fixed(std::string& out, double value, int decimals) {
   char buffer[360];
   out.append(buffer, write_fixed(buffer, value, decimals));
-}
-
-inline void append_integer(std::string& out, std::int64_t value) {
-  char buffer[24];
-  const auto written = std::to_chars(buffer, buffer + sizeof buffer, value);
-  out.append(buffer, written.ptr);
 }
 
 // Cells of a comma-separated row: each call appends one cell after a separator (none before the
