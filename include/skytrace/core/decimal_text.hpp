@@ -25,44 +25,61 @@ inline void append_fixed_slow(std::string& out, double value, int decimals) {
   out.append(buffer, write_fixed_to_chars(buffer, value, decimals));
 }
 
-// The same characters written at `p` (room for 352 bytes), returning the end, about three times
-// faster for the table's usual values: value * 10^decimals is one correctly rounded product, so
-// where it is not within its own rounding error of a half-integer, rounding it to the nearest
-// integer rounds the exact decimal value the same way; other values (near a tie, too large, nan,
-// inf) go to std::to_chars.
-inline char* write_fixed(char* p, double value, int decimals) {
-  static constexpr double kPowerOfTen[] = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
-  static constexpr std::uint64_t kIntegerPowerOfTen[] = {1,         10,         100,         1000,     10000,
-                                                         100000,    1000000,    10000000,    100000000, 1000000000};
+namespace decimal_text_detail {
+
+inline constexpr double kPowerOfTen[] = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
+// 10^0 .. 10^16: the integer part of a value below kLargest has at most 16 digits.
+inline constexpr std::uint64_t kIntegerPowerOfTen[] = {1ULL,
+                                                      10ULL,
+                                                      100ULL,
+                                                      1000ULL,
+                                                      10000ULL,
+                                                      100000ULL,
+                                                      1000000ULL,
+                                                      10000000ULL,
+                                                      100000000ULL,
+                                                      1000000000ULL,
+                                                      10000000000ULL,
+                                                      100000000000ULL,
+                                                      1000000000000ULL,
+                                                      10000000000000ULL,
+                                                      100000000000000ULL,
+                                                      1000000000000000ULL,
+                                                      10000000000000000ULL};
+inline constexpr char kPairs[] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
+
+// write_fixed with the number of decimals known when compiling: the divisions by 10^decimals
+// become multiplications (a division by a variable power of ten was most of the time).
+template <int Decimals>
+char* write_fixed_exact(char* p, double value) {
+  static_assert(Decimals >= 0 && Decimals <= 9);
   constexpr double kLargest = 4.0e15;  // below 2^53: every integer up to it is a double
-  const auto slow = [&] { return write_fixed_to_chars(p, value, decimals); };
-  if (decimals < 0 || decimals > 9) return slow();
-  const double scaled = std::abs(value) * kPowerOfTen[decimals];  // NaN fails the test below
-  if (!(scaled < kLargest)) return slow();
+  constexpr std::uint64_t kScale = kIntegerPowerOfTen[Decimals];
+  const double scaled = std::abs(value) * kPowerOfTen[Decimals];  // NaN fails the test below
+  if (!(scaled < kLargest)) return write_fixed_to_chars(p, value, Decimals);
   const auto whole = static_cast<std::uint64_t>(scaled);  // the floor: scaled is not negative
   const double remainder = scaled - static_cast<double>(whole);
-  if (std::abs(remainder - 0.5) <= scaled * 0x1p-51 + 0x1p-60) return slow();
-  std::uint64_t digits = remainder > 0.5 ? whole + 1 : whole;
+  if (std::abs(remainder - 0.5) <= scaled * 0x1p-51 + 0x1p-60) return write_fixed_to_chars(p, value, Decimals);
+  const std::uint64_t digits = remainder > 0.5 ? whole + 1 : whole;
   // Written from the last digit, two at a time, straight into place: first the length.
-  static constexpr char kPairs[] =
-      "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-      "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-      "8081828384858687888990919293949596979899";
-  std::uint64_t fraction = digits % kIntegerPowerOfTen[decimals];
-  std::uint64_t integer = digits / kIntegerPowerOfTen[decimals];
+  std::uint64_t fraction = digits % kScale;
+  std::uint64_t integer = digits / kScale;
   int integer_digits = 1;
-  for (std::uint64_t rest = integer; rest >= 10; rest /= 10) ++integer_digits;
+  while (integer >= kIntegerPowerOfTen[integer_digits]) ++integer_digits;
   if (std::signbit(value)) *p++ = '-';
-  char* const end = p + integer_digits + (decimals > 0 ? decimals + 1 : 0);
+  char* const end = p + integer_digits + (Decimals > 0 ? Decimals + 1 : 0);
   char* q = end;
-  int left = decimals;
+  int left = Decimals;
   for (; left >= 2; left -= 2) {
     q -= 2;
     std::memcpy(q, kPairs + 2 * (fraction % 100), 2);
     fraction /= 100;
   }
   if (left == 1) *--q = static_cast<char>('0' + fraction);
-  if (decimals > 0) *--q = '.';
+  if (Decimals > 0) *--q = '.';
   while (integer >= 100) {
     q -= 2;
     std::memcpy(q, kPairs + 2 * (integer % 100), 2);
@@ -75,6 +92,30 @@ inline char* write_fixed(char* p, double value, int decimals) {
     *--q = static_cast<char>('0' + integer);
   }
   return end;
+}
+
+}  // namespace decimal_text_detail
+
+// The same characters written at `p` (room for 352 bytes), returning the end, several times
+// faster for the table's usual values: value * 10^decimals is one correctly rounded product, so
+// where it is not within its own rounding error of a half-integer, rounding it to the nearest
+// integer rounds the exact decimal value the same way; other values (near a tie, too large, nan,
+// inf) go to std::to_chars.
+inline char* write_fixed(char* p, double value, int decimals) {
+  using decimal_text_detail::write_fixed_exact;
+  switch (decimals) {
+    case 0: return write_fixed_exact<0>(p, value);
+    case 1: return write_fixed_exact<1>(p, value);
+    case 2: return write_fixed_exact<2>(p, value);
+    case 3: return write_fixed_exact<3>(p, value);
+    case 4: return write_fixed_exact<4>(p, value);
+    case 5: return write_fixed_exact<5>(p, value);
+    case 6: return write_fixed_exact<6>(p, value);
+    case 7: return write_fixed_exact<7>(p, value);
+    case 8: return write_fixed_exact<8>(p, value);
+    case 9: return write_fixed_exact<9>(p, value);
+    default: return write_fixed_to_chars(p, value, decimals);
+  }
 }
 
 // `value` with `decimals` digits after the point, appended to `out` (write_fixed's characters).
