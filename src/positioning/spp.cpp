@@ -107,9 +107,25 @@ struct Geometry {
   double satellite_clock_m = 0.0;  // c (dt_sv + dt_rel) at transmission
   Eigen::Vector3d line_of_sight;   // unit, receiver to satellite (ECEF)
   double range_m = 0.0;
+  // Seen from a place on the Earth (has_local): the satellite's local east-north-up offset and the
+  // sine of its elevation; the angles themselves are worked out only where something needs them
+  // (with_direction): the iterations need the sine alone.
+  bool has_local = false;
+  Eigen::Vector3d enu_m = Eigen::Vector3d::Zero();
+  double sin_elevation = 1.0;
+  bool has_direction = false;
   double elevation_deg = 90.0;
   double azimuth_deg = 0.0;
 };
+
+// The elevation and azimuth of a geometry seen from the Earth (90 and 0 deg otherwise).
+void with_direction(Geometry& g) {
+  if (!g.has_local || g.has_direction) return;
+  g.elevation_deg = std::atan2(g.enu_m.z(), std::hypot(g.enu_m.x(), g.enu_m.y())) * kDegPerRad;
+  const double azimuth_deg = std::atan2(g.enu_m.x(), g.enu_m.y()) * kDegPerRad;
+  g.azimuth_deg = azimuth_deg < 0.0 ? azimuth_deg + 360.0 : azimuth_deg;
+  g.has_direction = true;
+}
 
 // With the receiver's clock for the satellite's system known, the transmission time is the true
 // reception time minus the flight time (light-time iteration, exactly as the signal was made);
@@ -141,10 +157,9 @@ Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, co
       rotate_earth_frame(c.velocity_mps + c.acceleration_mps2 * step_s, kEarthRotation_radps * flight_time_s);
   g.line_of_sight = (g.satellite_m - receiver_m) / g.range_m;
   if (to_enu != nullptr) {
-    const Eigen::Vector3d enu = *to_enu * (g.satellite_m - receiver_m);
-    g.elevation_deg = std::atan2(enu.z(), std::hypot(enu.x(), enu.y())) * kDegPerRad;
-    const double azimuth_deg = std::atan2(enu.x(), enu.y()) * kDegPerRad;
-    g.azimuth_deg = azimuth_deg < 0.0 ? azimuth_deg + 360.0 : azimuth_deg;
+    g.has_local = true;
+    g.enu_m = *to_enu * (g.satellite_m - receiver_m);
+    g.sin_elevation = g.enu_m.z() / g.enu_m.norm();
   }
   return g;
 }
@@ -181,6 +196,11 @@ double regularized_gamma_p(double a, double x) {
 }
 
 // A weighted least-squares solution of the code equations for a given set of satellites.
+// The normal equations of the code solution: position and one clock per system, on the stack.
+constexpr int kMaxUnknowns = 3 + kMaxSystems;
+using NormalMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxUnknowns, kMaxUnknowns>;
+using NormalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxUnknowns, 1>;
+
 struct CodeSolution {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   std::array<double, kMaxSystems> clock_m{};
@@ -401,6 +421,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     if (moved_m(st.ionosphere_at_m) > kIonosphereReuse_m) {
       st.ionosphere_m = 0.0;
       if (settings_.ionosphere_klobuchar && klobuchar_) {
+        with_direction(st.geometry);
         const AzimuthElevation direction{st.geometry.azimuth_deg, st.geometry.elevation_deg};
         st.ionosphere_m = atmosphere::klobuchar_delay_l1_m(*klobuchar_, reception, geodetic, direction).value_or(0.0) *
                           std::pow(kFrequencyL1_Hz / c.carrier_hz, 2);
@@ -410,6 +431,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     if (moved_m(st.troposphere_at_m) > kTroposphereReuse_m) {
       st.troposphere_m = 0.0;
       if (settings_.troposphere_saastamoinen) {
+        with_direction(st.geometry);
         st.troposphere_m = atmosphere::saastamoinen_delay_m(geodetic, st.geometry.elevation_deg).value_or(0.0);
       }
       st.troposphere_at_m = position_m;
@@ -418,6 +440,9 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     troposphere_m = st.troposphere_m;
   };
 
+  // The mask as the sine of the elevation (what the geometry gives without an arc tangent).
+  const double sin_mask = std::sin(settings_.elevation_mask_deg / kDegPerRad);
+  std::vector<double> observed_m;  // per candidate: the corrected code of the iteration
   const auto solve_code = [&](Eigen::Vector3d start_m, int max_iterations) {
     CodeSolution s;
     s.position_m = start_m;
@@ -432,7 +457,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       // The receiver clock of the previous iteration dates the reception for the ionosphere.
       const GnssTime reception = tag - (s.systems.empty() ? 0.0 : s.clock_m[s.systems.front()]) / kC;
       std::array<int, kMaxSystems> per_system{};
-      std::vector<double> observed_m(candidates.size(), 0.0);
+      observed_m.assign(candidates.size(), 0.0);
       for (size_t i = 0; i < candidates.size(); ++i) {
         const Candidate& c = candidates[i];
         State& st = states[i];
@@ -443,14 +468,13 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
         if (on_earth && !s.systems.empty()) receiver_clock_m = s.clock_m[s.systems.front()];
         st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr, receiver_clock_m);
         if (st.rejected) continue;
-        const double elevation_deg = st.geometry.elevation_deg;
-        if (on_earth && elevation_deg < settings_.elevation_mask_deg) {
+        if (on_earth && st.geometry.sin_elevation < sin_mask) {
           st.note = "below the elevation mask";
           continue;
         }
         double ionosphere_m = 0.0, troposphere_m = 0.0;
         if (on_earth) atmosphere_delays(st, c, s.position_m, geodetic, reception, ionosphere_m, troposphere_m);
-        const double sin_el = std::max(std::sin(elevation_deg / kDegPerRad), 0.05);
+        const double sin_el = std::max(st.geometry.sin_elevation, 0.05);
         double variance_m2 = settings_.sigma_code_zenith_m * settings_.sigma_code_zenith_m +
                              std::pow(settings_.sigma_code_elevation_m / sin_el, 2);
         if (settings_.weight_by_cn0 && c.measurement->cn0_dbhz > 0.0) {
@@ -492,26 +516,30 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
                     " unknowns (position and " + std::to_string(s.systems.size()) + " clock(s))";
         return s;
       }
-      Eigen::MatrixXd h(used, unknowns);
-      Eigen::VectorXd y(used), w(used);
-      h.setZero();
-      int row = 0;
+      // The normal equations N x = b summed row by row: a row is (-line of sight, 1 in its
+      // system's clock column), so each adds a 3x3 block, its clock's column and diagonal.
+      NormalMatrix normal = NormalMatrix::Zero(unknowns, unknowns);
+      NormalVector rhs = NormalVector::Zero(unknowns);
       for (size_t i = 0; i < candidates.size(); ++i) {
         if (!states[i].used) continue;
-        h.block<1, 3>(row, 0) = -states[i].geometry.line_of_sight.transpose();
-        h(row, column[candidates[i].system]) = 1.0;
-        y(row) = observed_m[i] - states[i].geometry.range_m;
-        w(row) = 1.0 / states[i].variance_m2;
-        ++row;
+        const Eigen::Vector3d& e = states[i].geometry.line_of_sight;
+        const int k = column[candidates[i].system];
+        const double w = 1.0 / states[i].variance_m2;
+        const double y = observed_m[i] - states[i].geometry.range_m;
+        normal.topLeftCorner<3, 3>().noalias() += (w * e) * e.transpose();
+        normal.block<3, 1>(0, k) -= w * e;
+        normal(k, k) += w;
+        rhs.head<3>() -= (w * y) * e;
+        rhs(k) += w * y;
       }
-      const Eigen::MatrixXd normal = h.transpose() * w.asDiagonal() * h;
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(normal);
+      for (int k = 3; k < unknowns; ++k) normal.block<1, 3>(k, 0) = normal.block<3, 1>(0, k).transpose();
+      const Eigen::LDLT<NormalMatrix> ldlt(normal);
       if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || std::abs(ldlt.vectorD().minCoeff()) < 1e-12) {
         s.message = "singular geometry";
         return s;
       }
       // The unknowns: position step and the full clocks (the equations are linear in the clocks).
-      const Eigen::VectorXd x = ldlt.solve(h.transpose() * (w.asDiagonal() * y));
+      const NormalVector x = ldlt.solve(rhs);
       const Eigen::Vector3d dx = x.head<3>();
       s.position_m += dx;
       for (size_t k = 0; k < s.systems.size(); ++k) s.clock_m[s.systems[k]] = x(3 + static_cast<Eigen::Index>(k));
@@ -626,7 +654,8 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
 
   for (size_t i = 0; i < candidates.size(); ++i) {
     SatelliteUse& use = fix.satellites[candidates[i].use_index];
-    const State& st = states[i];
+    State& st = states[i];
+    with_direction(st.geometry);
     use.direction = {st.geometry.azimuth_deg, st.geometry.elevation_deg};
     use.used = solution.converged && st.used;
     use.rejected = st.rejected;
@@ -685,7 +714,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       h.block<1, 3>(r, 0) = -g.line_of_sight.transpose() / scale;
       h(r, 3) = 1.0;
       y(r) = -wavelength_m * *c.measurement->doppler_hz + kC * c.clock_rate_s_per_s - sat_term / scale;
-      const double sin_el = std::max(std::sin(g.elevation_deg / kDegPerRad), 0.05);
+      const double sin_el = std::max(g.sin_elevation, 0.05);
       w(r) = 2.0 / (settings_.sigma_doppler_mps * settings_.sigma_doppler_mps * (1.0 + 1.0 / (sin_el * sin_el)));
     }
     const Eigen::MatrixXd normal = h.transpose() * w.asDiagonal() * h;
