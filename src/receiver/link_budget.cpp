@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace skytrace::receiver {
@@ -156,7 +157,14 @@ double squaring_loss_db(double cn0_dbhz, double predetection_time_s) {
 }
 
 double noise_density_dbw_per_hz(double system_noise_temperature_k) {
-  return kBoltzmann_dbw_per_k_hz + 10.0 * std::log10(system_noise_temperature_k);
+  // Every signal of a receiver asks with the same temperature: the last answer is kept.
+  thread_local double last_temperature_k = std::numeric_limits<double>::quiet_NaN();
+  thread_local double last_density = 0.0;
+  if (system_noise_temperature_k != last_temperature_k) {
+    last_temperature_k = system_noise_temperature_k;
+    last_density = kBoltzmann_dbw_per_k_hz + 10.0 * std::log10(system_noise_temperature_k);
+  }
+  return last_density;
 }
 
 double block_power_offset_db(SatelliteBlock block, const Signal& signal) {
@@ -189,19 +197,40 @@ double block_power_offset_db(SatelliteBlock block, const Signal& signal) {
   return 0.0;
 }
 
+SatelliteLink::SatelliteLink(const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m) {
+  const Eigen::Vector3d to_receiver = receiver_m - satellite_m;
+  range_m_ = to_receiver.norm();
+  orbit_radius_m_ = satellite_m.norm();
+  const double cos_angle = std::clamp(-satellite_m.dot(to_receiver) / (orbit_radius_m_ * range_m_), -1.0, 1.0);
+  off_boresight_gain_db_ = satellite_antenna_gain_db(std::acos(cos_angle) / kDeg, orbit_radius_m_);
+}
+
+double SatelliteLink::received_power_dbw(const SignalPowerSpec& spec) {
+  if (spec.reference_elevation_deg != reference_elevation_deg_) {
+    reference_elevation_deg_ = spec.reference_elevation_deg;
+    reference_loss_ratio_db_ = 20.0 * std::log10(slant_range_m(orbit_radius_m_, spec.reference_elevation_deg) / range_m_);
+    reference_gain_db_ =
+        satellite_antenna_gain_db(off_boresight_deg(orbit_radius_m_, spec.reference_elevation_deg), orbit_radius_m_);
+  }
+  // The terms in the order of the free function's sum.
+  return spec.minimum_dbw + spec.margin_db + reference_loss_ratio_db_ + off_boresight_gain_db_ - reference_gain_db_;
+}
+
 LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal, const Eigen::Vector3d& satellite_m,
                        const Eigen::Vector3d& receiver_m, double elevation_deg, double azimuth_deg,
                        double attenuation_db, double satellite_power_offset_db) {
+  SatelliteLink link(satellite_m, receiver_m);
+  return link_budget(profile, signal, link, elevation_deg, azimuth_deg, attenuation_db, satellite_power_offset_db);
+}
+
+LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal, SatelliteLink& link,
+                       double elevation_deg, double azimuth_deg, double attenuation_db,
+                       double satellite_power_offset_db) {
   std::optional<SignalPowerSpec> spec = signal_power_spec(signal.signal);
   if (!spec) spec = signal_power_spec(Signal{signal.signal.system, '1', 'C'});
   if (!spec) spec = SignalPowerSpec{-158.5, 5.0, kUsualMargin_db, "GPS L1 C/A"};
-  const Eigen::Vector3d to_receiver = receiver_m - satellite_m;
-  const double range_m = to_receiver.norm();
-  const double orbit_radius_m = satellite_m.norm();
-  const double cos_angle = std::clamp(-satellite_m.dot(to_receiver) / (orbit_radius_m * range_m), -1.0, 1.0);
   LinkBudget b;
-  b.received_power_dbw =
-      received_power_dbw(*spec, range_m, orbit_radius_m, std::acos(cos_angle) / kDeg) + satellite_power_offset_db;
+  b.received_power_dbw = link.received_power_dbw(*spec) + satellite_power_offset_db;
   const AntennaPattern& antenna = signal.antenna ? *signal.antenna : profile.antenna;
   b.antenna_gain_dbic = antenna.rhcp_dbic(elevation_deg, azimuth_deg);
   // The band response joins the signal's extra loss (both quarter-dB steps: the sum is exact, so a

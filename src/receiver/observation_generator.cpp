@@ -325,6 +325,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
                                      obs.relativistic_m,
                                      kC * (p.truth.state.clock_drift_s_per_s + p.truth.state.relativistic_drift_s_per_s),
                                      obs.troposphere_m};
+  SatelliteLink link(obs.satellite_position_m, rx_m);  // the budget terms the signals share
   for (const Signal& signal : settings_.signals) {
     // A receiver records only what the satellite transmits; the answer is kept for the GPST day.
     if (signal.system != sat.system || !satellite_signals_.transmitted(sat, signal, tag)) continue;
@@ -343,8 +344,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
         received.empty() || antenna == received_antenna ? received : received_through(antenna, received, obs);
     const MultipathErrors multipath = stages::signal_multipath_errors(*signal_info_.at(signal), obs.glonass_channel,
                                                                       profile.correlator_spacing_chips, through_antenna);
-    const double cn0_dbhz = stages::signal_cn0_dbhz(profile, tracked_.at(signal), obs.satellite_position_m, rx_m,
-                                                    obs.direction, attenuation_db,
+    const double cn0_dbhz = stages::signal_cn0_dbhz(profile, tracked_.at(signal), link, obs.direction, attenuation_db,
                                                     satellite_signals_.power_offset_db(sat, signal, tag),
                                                     multipath.power_db);
     if (settings_.incoming_signals) {

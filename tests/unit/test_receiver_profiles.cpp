@@ -250,7 +250,9 @@ TEST(ReceiverProfiles, CycleSlipTimeFollowsViterbi) {
       const double exact = -std::expm1(-interval_s / exact_s);
       const double fast = slip_probability(jitter_rad, 15.0, false, interval_s);
       EXPECT_EQ(fast > 0.0, exact > 0.0) << rho;
-      if (exact >= 0x1p-60) EXPECT_EQ(fast, exact) << rho;
+      if (exact >= 0x1p-60) {
+        EXPECT_EQ(fast, exact) << rho;
+      }
       // The draws u = k 2^-53 nearest to the probabilities decide alike.
       for (const double u : {0.0, 0x1p-53, 0x1p-52, std::floor(exact * 0x1p53) * 0x1p-53}) {
         EXPECT_EQ(u < fast, u < exact) << rho << " " << u;

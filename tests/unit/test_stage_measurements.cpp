@@ -41,16 +41,20 @@ TEST(StageSignalPower, Cn0AtTheIcdReferenceGeometry) {
   const TrackedSignal g1c{Signal::parse("G1C").value(), 0.0};
   const auto [satellite, receiver] = geometry_at(5.0);
   const AzimuthElevation direction{0.0, 5.0};
+  SatelliteLink link(satellite, receiver);
   // IS-GPS-200 minimum -158.5 dBW plus the usual 3 dB; N0 = 10 log10(k 290 K) = -204.0 dBW/Hz.
   const double expected_dbhz = -158.5 + 3.0 - (-228.5991631 + 10.0 * std::log10(290.0));
-  EXPECT_NEAR(signal_cn0_dbhz(profile, g1c, satellite, receiver, direction, 0.0, 0.0, 0.0), expected_dbhz, 0.01);
+  EXPECT_NEAR(signal_cn0_dbhz(profile, g1c, link, direction, 0.0, 0.0, 0.0), expected_dbhz, 0.01);
   // Vegetation, the block's offset and multipath enter dB for dB.
-  EXPECT_NEAR(signal_cn0_dbhz(profile, g1c, satellite, receiver, direction, 6.0, 1.5, -2.0), expected_dbhz - 6.5,
-              0.01);
+  EXPECT_NEAR(signal_cn0_dbhz(profile, g1c, link, direction, 6.0, 1.5, -2.0), expected_dbhz - 6.5, 0.01);
+  // The shared terms give the free function's budget to the bit.
+  EXPECT_EQ(link_budget(profile, g1c, link, 5.0, 0.0, 0.0).cn0_dbhz(),
+            link_budget(profile, g1c, satellite, receiver, 5.0, 0.0, 0.0).cn0_dbhz());
   // Higher up the satellite is nearer: more power (free-space ratio less the satellite's limb boost).
   const auto [satellite_high, receiver_high] = geometry_at(90.0);
+  SatelliteLink link_high(satellite_high, receiver_high);
   const double zenith_dbhz =
-      signal_cn0_dbhz(profile, g1c, satellite_high, receiver_high, AzimuthElevation{0.0, 90.0}, 0.0, 0.0, 0.0);
+      signal_cn0_dbhz(profile, g1c, link_high, AzimuthElevation{0.0, 90.0}, 0.0, 0.0, 0.0);
   const double free_space_db = 20.0 * std::log10((satellite - receiver).norm() / (satellite_high - receiver_high).norm());
   EXPECT_GT(zenith_dbhz - expected_dbhz, free_space_db - kSatelliteLimbBoost_db - 0.3);
   EXPECT_LT(zenith_dbhz - expected_dbhz, free_space_db);

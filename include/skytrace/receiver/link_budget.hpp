@@ -85,12 +85,34 @@ struct LinkBudget {
 // block"). 0 elsewhere.
 [[nodiscard]] double block_power_offset_db(SatelliteBlock block, const Signal& signal);
 
+// What the budgets of one satellite's signals share at an instant: the range, the orbit radius and
+// the satellite antenna's gain towards the receiver, and the reference terms of the last reference
+// elevation asked for (5 deg, 10 for Galileo and QZSS). received_power_dbw gives the same value,
+// to the bit, as the free function with the same geometry.
+class SatelliteLink {
+ public:
+  SatelliteLink(const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m);
+  [[nodiscard]] double received_power_dbw(const SignalPowerSpec& spec);
+
+ private:
+  double range_m_ = 0.0;
+  double orbit_radius_m_ = 0.0;
+  double off_boresight_gain_db_ = 0.0;
+  double reference_elevation_deg_ = -1.0;  // none yet
+  double reference_loss_ratio_db_ = 0.0;   // 20 log10(reference range / range)
+  double reference_gain_db_ = 0.0;
+};
+
 // The budget of a signal from a satellite at `satellite_m` (ECEF) to a receiver at `receiver_m`
 // seen at (elevation, azimuth), through `attenuation_db` of obstacles, from a satellite delivering
 // `satellite_power_offset_db` more than its signal's row (block_power_offset_db). A signal
 // without a power specification is treated like its system's L1 civil signal.
 [[nodiscard]] LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal,
                                      const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m,
+                                     double elevation_deg, double azimuth_deg, double attenuation_db,
+                                     double satellite_power_offset_db = 0.0);
+// The same with the satellite's shared terms (the same value to the bit).
+[[nodiscard]] LinkBudget link_budget(const ReceiverProfile& profile, const TrackedSignal& signal, SatelliteLink& link,
                                      double elevation_deg, double azimuth_deg, double attenuation_db,
                                      double satellite_power_offset_db = 0.0);
 

@@ -31,16 +31,15 @@ class SatelliteSignals {
   std::unordered_map<SignalKey, std::pair<std::int64_t, double>, SignalKeyHash> power_offset_db_;
 };
 
-// C/N0 (dB-Hz) of a signal from a satellite at `satellite_m` to a receiver at `receiver_m` (ECEF)
-// seen in `direction`, through `attenuation_db` of vegetation, from a satellite delivering
+// C/N0 (dB-Hz) of a signal from a satellite (`link`: its geometry towards the receiver) seen in
+// `direction`, through `attenuation_db` of vegetation, from a satellite delivering
 // `power_offset_db` over its signal's row, with the multipath change of prompt power
 // (MultipathErrors::power_db, 0 without multipath).
 [[nodiscard]] inline double signal_cn0_dbhz(const ReceiverProfile& profile, const TrackedSignal& tracked,
-                                            const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m,
-                                            const AzimuthElevation& direction, double attenuation_db,
-                                            double power_offset_db, double multipath_power_db) {
-  return link_budget(profile, tracked, satellite_m, receiver_m, direction.elevation_deg, direction.azimuth_deg,
-                     attenuation_db, power_offset_db)
+                                            SatelliteLink& link, const AzimuthElevation& direction,
+                                            double attenuation_db, double power_offset_db, double multipath_power_db) {
+  return link_budget(profile, tracked, link, direction.elevation_deg, direction.azimuth_deg, attenuation_db,
+                     power_offset_db)
              .cn0_dbhz() +
          multipath_power_db;
 }
