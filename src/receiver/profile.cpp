@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -321,6 +322,15 @@ std::vector<std::string> available_profile_names(const std::filesystem::path& sc
 }
 
 
+namespace {
+// PLL thermal jitter (rad) from C/N0 as a ratio (Hz).
+double pll_jitter_from_ratio_rad(const ReceiverProfile& profile, double cn0_hz, double bandwidth_hz) {
+  if (bandwidth_hz <= 0.0) return 0.0;
+  const double var_rad2 = bandwidth_hz / cn0_hz * (1.0 + 1.0 / (2.0 * profile.integration_time_s * cn0_hz));
+  return std::sqrt(var_rad2);
+}
+}  // namespace
+
 TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& signal, double carrier_hz,
                              double cn0_dbhz) {
   TrackingNoise noise;
@@ -338,7 +348,8 @@ TrackingNoise tracking_noise(const ReceiverProfile& profile, const SignalInfo& s
   }
   const double wavelength_m = constants::kSpeedOfLight_mps / carrier_hz;
   if (profile.pll_bandwidth_hz > 0.0) {
-    noise.phase_m = pll_jitter_rad(profile, cn0_dbhz) * wavelength_m / (2.0 * std::numbers::pi);
+    noise.phase_m = pll_jitter_from_ratio_rad(profile, cn0_hz, profile.pll_bandwidth_hz) * wavelength_m /
+                    (2.0 * std::numbers::pi);
   }
   if (profile.fll_bandwidth_hz > 0.0) {
     // FLL thermal noise (Hz) scaled to range rate.
@@ -355,8 +366,24 @@ double loop_time_constant_s(double bandwidth_hz) {
 
 double gauss_markov_step(double previous, double dt_s, double tau_s, double white) {
   if (!std::isfinite(dt_s) || dt_s <= 0.0 || !(tau_s > 0.0) || !std::isfinite(tau_s)) return white;
+  // A receiver's loops keep their time constants and step by its interval: the coefficients of the
+  // last few (step, time constant) pairs are kept instead of taking the exponential every time.
+  struct Coefficients {
+    double dt_s = std::numeric_limits<double>::quiet_NaN();
+    double tau_s = 0.0;
+    double kept = 0.0;  // exp(-dt / tau)
+    double fresh = 0.0; // sqrt(1 - kept^2)
+  };
+  thread_local std::array<Coefficients, 4> recent;
+  thread_local size_t next = 0;
+  for (const Coefficients& c : recent) {
+    if (c.dt_s == dt_s && c.tau_s == tau_s) return c.kept * previous + c.fresh * white;
+  }
   const double a = std::exp(-dt_s / tau_s);
-  return a * previous + std::sqrt(1.0 - a * a) * white;
+  const double b = std::sqrt(1.0 - a * a);
+  recent[next] = Coefficients{dt_s, tau_s, a, b};
+  next = (next + 1) % recent.size();
+  return a * previous + b * white;
 }
 
 double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz) {
@@ -365,9 +392,7 @@ double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz) {
 
 double pll_jitter_rad(const ReceiverProfile& profile, double cn0_dbhz, double bandwidth_hz) {
   if (bandwidth_hz <= 0.0) return 0.0;
-  const double cn0_hz = std::pow(10.0, cn0_dbhz / 10.0);
-  const double var_rad2 = bandwidth_hz / cn0_hz * (1.0 + 1.0 / (2.0 * profile.integration_time_s * cn0_hz));
-  return std::sqrt(var_rad2);
+  return pll_jitter_from_ratio_rad(profile, std::pow(10.0, cn0_dbhz / 10.0), bandwidth_hz);
 }
 
 double mean_time_to_slip_s(double jitter_rad, double bandwidth_hz, bool costas) {
