@@ -348,7 +348,9 @@ SatelliteState evaluate_sbas(const SbasEphemeris& eph, const GnssTime& t) {
   return state;
 }
 
-double group_delay_s(const KeplerEphemeris& eph, const Signal& signal) {
+double group_delay_s(const KeplerEphemeris& eph, const Signal& signal) { return group_delay_s(eph, signal, eph.message); }
+
+double group_delay_s(const KeplerEphemeris& eph, const Signal& signal, NavMessage message) {
   const GroupDelays& g = eph.group_delays;
   const char band = signal.band;
   const char attribute = signal.attribute;
@@ -357,7 +359,7 @@ double group_delay_s(const KeplerEphemeris& eph, const Signal& signal) {
     case GnssSystem::kQzss: {
       // IS-GPS-200 20.3.3.3.3.2 and 30.3.3.3.1.1, IS-GPS-705 20.3.3.3.1.2, IS-GPS-800 3.5.3.9:
       // (dt_sv)_signal = dt_sv - T_GD + ISC_signal, i.e. the signal's code is late by T_GD - ISC.
-      const bool cnav = is_cnav(eph.message);
+      const bool cnav = is_cnav(message);
       if (band == '1') {
         if (attribute == 'C') return g.tgd_s - g.isc_l1ca_s;
         if (attribute == 'S') return g.tgd_s - g.isc_l1cd_s;
@@ -390,7 +392,7 @@ double group_delay_s(const KeplerEphemeris& eph, const Signal& signal) {
       //   in the record, so this falls back to BGD(E1,E5a)).
       const double gamma15 = squared(kFrequencyL1_Hz / kFrequencyL5_Hz);
       const double gamma17 = squared(kFrequencyL1_Hz / kFrequencyE5b_Hz);
-      const bool fnav = eph.message == NavMessage::kGalileoFnav;
+      const bool fnav = message == NavMessage::kGalileoFnav;
       const double reference_bgd_s = fnav ? g.bgd_e1e5a_s : g.bgd_e1e5b_s;
       const double e5a_s = fnav ? gamma15 * g.bgd_e1e5a_s : g.bgd_e1e5b_s + (gamma15 - 1.0) * g.bgd_e1e5a_s;
       const double e5b_s = fnav ? g.bgd_e1e5a_s + (gamma17 - 1.0) * g.bgd_e1e5b_s : gamma17 * g.bgd_e1e5b_s;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <span>
 
 #include "skytrace/atmosphere/models.hpp"
 #include "skytrace/core/constants.hpp"
@@ -273,9 +274,10 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
   const GnssTime& tag = epoch.receiver_time;
   const auto where = [&](const SatelliteId& sat) { return sat.to_string() + " at " + tag.to_iso8601(TimeScale::kGpst); };
 
-  // One signal per satellite: the first of the priority list the satellite has.
-  std::vector<SatelliteId> order;
-  std::map<SatelliteId, std::vector<const SignalMeasurement*>> by_satellite;
+  // One signal per satellite: the first of the priority list the satellite has. The measurements
+  // grouped by satellite in satellite order, each satellite's in the order given.
+  std::vector<const SignalMeasurement*> by_satellite;
+  by_satellite.reserve(epoch.signals.size());
   for (const SignalMeasurement& m : epoch.signals) {
     if (m.signal.system != m.satellite.system) {
       return make_error(ErrorCode::kInvalidArgument,
@@ -285,19 +287,24 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       return make_error(ErrorCode::kInvalidArgument,
                         "pseudorange or Doppler of " + m.signal.to_string() + " of " + where(m.satellite) + " is not finite");
     }
-    auto [it, inserted] = by_satellite.try_emplace(m.satellite);
-    if (inserted) order.push_back(m.satellite);
-    it->second.push_back(&m);
+    by_satellite.push_back(&m);
   }
-  std::sort(order.begin(), order.end());
+  std::stable_sort(by_satellite.begin(), by_satellite.end(),
+                   [](const SignalMeasurement* a, const SignalMeasurement* b) { return a->satellite < b->satellite; });
   const auto system_wanted = [&](GnssSystem system) {
     if (settings_.systems.empty()) return true;
     return std::find(settings_.systems.begin(), settings_.systems.end(), system) != settings_.systems.end();
   };
 
   std::vector<Candidate> candidates;
-  for (const SatelliteId& sat : order) {
-    const auto& list = by_satellite.at(sat);
+  candidates.reserve(by_satellite.size());
+  fix.satellites.reserve(by_satellite.size());
+  for (size_t first = 0; first < by_satellite.size();) {
+    size_t end = first;
+    while (end < by_satellite.size() && by_satellite[end]->satellite == by_satellite[first]->satellite) ++end;
+    const std::span<const SignalMeasurement* const> list(by_satellite.data() + first, end - first);
+    const SatelliteId sat = list.front()->satellite;
+    first = end;
     const SignalMeasurement* chosen = nullptr;
     for (const Signal& wanted : priority_[static_cast<size_t>(sat.system)]) {
       const auto it = std::find_if(list.begin(), list.end(), [&](const SignalMeasurement* m) { return m->signal == wanted; });

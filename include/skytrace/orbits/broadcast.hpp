@@ -54,6 +54,8 @@ class GlonassOrbitCache {
 // TGD_B1Cp + ISC_B1Cd, B2a pilot TGD_B2ap, data TGD_B2ap + ISC_B2ad, B2b TGD_B2bI (zero when the
 // record does not carry them). NavIC: L5 T_GD, S (f5/fS)^2 T_GD. Signals with nothing broadcast: 0.
 [[nodiscard]] double group_delay_s(const KeplerEphemeris& eph, const Signal& signal);
+// The same, read as if the record were of `message` (an I/NAV record's BGDs read as F/NAV's).
+[[nodiscard]] double group_delay_s(const KeplerEphemeris& eph, const Signal& signal, NavMessage message);
 // GLONASS FDMA: G1 0, G2 delta_tau_n when the file gives it, else 0.
 [[nodiscard]] double group_delay_s(const GlonassEphemeris& eph, const Signal& signal);
 

@@ -114,11 +114,8 @@ double precise_clock_group_delay_s(const RecordState& reference, const RecordSta
   if (delays.kepler == nullptr) return group_delay_of(delays, signal);
   const orbits::KeplerEphemeris& eph = *delays.kepler;
   switch (eph.satellite.system) {
-    case GnssSystem::kGalileo: {
-      orbits::KeplerEphemeris as_fnav = eph;  // I/NAV records carry BGD(E1,E5a) too
-      as_fnav.message = orbits::NavMessage::kGalileoFnav;
-      return orbits::group_delay_s(as_fnav, signal);
-    }
+    case GnssSystem::kGalileo:  // I/NAV records carry BGD(E1,E5a) too
+      return orbits::group_delay_s(eph, signal, orbits::NavMessage::kGalileoFnav);
     case GnssSystem::kBeiDou: {
       // The B1I/B3I ionosphere-free code is late by gamma/(gamma-1) TGD1 against B3I.
       const double gamma = std::pow(kFrequencyB1I_Hz / kFrequencyB3I_Hz, 2);
