@@ -385,6 +385,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
   }
 
   stages::SatelliteAcquisition acquisition = tracking_.begin_satellite(profile, acquirable, last_tag_.has_value());
+  obs.signals.reserve(candidates_.size());
   records_used_.clear();
   // The errors of the satellite's L1 C/A loop at this epoch, which aided loops follow.
   std::optional<stages::AidingLoop> aiding_loop;

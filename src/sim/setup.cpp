@@ -523,6 +523,9 @@ RinexRecordMaker::RinexRecordMaker(const io::ObservationHeader& header) : header
 io::ObservationEpoch RinexRecordMaker::record(const receiver::EpochObservations& epoch) const {
   io::ObservationEpoch out;
   out.time = epoch.receiver_time;
+  out.satellites.reserve(static_cast<size_t>(std::count_if(epoch.satellites.begin(), epoch.satellites.end(), [](const auto& sat) {
+    return sat.status == receiver::SatelliteStatus::kTracked;
+  })));
   for (const auto& sat : epoch.satellites) {
     if (sat.status != receiver::SatelliteStatus::kTracked) continue;
     const auto types = header_.observation_types.find(sat.satellite.system);
@@ -548,6 +551,11 @@ io::ObservationEpoch RinexRecordMaker::record(const receiver::EpochObservations&
 positioning::EpochMeasurements to_measurements(const receiver::EpochObservations& epoch) {
   positioning::EpochMeasurements out;
   out.receiver_time = epoch.receiver_time;
+  size_t signals = 0;
+  for (const auto& sat : epoch.satellites) {
+    if (sat.status == receiver::SatelliteStatus::kTracked) signals += sat.signals.size();
+  }
+  out.signals.reserve(signals);
   for (const auto& sat : epoch.satellites) {
     if (sat.status != receiver::SatelliteStatus::kTracked) continue;
     for (const auto& m : sat.signals) {
