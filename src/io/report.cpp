@@ -9,6 +9,8 @@
 #include <span>
 #include <string_view>
 
+#include "skytrace/core/decimal_text.hpp"
+
 namespace skytrace::io {
 namespace {
 
@@ -33,7 +35,13 @@ std::string escape(std::string_view text) {
 }
 
 // Coordinates with two decimals: 0.01 unit is far below a pixel (and no "-0.00").
-std::string num(double value) { return fmt::format("{:.2f}", std::abs(value) < 0.005 ? 0.0 : value); }
+// A coordinate or value with two decimals, fmt's "{:.2f}" characters (write_fixed), never "-0.00".
+void append_num(std::string& out, double value) { append_fixed(out, std::abs(value) < 0.005 ? 0.0 : value, 2); }
+std::string num(double value) {
+  std::string text;
+  append_num(text, value);
+  return text;
+}
 
 size_t system_index(GnssSystem system) { return static_cast<size_t>(system); }
 
@@ -88,9 +96,9 @@ std::string points_attribute(const std::vector<Point2>& points) {
   out.reserve(points.size() * 14);
   for (const auto& p : points) {
     if (!out.empty()) out += ' ';
-    out += num(p.x);
+    append_num(out, p.x);
     out += ',';
-    out += num(p.y);
+    append_num(out, p.y);
   }
   return out;
 }
