@@ -369,6 +369,8 @@ struct RinexObsWriter::Impl {
   std::optional<GnssTime> last_obs;
   std::optional<GnssTime> previous_time;
   std::optional<double> min_interval_s;
+  // The header written at the start of the body from the expected span (empty: none).
+  std::string early_header;
   std::array<const std::vector<ObservationType>*, 7> types_by_system{};  // indexed by GnssSystem
   std::vector<size_t> order;  // scratch for sorting satellites
 
@@ -607,6 +609,13 @@ struct RinexObsWriter::Impl {
     const std::optional<GnssTime> last = first_obs ? last_obs : header.time_of_last_obs;
     const std::optional<double> interval = header.interval_s ? header.interval_s : min_interval_s;
     const std::string head = format_header(header, *first, last, interval);
+    if (!early_header.empty() && head == early_header) {
+      // The body file already begins with this header: it is the file.
+      if (auto installed = install_output_file(body_path, target); !installed) return fail(installed.error());
+      body_path.clear();
+      finished = true;
+      return Ok{};
+    }
 
     const std::filesystem::path final_tmp = temporary_sibling(body_path.parent_path() / target.filename(), "part");
     std::FILE* out = std::fopen(final_tmp.c_str(), "wb");
@@ -622,6 +631,11 @@ struct RinexObsWriter::Impl {
     if (std::fwrite(head.data(), 1, head.size(), out) != head.size()) return fail_final("write failed");
     std::FILE* in = std::fopen(body_path.c_str(), "rb");
     if (in == nullptr) return fail_final("cannot reopen the body " + body_path.string());
+    // Past a header written before the body that the epochs did not confirm.
+    if (std::fseek(in, static_cast<long>(early_header.size()), SEEK_SET) != 0) {
+      std::fclose(in);
+      return fail_final("cannot read back the body " + body_path.string());
+    }
     std::vector<char> chunk(size_t{1} << 22);
     while (true) {
       const size_t n = std::fread(chunk.data(), 1, chunk.size(), in);
@@ -679,6 +693,15 @@ Status RinexObsWriter::open(const std::filesystem::path& path, ObservationHeader
     const std::string why = std::strerror(errno);
     impl->body_path.clear();
     return make_error(ErrorCode::kOutput, path.string() + ": cannot create a temporary file beside it (" + why + ")");
+  }
+  if (options.expected_first_obs && options.expected_last_obs) {
+    const std::optional<double> interval =
+        impl->header.interval_s ? impl->header.interval_s : options.expected_interval_s;
+    impl->early_header = format_header(impl->header, *options.expected_first_obs, options.expected_last_obs, interval);
+    if (std::fwrite(impl->early_header.data(), 1, impl->early_header.size(), impl->body) != impl->early_header.size()) {
+      impl->discard();
+      return make_error(ErrorCode::kOutput, path.string() + ": cannot write its temporary file (disk full?)");
+    }
   }
   impl_ = std::move(impl);
   return Ok{};

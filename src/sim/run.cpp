@@ -334,6 +334,9 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   context.write_truth = options.write_truth;
   context.threads = threads;
   context.summary = &summary;
+  const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
+  context.epoch_grid = EpochGrid{s.time.start, s.time.start + static_cast<double>(epoch_count - 1) * s.time.interval_s,
+                                 s.time.interval_s};
   for (const ReceiverRun& rx : receivers) {
     context.receivers.push_back(SinkReceiver{rx.settings, rx.marker_m, &rx.header, rx.kinematics,
                                              receivers.size() == 1 ? "" : "_" + rx.settings->name});
@@ -362,7 +365,6 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   const RunFigures& figures = *figures_sink;
   sinks->push_back(std::move(figures_sink));
 
-  const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
   // The bases' recent epochs: a rover takes the latest one that has reached it (rtk.latency_s,
   // rtk.interval_s, rtk.outages_s); older than the engine's age limit is never used.
   constexpr double kBaseHistory_s = 90.0;

@@ -272,7 +272,15 @@ class RinexObsSink final : public EpochSink {
       out.records = std::make_unique<RinexRecordMaker>(*rx.header);
       out.writer = std::make_unique<io::RinexObsWriter>();
       const auto path = c.staging_dir / ("obs" + rx.file_suffix + ".rnx");
-      if (auto st = out.writer->open(path, *rx.header); !st) return st.error();
+      // The header can be written first when the epochs' span is known (the file is then not copied
+      // behind a header at the end; the bytes are the same).
+      io::RinexObsWriterOptions options;
+      if (c.epoch_grid) {
+        options.expected_first_obs = c.epoch_grid->first;
+        options.expected_last_obs = c.epoch_grid->last;
+        options.expected_interval_s = c.epoch_grid->interval_s;
+      }
+      if (auto st = out.writer->open(path, *rx.header, options); !st) return st.error();
     }
     return std::unique_ptr<EpochSink>(std::move(sink));
   }

@@ -455,6 +455,33 @@ TEST(RinexObsWriter, FileAppearsOnlyAtFinish) {
   EXPECT_FALSE(writer.finish().ok());
 }
 
+// A header written before the body from the expected span: the same bytes whether the epochs
+// confirm it (the body file is renamed) or not (the final header replaces it), and no temporaries.
+TEST(RinexObsWriter, ExpectedSpanGivesTheSameBytesConfirmedOrNot) {
+  const auto dir = test::make_temp_dir("rinex_obs_expected");
+  const auto write = [&](const std::string& name, RinexObsWriterOptions options) {
+    RinexObsWriter writer;
+    EXPECT_TRUE(writer.open(dir / name, two_system_header(3.04), options).ok());
+    for (const auto& e : sample_epochs()) EXPECT_TRUE(writer.write_epoch(e).ok());
+    EXPECT_TRUE(writer.finish().ok());
+    return read_all(dir / name);
+  };
+  const std::vector<ObservationEpoch> epochs = sample_epochs();
+  const std::string plain = write("plain.rnx", {});
+  RinexObsWriterOptions confirmed;
+  confirmed.expected_first_obs = epochs.front().time;
+  confirmed.expected_last_obs = epochs.back().time;
+  confirmed.expected_interval_s = epochs[1].time - epochs[0].time;
+  EXPECT_EQ(write("confirmed.rnx", confirmed), plain);
+  RinexObsWriterOptions wrong = confirmed;
+  wrong.expected_last_obs = epochs.back().time + 3600.0;  // the run stopped early
+  EXPECT_EQ(write("wrong_end.rnx", wrong), plain);
+  RinexObsWriterOptions wrong_interval = confirmed;
+  wrong_interval.expected_interval_s = 0.5;
+  EXPECT_EQ(write("wrong_interval.rnx", wrong_interval), plain);
+  EXPECT_EQ(count_entries(dir), 4u);  // the four files, no temporaries
+}
+
 TEST(RinexObsWriter, DestroyedWithoutFinishLeavesNothing) {
   const auto dir = test::make_temp_dir("rinex_obs_abandon");
   {

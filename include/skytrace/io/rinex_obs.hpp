@@ -176,11 +176,19 @@ struct RinexObsWriterOptions {
   bool omit_unrepresentable_values = false;
   // Body bytes gathered in memory before each write to the temporary file.
   size_t buffer_bytes = size_t{1} << 20;
+  // The first and last epochs (and the interval, unless the header has one) when the caller knows
+  // them before writing, as a simulation on a time grid does: the header is written first and the
+  // body after it, and finish() only renames the file when the epochs written give the same header;
+  // otherwise it writes the final header before the body as without them. The bytes are the same.
+  std::optional<GnssTime> expected_first_obs;
+  std::optional<GnssTime> expected_last_obs;
+  std::optional<double> expected_interval_s;
 };
 
 // Streaming writer. The body goes to a temporary file next to the target; finish() writes the
 // final file (header with TIME OF FIRST/LAST OBS, then the body) under another temporary name and
-// renames it, so a partial file never appears under the target name. Destroying a writer that has
+// renames it (or renames the temporary itself when it already begins with that header:
+// RinexObsWriterOptions::expected_first_obs), so a partial file never appears under the target name. Destroying a writer that has
 // not finished removes its temporaries.
 class RinexObsWriter {
  public:

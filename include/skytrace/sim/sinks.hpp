@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,13 @@ struct SinkReceiver {
 };
 
 // What every sink may use: the scenario, what was loaded for it, the receivers, and where files go.
+// A run's epoch tags: first, last and the step between them.
+struct EpochGrid {
+  GnssTime first;
+  GnssTime last;
+  double interval_s = 0.0;
+};
+
 struct RunContext {
   const Scenario* scenario = nullptr;
   const ScenarioResources* resources = nullptr;
@@ -46,6 +54,7 @@ struct RunContext {
   bool write_truth = true;
   int threads = 1;  // threads the run may use: a sink starts threads of its own only from 2 on
   const RunSummary* summary = nullptr;  // the run's counts, complete when finish() is called
+  std::optional<EpochGrid> epoch_grid;  // known before a run over a scenario's time (none when live)
 };
 
 // One receiver's epoch.
