@@ -151,6 +151,9 @@ constexpr int kMaxThreads = 1024;
 struct QueuedEpoch {
   std::int64_t index = 0;
   std::vector<receiver::EpochObservations> receivers;
+  // What the fix engine reads of each receiver's epoch (empty for a receiver without fixes), taken
+  // where the observations were made, while they are in that core's cache.
+  std::vector<positioning::EpochMeasurements> measurements;
   std::vector<std::optional<positioning::PositionFix>> fixes;
 };
 using EpochBatch = std::vector<QueuedEpoch>;
@@ -412,7 +415,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
           }
           base = moving ? &*moving : nullptr;
         }
-        auto fix = rx.fixes->solve(epochs[i], base);
+        auto fix = rx.fixes->solve(instant.measurements[i], base);
         if (!fix) return fix.error();
         if (moving) positioning::add_baseline_heading(*fix);
         instant.fixes[i] = std::move(*fix);
@@ -422,7 +425,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         if (!receivers[i].is_base) continue;
         // The base's known position: its marker's antenna reference point.
         auto& history = base_history[i];
-        history.push_back(positioning::BaseEpoch{to_measurements(epochs[i]), antenna_point(receivers[i].marker_m, *receivers[i].settings)});
+        history.push_back(positioning::BaseEpoch{instant.measurements[i], antenna_point(receivers[i].marker_m, *receivers[i].settings)});
         while (history.back().measurements.receiver_time - history.front().measurements.receiver_time > kBaseHistory_s) {
           history.pop_front();
         }
@@ -464,9 +467,13 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (auto st = move_models(k); !st) return st;
     out.index = k;
     out.receivers.clear();
+    out.measurements.clear();
     for (ReceiverRun& rx : receivers) {
       auto epoch = rx.generator->observe(epoch_tag(k));
       if (!epoch) return epoch.error();
+      // Receivers with fixes, and RTK bases (their rovers' corrections), need them.
+      const bool measured = rx.fixes != nullptr || rx.is_base;
+      out.measurements.push_back(measured ? to_measurements(*epoch) : positioning::EpochMeasurements{});
       out.receivers.push_back(std::move(*epoch));
     }
     return Ok{};

@@ -148,8 +148,13 @@ FixStage::FixStage(const orbits::BroadcastEphemerides& ephemerides, const Receiv
 
 Result<positioning::PositionFix> FixStage::solve(const receiver::EpochObservations& epoch,
                                                  const positioning::BaseEpoch* base) {
-  if (rtk_) return rtk_->solve(to_measurements(epoch), base);
-  return solver_->solve(to_measurements(epoch));
+  return solve(to_measurements(epoch), base);
+}
+
+Result<positioning::PositionFix> FixStage::solve(const positioning::EpochMeasurements& measurements,
+                                                 const positioning::BaseEpoch* base) {
+  if (rtk_) return rtk_->solve(measurements, base);
+  return solver_->solve(measurements);
 }
 
 }  // namespace skytrace::sim

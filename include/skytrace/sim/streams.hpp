@@ -70,6 +70,9 @@ class FixStage {
   // by single point.
   [[nodiscard]] Result<positioning::PositionFix> solve(const receiver::EpochObservations& epoch,
                                                        const positioning::BaseEpoch* base = nullptr);
+  // The same from the epoch's measurements (to_measurements).
+  [[nodiscard]] Result<positioning::PositionFix> solve(const positioning::EpochMeasurements& measurements,
+                                                       const positioning::BaseEpoch* base = nullptr);
 
  private:
   std::optional<positioning::SinglePointSolver> solver_;
