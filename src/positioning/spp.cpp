@@ -132,7 +132,7 @@ void with_direction(Geometry& g) {
 // reception time minus the flight time (light-time iteration, exactly as the signal was made);
 // before that, the pseudorange corrected by the satellite clock dates it.
 Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, const Eigen::Matrix3d* to_enu,
-                       std::optional<double> receiver_clock_m) {
+                       std::optional<double> receiver_clock_m, std::optional<double> flight_time_guess_s = std::nullopt) {
   Geometry g;
   const auto move_to = [&](double step_s) {
     g.satellite_m = c.position_m + c.velocity_mps * step_s + 0.5 * c.acceleration_mps2 * step_s * step_s;
@@ -142,7 +142,9 @@ Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, co
   };
   double step_s = move_to(c.clock_step_s());
   const double pseudorange_s = c.measurement->pseudorange_m / kC;
-  double flight_time_s = (g.satellite_m - receiver_m).norm() / kC;
+  // From the last geometry's flight time when there is one (the receiver moved by metres since,
+  // the flight time by nanoseconds: the passes below repeat sooner).
+  double flight_time_s = flight_time_guess_s ? *flight_time_guess_s : (g.satellite_m - receiver_m).norm() / kC;
   // Four passes at most; once the flight time repeats exactly, further passes would repeat too.
   for (int iteration = 0; iteration < 4; ++iteration) {
     if (receiver_clock_m) step_s = move_to(pseudorange_s - *receiver_clock_m / kC - flight_time_s);
@@ -447,6 +449,10 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
     troposphere_m = st.troposphere_m;
   };
 
+  // The flight time of a candidate's last geometry, to start the next one from.
+  const auto last_flight_time_s = [](const State& st) {
+    return st.geometry.range_m > 0.0 ? std::optional<double>(st.geometry.range_m / kC) : std::nullopt;
+  };
   // The mask as the sine of the elevation (what the geometry gives without an arc tangent).
   const double sin_mask = std::sin(settings_.elevation_mask_deg / kDegPerRad);
   std::vector<double> observed_m;  // per candidate: the corrected code of the iteration
@@ -473,7 +479,7 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
         // system: inter-system biases are offsets of the measurements, not of the instant.
         std::optional<double> receiver_clock_m;
         if (on_earth && !s.systems.empty()) receiver_clock_m = s.clock_m[s.systems.front()];
-        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr, receiver_clock_m);
+        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr, receiver_clock_m, last_flight_time_s(st));
         if (st.rejected) continue;
         if (on_earth && st.geometry.sin_elevation < sin_mask) {
           st.note = "below the elevation mask";
@@ -611,7 +617,8 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
       State& st = states[i];
       if (!st.used) continue;
       const Candidate& c = candidates[i];
-      st.geometry = geometry_from(c, solution.position_m, &to_enu, solution.clock_m[solution.systems.front()]);
+      st.geometry = geometry_from(c, solution.position_m, &to_enu, solution.clock_m[solution.systems.front()],
+                                  last_flight_time_s(st));
       double ionosphere_m = 0.0, troposphere_m = 0.0;
       atmosphere_delays(st, c, solution.position_m, geodetic, reception, ionosphere_m, troposphere_m);
       st.residual_m = c.measurement->pseudorange_m + st.geometry.clock_correction_m - ionosphere_m - troposphere_m -
