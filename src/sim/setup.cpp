@@ -522,17 +522,24 @@ RinexRecordMaker::RinexRecordMaker(const io::ObservationHeader& header) : header
 
 io::ObservationEpoch RinexRecordMaker::record(const receiver::EpochObservations& epoch) const {
   io::ObservationEpoch out;
+  record_into(epoch, out);
+  return out;
+}
+
+void RinexRecordMaker::record_into(const receiver::EpochObservations& epoch, io::ObservationEpoch& out) const {
   out.time = epoch.receiver_time;
-  out.satellites.reserve(static_cast<size_t>(std::count_if(epoch.satellites.begin(), epoch.satellites.end(), [](const auto& sat) {
-    return sat.status == receiver::SatelliteStatus::kTracked;
-  })));
+  out.flag = io::EpochFlag::kOk;
+  out.receiver_clock_offset_s.reset();
+  out.event_records.clear();
+  size_t records = 0;
   for (const auto& sat : epoch.satellites) {
     if (sat.status != receiver::SatelliteStatus::kTracked) continue;
     const auto types = header_.observation_types.find(sat.satellite.system);
     if (types == header_.observation_types.end()) continue;
-    io::SatelliteObservations record;
+    if (records == out.satellites.size()) out.satellites.emplace_back();
+    io::SatelliteObservations& record = out.satellites[records++];
     record.satellite = sat.satellite;
-    record.values.resize(types->second.size());
+    record.values.assign(types->second.size(), io::ObservationValue{});
     for (const auto& m : sat.signals) {
       const auto column = code_column_.find(m.signal);
       if (column == code_column_.end()) continue;
@@ -543,9 +550,8 @@ io::ObservationEpoch RinexRecordMaker::record(const receiver::EpochObservations&
       record.values[index + 2] = {m.doppler_hz, 0, 0};
       record.values[index + 3] = {m.cn0_dbhz, 0, 0};
     }
-    out.satellites.push_back(std::move(record));
   }
-  return out;
+  out.satellites.resize(records);
 }
 
 positioning::EpochMeasurements to_measurements(const receiver::EpochObservations& epoch) {

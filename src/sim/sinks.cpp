@@ -286,7 +286,8 @@ class RinexObsSink final : public EpochSink {
   }
   Status add(const SinkEpoch& e) override {
     Receiver& rx = receivers_[e.receiver_index];
-    return rx.writer->write_epoch(rx.records->record(*e.observations));
+    rx.records->record_into(*e.observations, rx.epoch);
+    return rx.writer->write_epoch(rx.epoch);
   }
   Status finish() override {
     for (Receiver& rx : receivers_) {
@@ -299,6 +300,7 @@ class RinexObsSink final : public EpochSink {
   struct Receiver {
     std::unique_ptr<RinexRecordMaker> records;
     std::unique_ptr<io::RinexObsWriter> writer;
+    io::ObservationEpoch epoch;  // the record of the epoch being written, its storage reused
   };
   std::vector<Receiver> receivers_;
 };

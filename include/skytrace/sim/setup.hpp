@@ -145,6 +145,8 @@ class RinexRecordMaker {
  public:
   explicit RinexRecordMaker(const io::ObservationHeader& header);
   [[nodiscard]] io::ObservationEpoch record(const receiver::EpochObservations& epoch) const;
+  // The same into `out`, whose lists keep their storage from epoch to epoch.
+  void record_into(const receiver::EpochObservations& epoch, io::ObservationEpoch& out) const;
 
  private:
   const io::ObservationHeader& header_;
