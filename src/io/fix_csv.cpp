@@ -3,6 +3,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <string>
+
+#include "skytrace/core/decimal_text.hpp"
 
 namespace skytrace::io {
 namespace {
@@ -51,8 +54,22 @@ std::string fix_csv_row(const positioning::PositionFix& fix) {
   // second 0.000 of the next week, never 604800.000 of this one.
   const GnssTime time = fix.receiver_time.rounded_to(3);
   const WeekTow week_tow = time.to_week_tow(TimeScale::kGpst);
-  std::string row = fmt::format("{},{},{:.3f},{},{},", time.to_iso8601(TimeScale::kGpst, 3), week_tow.week,
-                                week_tow.tow_s, positioning::to_string(fix.type), fix.satellites_used);
+  // Numbers as fmt's "{:.Nf}" writes them (write_fixed), cell by cell.
+  std::string row;
+  row.reserve(400);
+  const auto number = [&](double value, int decimals) {
+    append_fixed(row, value, decimals);
+    row += ',';
+  };
+  row += time.to_iso8601(TimeScale::kGpst, 3);
+  row += ',';
+  row += std::to_string(week_tow.week);
+  row += ',';
+  number(week_tow.tow_s, 3);
+  row += positioning::to_string(fix.type);
+  row += ',';
+  row += std::to_string(fix.satellites_used);
+  row += ',';
   std::string rejected;
   for (const auto& use : fix.satellites) {
     if (!use.rejected) continue;
@@ -67,23 +84,45 @@ std::string fix_csv_row(const positioning::PositionFix& fix) {
   const auto& p = fix.position;
   const auto& x = fix.position_ecef_m;
   const auto& c = fix.covariance_enu_m2;
-  row += fmt::format("{:.9f},{:.9f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},", p.latitude_deg, p.longitude_deg,
-                     p.height_m, x.x(), x.y(), x.z(), std::sqrt(c(0, 0)), std::sqrt(c(1, 1)), std::sqrt(c(2, 2)));
+  number(p.latitude_deg, 9);
+  number(p.longitude_deg, 9);
+  number(p.height_m, 4);
+  number(x.x(), 4);
+  number(x.y(), 4);
+  number(x.z(), 4);
+  number(std::sqrt(c(0, 0)), 4);
+  number(std::sqrt(c(1, 1)), 4);
+  number(std::sqrt(c(2, 2)), 4);
   if (fix.velocity_valid) {
-    row += fmt::format("{:.5f},{:.5f},{:.5f},", fix.velocity_enu_mps.x(), fix.velocity_enu_mps.y(),
-                       fix.velocity_enu_mps.z());
+    number(fix.velocity_enu_mps.x(), 5);
+    number(fix.velocity_enu_mps.y(), 5);
+    number(fix.velocity_enu_mps.z(), 5);
   } else {
     row += ",,,";
   }
-  const double clock_m = fix.clock_bias_m.empty() ? 0.0 : fix.clock_bias_m.begin()->second;
-  row += fmt::format("{:.4f},", clock_m);
-  row += fix.velocity_valid ? fmt::format("{:.5f},", fix.clock_drift_mps) : std::string(",");
-  row += fmt::format("{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},", fix.gdop, fix.pdop, fix.hdop, fix.vdop, fix.tdop);
-  std::string clocks;
-  for (const auto& [system, bias_m] : fix.clock_bias_m) {
-    clocks += fmt::format("{}{}={:.4f}", clocks.empty() ? "" : " ", system_letter(system), bias_m);
+  number(fix.clock_bias_m.empty() ? 0.0 : fix.clock_bias_m.begin()->second, 4);
+  if (fix.velocity_valid) {
+    number(fix.clock_drift_mps, 5);
+  } else {
+    row += ',';
   }
-  return row + clocks + "," + csv_field(rejected) + "," + csv_field(fix.message) + "," + relative_cells(fix) + "\n";
+  for (const double dop : {fix.gdop, fix.pdop, fix.hdop, fix.vdop, fix.tdop}) number(dop, 3);
+  bool first_clock = true;
+  for (const auto& [system, bias_m] : fix.clock_bias_m) {
+    if (!first_clock) row += ' ';
+    first_clock = false;
+    row += system_letter(system);
+    row += '=';
+    append_fixed(row, bias_m, 4);
+  }
+  row += ',';
+  row += csv_field(rejected);
+  row += ',';
+  row += csv_field(fix.message);
+  row += ',';
+  row += relative_cells(fix);
+  row += '\n';
+  return row;
 }
 
 }  // namespace skytrace::io
