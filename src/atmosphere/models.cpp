@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "skytrace/core/constants.hpp"
@@ -48,17 +49,36 @@ std::optional<double> klobuchar_delay_l1_m(const orbits::KlobucharCoefficients& 
 std::optional<double> saastamoinen_delay_m(const Geodetic& receiver, double elevation_deg,
                                            const StandardAtmosphere& atmosphere) {
   if (elevation_deg <= 0.0 || receiver.height_m < -100.0 || receiver.height_m > 1e4) return std::nullopt;
+  // The terms of the receiver's place, kept while it asks for one satellite after another.
+  struct PlaceTerms {
+    double height_m = std::numeric_limits<double>::quiet_NaN();
+    double latitude_deg = 0.0;
+    StandardAtmosphere atmosphere;
+    double pressure_hpa = 0.0;
+    double temperature_k = 0.0;
+    double water_vapour_hpa = 0.0;
+    double gravity_factor = 0.0;  // 1 - 0.00266 cos(2 latitude) - 0.00028 h / km
+  };
+  thread_local PlaceTerms place;
   const double height_m = std::max(receiver.height_m, 0.0);
-  const double pressure_hpa = atmosphere.sea_level_pressure_hpa * std::pow(1.0 - 2.2557e-5 * height_m, 5.2568);
-  const double temperature_k = atmosphere.sea_level_temperature_c - 6.5e-3 * height_m + 273.16;
-  const double water_vapour_hpa = 6.108 * atmosphere.relative_humidity *
-                                  std::exp((17.15 * temperature_k - 4684.0) / (temperature_k - 38.45));
+  if (height_m != place.height_m || receiver.latitude_deg != place.latitude_deg ||
+      atmosphere.sea_level_pressure_hpa != place.atmosphere.sea_level_pressure_hpa ||
+      atmosphere.sea_level_temperature_c != place.atmosphere.sea_level_temperature_c ||
+      atmosphere.relative_humidity != place.atmosphere.relative_humidity) {
+    place.height_m = height_m;
+    place.latitude_deg = receiver.latitude_deg;
+    place.atmosphere = atmosphere;
+    place.pressure_hpa = atmosphere.sea_level_pressure_hpa * std::pow(1.0 - 2.2557e-5 * height_m, 5.2568);
+    place.temperature_k = atmosphere.sea_level_temperature_c - 6.5e-3 * height_m + 273.16;
+    place.water_vapour_hpa = 6.108 * atmosphere.relative_humidity *
+                             std::exp((17.15 * place.temperature_k - 4684.0) / (place.temperature_k - 38.45));
+    const double latitude_rad = receiver.latitude_deg * kDegToRad;
+    place.gravity_factor = 1.0 - 0.00266 * std::cos(2.0 * latitude_rad) - 0.00028 * height_m / 1e3;
+  }
   const double zenith_rad = kPi / 2.0 - elevation_deg * kDegToRad;
-  const double latitude_rad = receiver.latitude_deg * kDegToRad;
-  const double hydrostatic_m = 0.0022768 * pressure_hpa /
-                               (1.0 - 0.00266 * std::cos(2.0 * latitude_rad) - 0.00028 * height_m / 1e3) /
-                               std::cos(zenith_rad);
-  const double wet_m = 0.002277 * (1255.0 / temperature_k + 0.05) * water_vapour_hpa / std::cos(zenith_rad);
+  const double hydrostatic_m = 0.0022768 * place.pressure_hpa / place.gravity_factor / std::cos(zenith_rad);
+  const double wet_m =
+      0.002277 * (1255.0 / place.temperature_k + 0.05) * place.water_vapour_hpa / std::cos(zenith_rad);
   return hydrostatic_m + wet_m;
 }
 
