@@ -32,7 +32,8 @@ std::optional<double> klobuchar_delay_l1_m(const orbits::KlobucharCoefficients& 
   double local_time_s = 4.32e4 * ipp_longitude_sc + t.to_week_tow(TimeScale::kGpst).tow_s;
   local_time_s -= std::floor(local_time_s / 86400.0) * 86400.0;
 
-  const double slant_factor = 1.0 + 16.0 * std::pow(0.53 - elevation_sc, 3);
+  const double below_0_53 = 0.53 - elevation_sc;
+  const double slant_factor = 1.0 + 16.0 * (below_0_53 * below_0_53 * below_0_53);
   const double phi = geomagnetic_latitude_sc;
   double amplitude_s = k.alpha[0] + phi * (k.alpha[1] + phi * (k.alpha[2] + phi * k.alpha[3]));
   double period_s = k.beta[0] + phi * (k.beta[1] + phi * (k.beta[2] + phi * k.beta[3]));
