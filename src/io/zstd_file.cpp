@@ -152,6 +152,15 @@ Status ZstdFileWriter::write(std::string_view bytes) {
   return pending_.size() >= kChunkBytes ? hand_over() : Status(Ok{});
 }
 
+std::string* ZstdFileWriter::append_buffer() {
+  return background_ != nullptr && file_ != nullptr ? &pending_ : nullptr;
+}
+
+Status ZstdFileWriter::commit_appended() {
+  if (background_ == nullptr) return Ok{};
+  return pending_.size() >= kChunkBytes ? hand_over() : Status(Ok{});
+}
+
 Status ZstdFileWriter::close() {
   if (file_ == nullptr) return Ok{};
   if (background_ != nullptr) {

@@ -235,6 +235,8 @@ class CompressedFile final : public ByteStream {
   explicit CompressedFile(std::unique_ptr<io::ZstdFileWriter> writer) : writer_(std::move(writer)) {}
   Status write(std::string_view bytes) override { return writer_->write(bytes); }
   Status close() override { return writer_->close(); }
+  std::string* append_buffer() override { return writer_->append_buffer(); }
+  Status commit_appended() override { return writer_->commit_appended(); }
 
  private:
   std::unique_ptr<io::ZstdFileWriter> writer_;
@@ -249,6 +251,11 @@ class TableSink final : public EpochSink {
                               std::map<std::string, std::set<SatelliteId>>&);
   TableSink(std::unique_ptr<ByteStream> file, AppendRows append_rows) : file_(std::move(file)), append_rows_(append_rows) {}
   Status add(const SinkEpoch& e) override {
+    // Straight into the compressor's buffer when it has one (the truth with a compression thread).
+    if (std::string* buffer = file_->append_buffer()) {
+      append_rows_(*buffer, *e.observations, e.receiver->settings->name, state_);
+      return file_->commit_appended();
+    }
     text_.clear();
     append_rows_(text_, *e.observations, e.receiver->settings->name, state_);
     return file_->write(text_);

@@ -76,6 +76,27 @@ TEST(ZstdFile, BackgroundThreadWritesTheSameBytes) {
       EXPECT_TRUE(bytes == reference) << "background " << background << ", pieces of " << piece;
     }
   }
+  // Appending in place to the background writer's buffer: the same bytes again; none without it.
+  for (const bool background : {false, true}) {
+    const auto path = dir / ("appended_" + std::to_string(background) + ".zst");
+    ZstdWriteOptions options;
+    options.background_thread = background;
+    auto writer = ZstdFileWriter::create(path, options);
+    ASSERT_TRUE(writer) << writer.error().message;
+    for (size_t at = 0; at < text.size(); at += 4093) {
+      const std::string_view piece = std::string_view(text).substr(at, 4093);
+      if (std::string* buffer = (*writer)->append_buffer()) {
+        buffer->append(piece);
+        ASSERT_TRUE((*writer)->commit_appended());
+      } else {
+        EXPECT_FALSE(background);
+        ASSERT_TRUE((*writer)->write(piece));
+      }
+    }
+    ASSERT_TRUE((*writer)->close());
+    EXPECT_EQ((*writer)->append_buffer(), nullptr);  // closed
+    EXPECT_TRUE(read_bytes(path) == reference) << "appended, background " << background;
+  }
   auto back = zstd_decompress(reference);
   ASSERT_TRUE(back) << back.error().message;
   EXPECT_TRUE(*back == text);

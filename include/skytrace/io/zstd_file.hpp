@@ -41,6 +41,11 @@ class ZstdFileWriter {
   ZstdFileWriter& operator=(const ZstdFileWriter&) = delete;
 
   [[nodiscard]] Status write(std::string_view bytes);
+  // With the background thread: the text not yet handed over, to append to in place (nullptr
+  // without it, or once closed); commit_appended() then hands it over when a chunk is full. The same
+  // bytes as write() of what was appended, one copy fewer.
+  [[nodiscard]] std::string* append_buffer();
+  [[nodiscard]] Status commit_appended();
   // Ends the frame and closes the file; later writes fail.
   [[nodiscard]] Status close();
   [[nodiscard]] const std::filesystem::path& path() const { return path_; }

@@ -109,6 +109,10 @@ class ByteStream {
   virtual ~ByteStream() = default;
   [[nodiscard]] virtual Status write(std::string_view bytes) = 0;
   [[nodiscard]] virtual Status close() { return Ok{}; }
+  // A buffer the caller may append to in place instead of write() (nullptr: none), and the call
+  // that takes what was appended.
+  [[nodiscard]] virtual std::string* append_buffer() { return nullptr; }
+  [[nodiscard]] virtual Status commit_appended() { return Ok{}; }
 };
 
 // NMEA 0183 sentences of the epoch's fix (none without a fix).
