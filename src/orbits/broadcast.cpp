@@ -348,7 +348,9 @@ SatelliteState evaluate_sbas(const SbasEphemeris& eph, const GnssTime& t) {
   return state;
 }
 
-double group_delay_s(const KeplerEphemeris& eph, const Signal& signal) { return group_delay_s(eph, signal, eph.message); }
+double group_delay_s(const KeplerEphemeris& eph, const Signal& signal) {
+  return group_delay_s(eph, signal, eph.message);
+}
 
 double group_delay_s(const KeplerEphemeris& eph, const Signal& signal, NavMessage message) {
   const GroupDelays& g = eph.group_delays;

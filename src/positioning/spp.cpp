@@ -132,7 +132,8 @@ void with_direction(Geometry& g) {
 // reception time minus the flight time (light-time iteration, exactly as the signal was made);
 // before that, the pseudorange corrected by the satellite clock dates it.
 Geometry geometry_from(const Candidate& c, const Eigen::Vector3d& receiver_m, const Eigen::Matrix3d* to_enu,
-                       std::optional<double> receiver_clock_m, std::optional<double> flight_time_guess_s = std::nullopt) {
+                       std::optional<double> receiver_clock_m,
+                       std::optional<double> flight_time_guess_s = std::nullopt) {
   Geometry g;
   const auto move_to = [&](double step_s) {
     g.satellite_m = c.position_m + c.velocity_mps * step_s + 0.5 * c.acceleration_mps2 * step_s * step_s;
@@ -198,12 +199,12 @@ double regularized_gamma_p(double a, double x) {
   return 1.0 - std::exp(log_prefactor) * h;
 }
 
-// A weighted least-squares solution of the code equations for a given set of satellites.
 // The normal equations of the code solution: position and one clock per system, on the stack.
 constexpr int kMaxUnknowns = 3 + kMaxSystems;
 using NormalMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxUnknowns, kMaxUnknowns>;
 using NormalVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxUnknowns, 1>;
 
+// A weighted least-squares solution of the code equations for a given set of satellites.
 struct CodeSolution {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
   std::array<double, kMaxSystems> clock_m{};
@@ -479,7 +480,8 @@ Result<PositionFix> SinglePointSolver::solve(const EpochMeasurements& epoch) {
         // system: inter-system biases are offsets of the measurements, not of the instant.
         std::optional<double> receiver_clock_m;
         if (on_earth && !s.systems.empty()) receiver_clock_m = s.clock_m[s.systems.front()];
-        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr, receiver_clock_m, last_flight_time_s(st));
+        st.geometry = geometry_from(c, s.position_m, on_earth ? &to_enu : nullptr, receiver_clock_m,
+                                    last_flight_time_s(st));
         if (st.rejected) continue;
         if (on_earth && st.geometry.sin_elevation < sin_mask) {
           st.note = "below the elevation mask";

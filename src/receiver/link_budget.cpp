@@ -208,7 +208,8 @@ SatelliteLink::SatelliteLink(const Eigen::Vector3d& satellite_m, const Eigen::Ve
 double SatelliteLink::received_power_dbw(const SignalPowerSpec& spec) {
   if (spec.reference_elevation_deg != reference_elevation_deg_) {
     reference_elevation_deg_ = spec.reference_elevation_deg;
-    reference_loss_ratio_db_ = 20.0 * std::log10(slant_range_m(orbit_radius_m_, spec.reference_elevation_deg) / range_m_);
+    reference_loss_ratio_db_ =
+        20.0 * std::log10(slant_range_m(orbit_radius_m_, spec.reference_elevation_deg) / range_m_);
     reference_gain_db_ =
         satellite_antenna_gain_db(off_boresight_deg(orbit_radius_m_, spec.reference_elevation_deg), orbit_radius_m_);
   }

@@ -425,7 +425,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         if (!receivers[i].is_base) continue;
         // The base's known position: its marker's antenna reference point.
         auto& history = base_history[i];
-        history.push_back(positioning::BaseEpoch{instant.measurements[i], antenna_point(receivers[i].marker_m, *receivers[i].settings)});
+        history.push_back(positioning::BaseEpoch{instant.measurements[i],
+                                                 antenna_point(receivers[i].marker_m, *receivers[i].settings)});
         while (history.back().measurements.receiver_time - history.front().measurements.receiver_time > kBaseHistory_s) {
           history.pop_front();
         }

@@ -188,8 +188,8 @@ struct RinexObsWriterOptions {
 // Streaming writer. The body goes to a temporary file next to the target; finish() writes the
 // final file (header with TIME OF FIRST/LAST OBS, then the body) under another temporary name and
 // renames it (or renames the temporary itself when it already begins with that header:
-// RinexObsWriterOptions::expected_first_obs), so a partial file never appears under the target name. Destroying a writer that has
-// not finished removes its temporaries.
+// RinexObsWriterOptions::expected_first_obs), so a partial file never appears under the target
+// name. Destroying a writer that has not finished removes its temporaries.
 class RinexObsWriter {
  public:
   RinexObsWriter();

@@ -38,7 +38,6 @@ struct SinkReceiver {
   std::string file_suffix;
 };
 
-// What every sink may use: the scenario, what was loaded for it, the receivers, and where files go.
 // A run's epoch tags: first, last and the step between them.
 struct EpochGrid {
   GnssTime first;
@@ -46,6 +45,7 @@ struct EpochGrid {
   double interval_s = 0.0;
 };
 
+// What every sink may use: the scenario, what was loaded for it, the receivers, and where files go.
 struct RunContext {
   const Scenario* scenario = nullptr;
   const ScenarioResources* resources = nullptr;
