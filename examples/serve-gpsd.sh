@@ -12,7 +12,9 @@ work=$(mktemp -d)
 pids=()
 trap 'kill "${pids[@]}" 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$work"' EXIT
 
-# Port 0: the system picks a free port, which skytrace serve prints.
+# Port 0: the system picks a free port, which skytrace serve prints. The log exists before the
+# background process opens it, so that the first look for the port never finds no file.
+: >"$work/serve.log"
 "$skytrace" serve examples/quickstart.yaml --nmea-tcp 127.0.0.1:0 --rate-hz 1 >"$work/serve.log" 2>&1 &
 pids+=($!)
 for _ in $(seq 100); do

@@ -524,21 +524,27 @@ BroadcastEphemerides::BroadcastEphemerides(NavigationData data) : data_(std::mov
   kepler_index_ = build_index(data_.kepler);
   glonass_index_ = build_index(data_.glonass);
   sbas_index_ = build_index(data_.sbas);
-  for (const auto& [satellite, indices] : kepler_index_) kepler_max_window_s_[satellite] = max_window_s(data_.kepler, indices);
+  kepler_slot_.assign(kAllSystems.size() * 256, -1);
+  for (const auto& [satellite, indices] : kepler_index_) {
+    kepler_slot_[static_cast<size_t>(satellite.system) * 256 + satellite.number] =
+        static_cast<std::int32_t>(kepler_satellites_.size());
+    kepler_satellites_.push_back(KeplerSatellite{indices, max_window_s(data_.kepler, indices)});
+  }
 }
 
 const KeplerEphemeris* BroadcastEphemerides::find_kepler(const SatelliteId& satellite, const GnssTime& t,
                                                           std::optional<NavMessage> message,
                                                           std::span<const Signal> wanted) const {
-  const auto it = kepler_index_.find(satellite);
-  if (it == kepler_index_.end()) return nullptr;
+  const std::int32_t slot = kepler_slot_[static_cast<size_t>(satellite.system) * 256 + satellite.number];
+  if (slot < 0) return nullptr;
+  const KeplerSatellite& records = kepler_satellites_[static_cast<size_t>(slot)];
   // A Galileo data set is first broadcast after its toe (the age of data is never negative), so a
   // receiver at t can only hold records with toe < t; RTKLIB applies the same rule.
   const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;
   const auto accept = [&](const KeplerEphemeris& e) {
     return record_usable(e, wanted) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
   };
-  return select_nearest(data_.kepler, it->second, t, kepler_max_window_s_.at(satellite), accept);
+  return select_nearest(data_.kepler, records.records, t, records.max_window_s, accept);
 }
 
 std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const SatelliteId& satellite,

@@ -6,6 +6,7 @@
 #include <optional>
 #include <span>
 #include <string_view>
+#include <cstdint>
 #include <unordered_map>
 #include <vector>
 
@@ -138,8 +139,15 @@ class BroadcastEphemerides final : public SatelliteStateSource {
   std::unordered_map<SatelliteId, std::vector<size_t>> kepler_index_;
   std::unordered_map<SatelliteId, std::vector<size_t>> glonass_index_;
   std::unordered_map<SatelliteId, std::vector<size_t>> sbas_index_;
-  // Largest validity window among a satellite's Keplerian records: bounds the search around t.
-  std::unordered_map<SatelliteId, double> kepler_max_window_s_;
+  // find_kepler's view, asked at every epoch for every signal: per satellite its records sorted
+  // by toe and the largest validity window among them (which bounds the search around t), found
+  // by the satellite's system and number instead of a hash.
+  struct KeplerSatellite {
+    std::vector<size_t> records;
+    double max_window_s = 0.0;
+  };
+  std::vector<KeplerSatellite> kepler_satellites_;
+  std::vector<std::int32_t> kepler_slot_;  // system * 256 + number: index into kepler_satellites_, -1: none
 };
 
 // Maximum |t - toe| a receiver accepts per system and message (seconds): GPS/QZSS half the fit
