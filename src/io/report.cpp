@@ -34,8 +34,8 @@ std::string escape(std::string_view text) {
   return out;
 }
 
-// Coordinates with two decimals: 0.01 unit is far below a pixel (and no "-0.00").
-// A coordinate or value with two decimals, fmt's "{:.2f}" characters (write_fixed), never "-0.00".
+// Coordinates with two decimals: 0.01 unit is far below a pixel (and no "-0.00"); fmt's "{:.2f}"
+// characters, written by write_fixed.
 void append_num(std::string& out, double value) { append_fixed(out, std::abs(value) < 0.005 ? 0.0 : value, 2); }
 std::string num(double value) {
   std::string text;

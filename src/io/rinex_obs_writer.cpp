@@ -1,5 +1,6 @@
 // RINEX 3.04 / 4.00 observation writer: a streaming body with hand-made fixed-point formatting
-// (the hot path of long simulations) and an atomic final file with the header written last.
+// (the hot path of long simulations) and an atomic final file with the header written last (or first,
+// when the epochs' span is known beforehand and the epochs confirm it).
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -14,6 +15,7 @@
 
 #include "skytrace/io/rinex_obs.hpp"
 
+#include "skytrace/core/decimal_text.hpp"
 #include "skytrace/core/output_file.hpp"
 
 namespace skytrace::io {
@@ -22,14 +24,7 @@ namespace detail {
 
 namespace {
 // "00" .. "99": two digits per division halves the work of the integer part.
-constexpr auto kDigitPairs = [] {
-  std::array<char, 200> table{};
-  for (int i = 0; i < 100; ++i) {
-    table[2 * i] = static_cast<char>('0' + i / 10);
-    table[2 * i + 1] = static_cast<char>('0' + i % 10);
-  }
-  return table;
-}();
+constexpr const char* kDigitPairs = decimal_text_detail::kPairs;
 }  // namespace
 
 bool format_f14_3(double value, char* out) {

@@ -23,9 +23,8 @@ struct ZstdFileWriter::Context {
   }
 };
 
-ZstdFileWriter::ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context, int workers)
-    : path_(std::move(path)), file_(file), context_(std::move(context)), out_(ZSTD_CStreamOutSize(), '\0'),
-      workers_(workers) {}
+ZstdFileWriter::ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context)
+    : path_(std::move(path)), file_(file), context_(std::move(context)), out_(ZSTD_CStreamOutSize(), '\0') {}
 
 namespace {
 constexpr size_t kChunkBytes = size_t{1} << 20;
@@ -61,14 +60,11 @@ Result<std::unique_ptr<ZstdFileWriter>> ZstdFileWriter::create(const std::filesy
   if (!set(ZSTD_c_compressionLevel, options.level) || !set(ZSTD_c_checksumFlag, 1)) {
     return make_error(ErrorCode::kOutput, path.string() + ": zstd: level " + std::to_string(options.level) + " refused");
   }
-  // A libzstd built without threads refuses workers: then the caller's thread compresses.
-  int workers = options.workers;
-  if (workers > 0 && !set(ZSTD_c_nbWorkers, workers)) workers = 0;
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (file == nullptr) {
     return make_error(ErrorCode::kOutput, path.string() + ": cannot create (" + output_errno_text(errno) + ")");
   }
-  std::unique_ptr<ZstdFileWriter> writer(new ZstdFileWriter(path, file, std::move(context), workers));
+  std::unique_ptr<ZstdFileWriter> writer(new ZstdFileWriter(path, file, std::move(context)));
   if (options.background_thread) {
     writer->background_ = std::make_unique<Background>();
     Background& b = *writer->background_;

@@ -521,38 +521,42 @@ double validity_half_window_s(const KeplerEphemeris& eph) {
 }
 
 BroadcastEphemerides::BroadcastEphemerides(NavigationData data) : data_(std::move(data)) {
-  kepler_index_ = build_index(data_.kepler);
   glonass_index_ = build_index(data_.glonass);
   sbas_index_ = build_index(data_.sbas);
   kepler_slot_.assign(kAllSystems.size() * 256, -1);
-  for (const auto& [satellite, indices] : kepler_index_) {
+  for (auto& [satellite, indices] : build_index(data_.kepler)) {
     kepler_slot_[static_cast<size_t>(satellite.system) * 256 + satellite.number] =
         static_cast<std::int32_t>(kepler_satellites_.size());
-    kepler_satellites_.push_back(KeplerSatellite{indices, max_window_s(data_.kepler, indices)});
+    const double max_window = max_window_s(data_.kepler, indices);
+    kepler_satellites_.push_back(KeplerSatellite{satellite, std::move(indices), max_window});
   }
+}
+
+const BroadcastEphemerides::KeplerSatellite* BroadcastEphemerides::kepler_satellite(const SatelliteId& satellite) const {
+  const std::int32_t slot = kepler_slot_[static_cast<size_t>(satellite.system) * 256 + satellite.number];
+  return slot < 0 ? nullptr : &kepler_satellites_[static_cast<size_t>(slot)];
 }
 
 const KeplerEphemeris* BroadcastEphemerides::find_kepler(const SatelliteId& satellite, const GnssTime& t,
                                                           std::optional<NavMessage> message,
                                                           std::span<const Signal> wanted) const {
-  const std::int32_t slot = kepler_slot_[static_cast<size_t>(satellite.system) * 256 + satellite.number];
-  if (slot < 0) return nullptr;
-  const KeplerSatellite& records = kepler_satellites_[static_cast<size_t>(slot)];
+  const KeplerSatellite* records = kepler_satellite(satellite);
+  if (records == nullptr) return nullptr;
   // A Galileo data set is first broadcast after its toe (the age of data is never negative), so a
   // receiver at t can only hold records with toe < t; RTKLIB applies the same rule.
   const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;
   const auto accept = [&](const KeplerEphemeris& e) {
     return record_usable(e, wanted) && (!message || e.message == *message) && (!toe_must_be_past || e.toe < t);
   };
-  return select_nearest(data_.kepler, records.records, t, records.max_window_s, accept);
+  return select_nearest(data_.kepler, records->records, t, records->max_window_s, accept);
 }
 
 std::vector<RecordAvailability> BroadcastEphemerides::record_availability(const SatelliteId& satellite,
                                                                            std::span<const Signal> wanted) const {
   std::vector<RecordAvailability> out;
-  if (const auto it = kepler_index_.find(satellite); it != kepler_index_.end()) {
+  if (const KeplerSatellite* kepler = kepler_satellite(satellite)) {
     const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;  // as find_kepler
-    for (size_t i : it->second) {
+    for (size_t i : kepler->records) {
       const KeplerEphemeris& e = data_.kepler[i];
       if (!record_usable(e, wanted)) continue;
       const double w = window_s(e);
@@ -598,13 +602,13 @@ Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const Satelli
                                                                    std::optional<NavMessage> message,
                                                                    std::span<const Signal> wanted) const {
   if (const KeplerEphemeris* found = find_kepler(satellite, t, message, wanted)) return found;
-  const auto it = kepler_index_.find(satellite);
-  if (it == kepler_index_.end()) return no_ephemeris_at_all(satellite);
+  const KeplerSatellite* kepler = kepler_satellite(satellite);
+  if (kepler == nullptr) return no_ephemeris_at_all(satellite);
   const std::string_view wanted_message = message ? to_string(*message) : "";
   const auto matches = [&](const KeplerEphemeris& e) { return !message || e.message == *message; };
   if (satellite.system == GnssSystem::kGalileo) {
     const auto matches_past = [&](const KeplerEphemeris& e) { return matches(e) && e.toe < t; };
-    const auto& indices = it->second;
+    const auto& indices = kepler->records;
     const bool any_match = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches(data_.kepler[i]); });
     const bool any_past = std::any_of(indices.begin(), indices.end(), [&](size_t i) { return matches_past(data_.kepler[i]); });
     if (any_match && !any_past) {
@@ -615,7 +619,7 @@ Result<const KeplerEphemeris*> BroadcastEphemerides::select_kepler(const Satelli
     }
     return explain_no_record(data_.kepler, indices, satellite, t, wanted_message, matches_past);
   }
-  return explain_no_record(data_.kepler, it->second, satellite, t, wanted_message, matches);
+  return explain_no_record(data_.kepler, kepler->records, satellite, t, wanted_message, matches);
 }
 
 Result<const GlonassEphemeris*> BroadcastEphemerides::select_glonass(const SatelliteId& satellite,
@@ -711,8 +715,8 @@ Result<SatelliteState> BroadcastEphemerides::state(const SatelliteId& satellite,
 
 std::vector<SatelliteId> BroadcastEphemerides::satellites() const {
   std::vector<SatelliteId> result;
-  result.reserve(kepler_index_.size() + glonass_index_.size() + sbas_index_.size());
-  for (const auto& [satellite, indices] : kepler_index_) result.push_back(satellite);
+  result.reserve(kepler_satellites_.size() + glonass_index_.size() + sbas_index_.size());
+  for (const KeplerSatellite& kepler : kepler_satellites_) result.push_back(kepler.satellite);
   for (const auto& [satellite, indices] : glonass_index_) result.push_back(satellite);
   for (const auto& [satellite, indices] : sbas_index_) result.push_back(satellite);
   std::sort(result.begin(), result.end());

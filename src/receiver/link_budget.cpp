@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -139,11 +140,7 @@ double off_boresight_deg(double orbit_radius_m, double elevation_deg) {
 
 double received_power_dbw(const SignalPowerSpec& spec, double range_m, double orbit_radius_m,
                           double off_boresight_angle_deg) {
-  const double reference_range_m = slant_range_m(orbit_radius_m, spec.reference_elevation_deg);
-  const double reference_angle_deg = off_boresight_deg(orbit_radius_m, spec.reference_elevation_deg);
-  return spec.minimum_dbw + spec.margin_db + 20.0 * std::log10(reference_range_m / range_m) +
-         satellite_antenna_gain_db(off_boresight_angle_deg, orbit_radius_m) -
-         satellite_antenna_gain_db(reference_angle_deg, orbit_radius_m);
+  return SatelliteLink(range_m, orbit_radius_m, off_boresight_angle_deg).received_power_dbw(spec);
 }
 
 bool is_semicodeless(const Signal& signal) {
@@ -197,13 +194,27 @@ double block_power_offset_db(SatelliteBlock block, const Signal& signal) {
   return 0.0;
 }
 
-SatelliteLink::SatelliteLink(const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m) {
+SatelliteLink::SatelliteLink(double range_m, double orbit_radius_m, double off_boresight_angle_deg)
+    : range_m_(range_m),
+      orbit_radius_m_(orbit_radius_m),
+      off_boresight_gain_db_(satellite_antenna_gain_db(off_boresight_angle_deg, orbit_radius_m)) {}
+
+namespace {
+// Range, orbit radius and off-boresight angle (deg) of a satellite seen from a receiver.
+std::array<double, 3> link_geometry(const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m) {
   const Eigen::Vector3d to_receiver = receiver_m - satellite_m;
-  range_m_ = to_receiver.norm();
-  orbit_radius_m_ = satellite_m.norm();
-  const double cos_angle = std::clamp(-satellite_m.dot(to_receiver) / (orbit_radius_m_ * range_m_), -1.0, 1.0);
-  off_boresight_gain_db_ = satellite_antenna_gain_db(std::acos(cos_angle) / kDeg, orbit_radius_m_);
+  const double range_m = to_receiver.norm();
+  const double orbit_radius_m = satellite_m.norm();
+  const double cos_angle = std::clamp(-satellite_m.dot(to_receiver) / (orbit_radius_m * range_m), -1.0, 1.0);
+  return {range_m, orbit_radius_m, std::acos(cos_angle) / kDeg};
 }
+}  // namespace
+
+SatelliteLink::SatelliteLink(const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m)
+    : SatelliteLink(link_geometry(satellite_m, receiver_m)) {}
+
+SatelliteLink::SatelliteLink(const std::array<double, 3>& geometry)
+    : SatelliteLink(geometry[0], geometry[1], geometry[2]) {}
 
 double SatelliteLink::received_power_dbw(const SignalPowerSpec& spec) {
   if (spec.reference_elevation_deg != reference_elevation_deg_) {
@@ -213,7 +224,6 @@ double SatelliteLink::received_power_dbw(const SignalPowerSpec& spec) {
     reference_gain_db_ =
         satellite_antenna_gain_db(off_boresight_deg(orbit_radius_m_, spec.reference_elevation_deg), orbit_radius_m_);
   }
-  // The terms in the order of the free function's sum.
   return spec.minimum_dbw + spec.margin_db + reference_loss_ratio_db_ + off_boresight_gain_db_ - reference_gain_db_;
 }
 

@@ -338,8 +338,8 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   context.threads = threads;
   context.summary = &summary;
   const auto epoch_count = static_cast<std::int64_t>(std::floor(s.time.duration_s / s.time.interval_s + 1e-9)) + 1;
-  context.epoch_grid = EpochGrid{s.time.start, s.time.start + static_cast<double>(epoch_count - 1) * s.time.interval_s,
-                                 s.time.interval_s};
+  const auto epoch_tag = [&](std::int64_t k) { return s.time.start + static_cast<double>(k) * s.time.interval_s; };
+  context.epoch_grid = EpochGrid{epoch_tag(0), epoch_tag(epoch_count - 1), s.time.interval_s};
   for (const ReceiverRun& rx : receivers) {
     context.receivers.push_back(SinkReceiver{rx.settings, rx.marker_m, &rx.header, rx.kinematics,
                                              receivers.size() == 1 ? "" : "_" + rx.settings->name});
@@ -457,7 +457,6 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (options.progress) options.progress(index + 1, epoch_count);
     return Ok{};
   };
-  auto epoch_tag = [&](std::int64_t k) { return s.time.start + static_cast<double>(k) * s.time.interval_s; };
   // The models of world.moving go where their trajectories say before an epoch's rays are traced.
   auto move_models = [&](std::int64_t k) -> Status {
     if (!resources->world || resources->world->moving.empty()) return Ok{};

@@ -18,12 +18,6 @@ struct ZstdWriteOptions {
   // Level 1: the fastest of the standard levels, and on truth.csv also the smallest of 1..3
   // (docs/performance.md, "truth.csv.zst").
   int level = 1;
-  // zstd worker threads: 0 compresses on the caller's thread (the default: the compressed bytes do
-  // not depend on the machine, and with a bag being written on two cores it measured faster, a
-  // bag costing 8 % of wall time instead of 23 %, docs/performance.md); 1 on a thread of libzstd's
-  // own while write() returns. The decompressed content is the same either way; the compressed
-  // bytes may differ between 0 and >= 1.
-  int workers = 0;
   // Compress on a thread of this writer's own, fed in chunks of about 1 MiB: the same bytes as on
   // the caller's thread (libzstd's single-threaded stream does not depend on how its input is
   // cut), while write() only copies (a run's writer thread formats the next rows meanwhile).
@@ -49,12 +43,11 @@ class ZstdFileWriter {
   // Ends the frame and closes the file; later writes fail.
   [[nodiscard]] Status close();
   [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-  [[nodiscard]] int workers() const { return workers_; }  // as libzstd accepted them
 
  private:
   struct Context;
   struct Background;
-  ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context, int workers);
+  ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context);
   [[nodiscard]] Status drain(int end_op, std::string_view bytes);
   // Background thread: hands the pending chunk over (waiting while two are queued).
   [[nodiscard]] Status hand_over();
@@ -65,7 +58,6 @@ class ZstdFileWriter {
   std::FILE* file_ = nullptr;
   std::unique_ptr<Context> context_;
   std::string out_;  // one output block of ZSTD_CStreamOutSize()
-  int workers_ = 0;
   std::unique_ptr<Background> background_;
   std::string pending_;  // bytes not yet handed to the background thread
 };

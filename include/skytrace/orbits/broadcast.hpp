@@ -5,8 +5,8 @@
 
 #include <optional>
 #include <span>
-#include <string_view>
 #include <cstdint>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -136,18 +136,19 @@ class BroadcastEphemerides final : public SatelliteStateSource {
  private:
   NavigationData data_;
   // Indices into data_ per satellite, sorted by toe.
-  std::unordered_map<SatelliteId, std::vector<size_t>> kepler_index_;
   std::unordered_map<SatelliteId, std::vector<size_t>> glonass_index_;
   std::unordered_map<SatelliteId, std::vector<size_t>> sbas_index_;
-  // find_kepler's view, asked at every epoch for every signal: per satellite its records sorted
-  // by toe and the largest validity window among them (which bounds the search around t), found
-  // by the satellite's system and number instead of a hash.
+  // The Keplerian records per satellite (indices into data_.kepler sorted by toe) and the largest
+  // validity window among them (which bounds the search around t). find_kepler is asked at every
+  // epoch for every signal: a satellite is found by its system and number, not by a hash.
   struct KeplerSatellite {
+    SatelliteId satellite;
     std::vector<size_t> records;
     double max_window_s = 0.0;
   };
   std::vector<KeplerSatellite> kepler_satellites_;
   std::vector<std::int32_t> kepler_slot_;  // system * 256 + number: index into kepler_satellites_, -1: none
+  [[nodiscard]] const KeplerSatellite* kepler_satellite(const SatelliteId& satellite) const;
 };
 
 // Maximum |t - toe| a receiver accepts per system and message (seconds): GPS/QZSS half the fit

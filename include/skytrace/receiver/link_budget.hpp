@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <optional>
 #include <string_view>
 
@@ -87,14 +88,16 @@ struct LinkBudget {
 
 // What the budgets of one satellite's signals share at an instant: the range, the orbit radius and
 // the satellite antenna's gain towards the receiver, and the reference terms of the last reference
-// elevation asked for (5 deg, 10 for Galileo and QZSS). received_power_dbw gives the same value,
-// to the bit, as the free function with the same geometry.
+// elevation asked for (5 deg, 10 for Galileo and QZSS). The free received_power_dbw is this with
+// the geometry given as numbers.
 class SatelliteLink {
  public:
   SatelliteLink(const Eigen::Vector3d& satellite_m, const Eigen::Vector3d& receiver_m);
+  SatelliteLink(double range_m, double orbit_radius_m, double off_boresight_angle_deg);
   [[nodiscard]] double received_power_dbw(const SignalPowerSpec& spec);
 
  private:
+  explicit SatelliteLink(const std::array<double, 3>& geometry);  // range, orbit radius, angle
   double range_m_ = 0.0;
   double orbit_radius_m_ = 0.0;
   double off_boresight_gain_db_ = 0.0;
