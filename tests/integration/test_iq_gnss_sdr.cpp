@@ -50,7 +50,7 @@ class IqGnssSdr : public ::testing::Test {
   }
   // skytrace iq on a contract scenario (at 1 s, the gnss-sdr profile) for one band, then GNSS-SDR
   // in the output folder; the samples are removed afterwards (up to a gigabyte).
-  std::filesystem::path run_both(const std::string& band, const std::string& arguments) {
+  std::filesystem::path run_both(const std::string& band, const std::string& arguments, bool keep_samples = false) {
     const auto dir = test::make_temp_dir("iq_gnss_sdr_" + band);
     const std::string signal = band == "L1" ? "G1C" : band == "B1" ? "C2I" : "R1C";
     const auto iq = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " iq " +
@@ -59,12 +59,17 @@ class IqGnssSdr : public ::testing::Test {
                                       " --quiet --set time.interval_s=1 --set receiver.profile=gnss-sdr --set "
                                       "'receiver.signals=[" + signal + "]' 2>&1");
     EXPECT_EQ(iq.exit_code, 0) << iq.output;
+    run_receiver(dir, band);
+    if (!keep_samples) std::filesystem::remove(dir / ("iq_" + band + ".sc8"));
+    return dir;
+  }
+  // GNSS-SDR on the samples in `dir` (its earlier outputs there replaced).
+  static void run_receiver(const std::filesystem::path& dir, const std::string& band) {
+    std::filesystem::remove_all(dir / ("gnss-sdr-" + band));
     std::filesystem::create_directories(dir / ("gnss-sdr-" + band));
     const auto receiver = test::run_command("cd " + test::shell_quote(dir.string()) + " && timeout 600 gnss-sdr --config_file=gnss-sdr-" +
                                             band + ".conf > gnss-sdr.log 2>&1");
     EXPECT_EQ(receiver.exit_code, 0) << receiver.output;
-    std::filesystem::remove(dir / ("iq_" + band + ".sc8"));
-    return dir;
   }
 };
 
@@ -91,19 +96,16 @@ std::pair<int, double> fixes_against_antenna(const std::string& log) {
   return {fixes, worst_m};
 }
 
-TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
-  const auto dir = run_both("L1", "--set time.duration_s=90");
-  const std::string log = read_text(dir / "gnss-sdr.log");
-
-  // The samples hold the satellites of the run's obs.rnx; GNSS-SDR's observations come from
-  // those of them whose ephemeris it accepts (it requires IODC == IODE over all ten bits:
-  // Gps_Navigation_Message::satellite_validation; G18's record has IODC 388, IODE 132).
-  auto sim = io::read_rinex_obs(dir / "obs.rnx");
-  ASSERT_TRUE(sim) << sim.error().message;
-  auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
-  ASSERT_TRUE(sim_nav);
+// The satellites of a run's obs.rnx (those its samples hold), and those of them whose ephemeris
+// GNSS-SDR accepts (it requires IODC == IODE over all ten bits:
+// Gps_Navigation_Message::satellite_validation; G18's record has IODC 388, IODE 132).
+std::pair<std::set<std::string>, std::set<std::string>> satellites_in_samples(const std::filesystem::path& dir) {
   std::set<std::string> in_samples;
   std::set<std::string> usable_by_gnss_sdr;
+  auto sim = io::read_rinex_obs(dir / "obs.rnx");
+  auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
+  EXPECT_TRUE(sim && sim_nav);
+  if (!sim || !sim_nav) return {};
   for (const auto& epoch : sim->epochs) {
     for (const auto& s : epoch.satellites) in_samples.insert(s.satellite.to_string());
   }
@@ -112,6 +114,42 @@ TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
       usable_by_gnss_sdr.insert(eph.satellite.to_string());
     }
   }
+  return {in_samples, usable_by_gnss_sdr};
+}
+
+// The satellites of GNSS-SDR's RINEX observation file in `folder` (none without one).
+std::set<std::string> satellites_observed(const std::filesystem::path& folder) {
+  std::set<std::string> observed;
+  const auto path = file_ending(folder, 'O');
+  if (!path) return observed;
+  auto real = io::read_rinex_obs(*path);
+  if (!real) return observed;
+  for (const auto& epoch : real->epochs) {
+    for (const auto& s : epoch.satellites) observed.insert(s.satellite.to_string());
+  }
+  return observed;
+}
+
+TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
+  const auto dir = run_both("L1", "--set time.duration_s=90", true);
+  const auto satellites = satellites_in_samples(dir);
+  const std::set<std::string>& in_samples = satellites.first;
+  const std::set<std::string>& usable_by_gnss_sdr = satellites.second;
+  // GNSS-SDR runs its blocks on threads of its own: when it acquires each satellite, and so which
+  // ephemerides it holds by the end and where its first fixes fall, varies from run to run, more
+  // under load (a fresh-clone CI run once ended without G07, another with a first fix 5.9 m off).
+  // A run that misses a satellite or a limit is repeated once on the same samples; the limits below
+  // are the same for either run.
+  const auto run_complete = [&] {
+    const auto [fixes, worst_m] = fixes_against_antenna(read_text(dir / "gnss-sdr.log"));
+    return satellites_observed(dir / "gnss-sdr-L1") == usable_by_gnss_sdr && fixes >= 15 && worst_m <= 5.0;
+  };
+  if (!run_complete()) {
+    std::cout << "GNSS-SDR's first run missed a satellite or a limit: run again on the same samples\n";
+    run_receiver(dir, "L1");
+  }
+  std::filesystem::remove(dir / "iq_L1.sc8");
+  const std::string log = read_text(dir / "gnss-sdr.log");
   ASSERT_GE(in_samples.size(), 8u);
   // It tracks every satellite of the samples.
   for (const auto& sat : in_samples) {
@@ -120,15 +158,11 @@ TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
   }
   const auto real_obs_path = file_ending(dir / "gnss-sdr-L1", 'O');
   ASSERT_TRUE(real_obs_path) << log.substr(log.size() > 4000 ? log.size() - 4000 : 0);
-  auto real = io::read_rinex_obs(*real_obs_path);
-  ASSERT_TRUE(real) << real.error().message;
-  std::set<std::string> observed;
-  for (const auto& epoch : real->epochs) {
-    for (const auto& s : epoch.satellites) observed.insert(s.satellite.to_string());
-  }
-  EXPECT_EQ(observed, usable_by_gnss_sdr);
+  EXPECT_EQ(satellites_observed(dir / "gnss-sdr-L1"), usable_by_gnss_sdr);
 
   // The ephemerides it decoded are nav.rnx's records, field by field.
+  auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
+  ASSERT_TRUE(sim_nav);
   const auto real_nav_path = file_ending(dir / "gnss-sdr-L1", 'N');
   ASSERT_TRUE(real_nav_path);
   auto real_nav = orbits::read_rinex_nav(*real_nav_path);
@@ -187,7 +221,7 @@ TEST_F(IqGnssSdr, OpenSkyDecodesTheEphemeridesAndFixesWithinFiveMetres) {
   const auto [fixes, worst_m] = fixes_against_antenna(log);
   EXPECT_GE(fixes, 15);
   EXPECT_LE(worst_m, 5.0);
-  std::cout << "GNSS-SDR: " << observed.size() << " satellites, " << fixes << " fixes, worst 3D error " << worst_m
+  std::cout << "GNSS-SDR: " << satellites_observed(dir / "gnss-sdr-L1").size() << " satellites, " << fixes << " fixes, worst 3D error " << worst_m
             << " m; " << g1c->dump() << "\n";
 }
 
