@@ -93,7 +93,28 @@ void ObservationGenerator::set_world(const PathQuery* world, const LocalFrame& f
   world_frame_ = frame;
 }
 
+namespace {
+
+// The satellite's slot `used` of the epoch, as a default-constructed observation that keeps the
+// storage of the slot's vectors and strings from an earlier epoch: copy-assigning an empty vector
+// or string keeps the target's capacity.
+SatelliteObservation& reused_slot(std::vector<SatelliteObservation>& satellites, size_t used) {
+  if (used == satellites.size()) return satellites.emplace_back();
+  static const SatelliteObservation kBlank;
+  SatelliteObservation& obs = satellites[used];
+  obs = kBlank;
+  return obs;
+}
+
+}  // namespace
+
 Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
+  EpochObservations epoch;
+  if (auto st = observe(tag, epoch); !st) return st.error();
+  return epoch;
+}
+
+Status ObservationGenerator::observe(const GnssTime& tag, EpochObservations& epoch) {
   if (last_tag_) {
     if (tag <= *last_tag_) {
       return make_error(ErrorCode::kInvalidArgument, "epochs must increase: " + tag.to_iso8601(TimeScale::kGpst) +
@@ -101,7 +122,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     }
     clock_.advance(tag - *last_tag_);
   }
-  EpochObservations epoch;
+  size_t used = 0;  // satellites written into epoch.satellites so far
   epoch.receiver_time = tag;
   epoch.receiver_clock = clock_.state();
   epoch.true_time = tag - epoch.receiver_clock.bias_s;
@@ -118,14 +139,13 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   lines_of_sight_.clear();
   epoch.satellites.reserve(satellites_.size());
   for (const SatelliteId& sat : satellites_) {
-    SatelliteObservation obs;
+    SatelliteObservation& obs = reused_slot(epoch.satellites, used++);
     obs.satellite = sat;
     std::optional<stages::RecordState> record = stages::select_default_record(ephemerides_, sat, tag, settings_.signals);
     if (!record) {
       obs.status = SatelliteStatus::kNoEphemeris;
       obs.detail = "no valid broadcast ephemeris";
       flight_time_guess_s_.erase(sat);
-      epoch.satellites.push_back(std::move(obs));
       continue;
     }
     // The truth: one orbit and clock per satellite, from its reference record (or the precise
@@ -166,7 +186,6 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     if (record->glonass != nullptr) obs.glonass_channel = record->glonass->frequency_channel;
     if (obs.direction.elevation_deg < elevation_mask_deg_) {
       obs.status = SatelliteStatus::kBelowMask;
-      epoch.satellites.push_back(std::move(obs));
       continue;
     }
     auto atmosphere = stages::atmosphere_terms(settings_.troposphere, settings_.ionosphere.get(), epoch.true_time,
@@ -175,10 +194,10 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
     obs.troposphere_m = atmosphere->troposphere_m;
     obs.ionosphere_l1_m = atmosphere->ionosphere_l1_m;
 
-    pending_.push_back(Pending{epoch.satellites.size(), *record, truth, precise_truth, light_time});
+    pending_.push_back(Pending{used - 1, *record, truth, precise_truth, light_time});
     lines_of_sight_.push_back(light_time.line_of_sight);
-    epoch.satellites.push_back(std::move(obs));
   }
+  epoch.satellites.resize(used);
 
   // Stage 2: what the world does to each signal on its way to the antenna, all satellites in one batch.
   world_outcomes_.clear();
@@ -198,7 +217,7 @@ Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   for (const size_t pending_index : order_) observe_satellite(epoch, pending_index, rx_to_enu, channels_used);
   if (settings_.profile.output_requires_ephemeris) ephemeris_decoding_.end_epoch(tag);
   last_tag_ = tag;
-  return epoch;
+  return Ok{};
 }
 
 namespace {

@@ -159,8 +159,8 @@ struct QueuedEpoch {
 using EpochBatch = std::vector<QueuedEpoch>;
 
 // A bounded single-producer single-consumer queue of computed epochs, in batches. Spent batches go
-// back to the producer, which frees them: memory is released by the thread that allocated it, so
-// the two threads do not contend for the allocator's locks.
+// back to the producer, which fills them again: their storage is allocated once, by the thread that
+// uses it, and no thread contends for the allocator's locks.
 class EpochQueue {
  public:
   explicit EpochQueue(size_t capacity_batches) : capacity_(capacity_batches) {}
@@ -187,13 +187,13 @@ class EpochQueue {
     std::lock_guard lock(mutex_);
     spent_.push_back(std::move(batch));
   }
-  // The producer frees the spent batches outside the lock.
-  void release_spent() {
-    std::vector<EpochBatch> spent;
-    {
-      std::lock_guard lock(mutex_);
-      spent.swap(spent_);
-    }
+  // A spent batch for the producer to fill again (empty when none is back yet).
+  EpochBatch reuse_spent() {
+    std::lock_guard lock(mutex_);
+    if (spent_.empty()) return {};
+    EpochBatch batch = std::move(spent_.back());
+    spent_.pop_back();
+    return batch;
   }
   void close() {
     std::lock_guard lock(mutex_);
@@ -466,15 +466,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   auto observe_only = [&](std::int64_t k, QueuedEpoch& out) -> Status {
     if (auto st = move_models(k); !st) return st;
     out.index = k;
-    out.receivers.clear();
-    out.measurements.clear();
-    for (ReceiverRun& rx : receivers) {
-      auto epoch = rx.generator->observe(epoch_tag(k));
-      if (!epoch) return epoch.error();
+    // The storage of an earlier epoch is reused (the generator overwrites every field).
+    out.receivers.resize(receivers.size());
+    out.measurements.resize(receivers.size());
+    for (size_t i = 0; i < receivers.size(); ++i) {
+      ReceiverRun& rx = receivers[i];
+      if (auto st = rx.generator->observe(epoch_tag(k), out.receivers[i]); !st) return st;
       // Receivers with fixes, and RTK bases (their rovers' corrections), need them.
-      const bool measured = rx.fixes != nullptr || rx.is_base;
-      out.measurements.push_back(measured ? to_measurements(*epoch) : positioning::EpochMeasurements{});
-      out.receivers.push_back(std::move(*epoch));
+      if (rx.fixes != nullptr || rx.is_base) {
+        to_measurements(out.receivers[i], out.measurements[i]);
+      } else {
+        out.measurements[i] = positioning::EpochMeasurements{};
+      }
     }
     return Ok{};
   };
@@ -506,9 +509,11 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     std::optional<Error> producer_error, fixer_error;
     std::thread producer([&] {
       EpochBatch batch;
+      size_t filled = 0;  // items of `batch` holding this batch's epochs (a reused batch has more)
       size_t receiver_epochs = 0;
       for (std::int64_t k = 0; k < epoch_count && !observed.cancelled() && !cancellation_requested(); ++k) {
-        QueuedEpoch& item = batch.emplace_back();
+        QueuedEpoch& item = filled < batch.size() ? batch[filled] : batch.emplace_back();
+        ++filled;
         if (auto st = fix_stage ? observe_only(k, item) : observe_instant(k, item); !st) {
           producer_error = st.error();
           observed.close();
@@ -516,12 +521,14 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         }
         receiver_epochs += receivers.size();
         if (receiver_epochs >= kBatchEpochs) {
+          batch.resize(filled);
           if (!observed.push(std::move(batch))) return;
-          batch = EpochBatch();
+          batch = observed.reuse_spent();
+          filled = 0;
           receiver_epochs = 0;
-          observed.release_spent();
         }
       }
+      batch.resize(filled);
       if (!batch.empty()) observed.push(std::move(batch));
       observed.close();
     });
@@ -552,7 +559,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         if (!consumed) break;
       }
       if (!consumed) break;
-      observed.give_back(std::move(*batch));  // freed by the producer, which allocated it
+      observed.give_back(std::move(*batch));  // filled again by the producer, which allocated it
     }
     if (!consumed) {
       to_writer.cancel();

@@ -556,7 +556,13 @@ void RinexRecordMaker::record_into(const receiver::EpochObservations& epoch, io:
 
 positioning::EpochMeasurements to_measurements(const receiver::EpochObservations& epoch) {
   positioning::EpochMeasurements out;
+  to_measurements(epoch, out);
+  return out;
+}
+
+void to_measurements(const receiver::EpochObservations& epoch, positioning::EpochMeasurements& out) {
   out.receiver_time = epoch.receiver_time;
+  out.signals.clear();
   size_t signals = 0;
   for (const auto& sat : epoch.satellites) {
     if (sat.status == receiver::SatelliteStatus::kTracked) signals += sat.signals.size();
@@ -578,7 +584,6 @@ positioning::EpochMeasurements to_measurements(const receiver::EpochObservations
       out.signals.push_back(pm);
     }
   }
-  return out;
 }
 
 }  // namespace skytrace::sim

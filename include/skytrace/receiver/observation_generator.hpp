@@ -104,6 +104,9 @@ class ObservationGenerator {
 
   // Observations at the receiver time tag `tag`.
   [[nodiscard]] Result<EpochObservations> observe(const GnssTime& tag);
+  // The same into `epoch`, whose storage (satellites, signals, strings) is reused: a run that hands
+  // epochs back saves an allocation per satellite and epoch. Every field is overwritten.
+  [[nodiscard]] Status observe(const GnssTime& tag, EpochObservations& epoch);
 
   // Every ephemeris record used so far (for the navigation file that goes with the observations).
   [[nodiscard]] const std::set<const orbits::KeplerEphemeris*>& used_kepler() const { return used_kepler_; }

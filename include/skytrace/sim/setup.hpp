@@ -155,5 +155,7 @@ class RinexRecordMaker {
 
 // The tracked signals of an epoch as the navigation engine's input.
 [[nodiscard]] positioning::EpochMeasurements to_measurements(const receiver::EpochObservations& epoch);
+// The same into `out`, reusing its storage.
+void to_measurements(const receiver::EpochObservations& epoch, positioning::EpochMeasurements& out);
 
 }  // namespace skytrace::sim
