@@ -1,4 +1,5 @@
 #include "gz_bridge.hpp"
+#include "gz_module.hpp"
 
 #include <fmt/format.h>
 #include <ignition/msgs/clock.pb.h>
@@ -329,7 +330,9 @@ std::string observations_topic(const BridgeOptions& options) {
   return "/world/" + options.world_name + "/model/" + options.model + "/skytrace/observations";
 }
 
-Status run_bridge(const BridgeOptions& options) {
+namespace {
+
+Status run_bridge_here(const BridgeOptions& options) {
   if (options.world_name.empty() || options.model.empty()) {
     return make_error(ErrorCode::kInvalidArgument, "--world-name and --model must not be empty");
   }
@@ -379,4 +382,13 @@ Status run_bridge(const BridgeOptions& options) {
   return bridge.finish_outputs();
 }
 
+}  // namespace
+
 }  // namespace skytrace::gz
+
+// The entry of the module skytrace-gz.so (gz_module.hpp).
+extern "C" __attribute__((visibility("default"))) const skytrace::gz::GzBackend* skytrace_gz_backend() {
+  using namespace skytrace::gz;
+  static const GzBackend table{kGzBackendRevision, gz_backend_layout(), &run_bridge_here};
+  return &table;
+}

@@ -30,8 +30,6 @@ namespace skytrace::world::city_model {
 [[nodiscard]] Status to_wgs84(std::optional<int> epsg, bool gml_axis_order, std::vector<Eigen::Vector3d>& points,
                               const std::string& where, const std::string& crs_key);
 
-// The same for a CRS given as WKT (a raster's), easting/longitude first; `what` names it in errors.
-[[nodiscard]] Status wkt_to_wgs84(const std::string& wkt, std::vector<Eigen::Vector3d>& points, const std::string& where);
 
 // Longitude/latitude/z points in the world frame: the origin (given, or the centre of the
 // extent at the lowest point), heights moved by `height_offset_m` (nullopt: the EGM96 geoid at the

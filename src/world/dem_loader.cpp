@@ -9,12 +9,15 @@
 
 #include <fmt/format.h>
 
+#include "backend.hpp"
 #include "city_model.hpp"
 #include "gdal_support.hpp"
 #include "skytrace/core/input_limits.hpp"
 #include "skytrace/world/loaders.hpp"
 
 namespace skytrace::world {
+namespace backend {
+
 Result<WorldModel> load_dem_world(const std::filesystem::path& path, const DemLoadOptions& options) {
   const std::string where = path.string();
   std::error_code ec;
@@ -82,7 +85,7 @@ Result<WorldModel> load_dem_world(const std::filesystem::path& path, const DemLo
     }
   }
   if (points.size() < 3) return make_error(ErrorCode::kParse, where + ": fewer than three cells with a height");
-  if (auto st = city_model::wkt_to_wgs84(wkt, points, where); !st) return st.error();
+  if (auto st = city_model::backend::wkt_to_wgs84(wkt, points, where); !st) return st.error();
   WorldModel world;
   world.name = path.filename().string();
   auto placed = city_model::place(points, options.origin, options.height_offset_m, world, where, "cell",
@@ -120,5 +123,7 @@ Result<WorldModel> load_dem_world(const std::filesystem::path& path, const DemLo
   world.objects.push_back(std::move(ground));
   return world;
 }
+
+}  // namespace backend
 
 }  // namespace skytrace::world

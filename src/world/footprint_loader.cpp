@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "backend.hpp"
 #include "skytrace/world/loaders.hpp"
 #include "gdal_support.hpp"
 
@@ -70,6 +71,8 @@ constexpr double kMaxBuildingHeight_m = 1000.0;
 constexpr double kMaxStoreys = 200.0;
 
 }  // namespace
+
+namespace backend {
 
 Result<WorldModel> load_footprint_world(const std::filesystem::path& path, const FootprintLoadOptions& options) {
   std::error_code ec;
@@ -246,5 +249,7 @@ Result<WorldModel> load_footprint_world(const std::filesystem::path& path, const
   }
   return world;
 }
+
+}  // namespace backend
 
 }  // namespace skytrace::world

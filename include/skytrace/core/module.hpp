@@ -1,0 +1,21 @@
+// Optional parts of skytrace built as modules, shared objects loaded on first use: the world
+// loaders that need sdformat and GDAL, and the Gazebo bridge. Linked into the executable, their
+// libraries (some 110 shared objects) would cost every command about 55 ms of loading before it
+// starts (docs/adr/0005-optional-modules.md).
+#pragma once
+
+#include <string>
+
+#include "skytrace/core/error.hpp"
+
+namespace skytrace {
+
+// The folder the modules are loaded from: $SKYTRACE_MODULE_DIR when set, else lib/skytrace beside
+// the folder of the running executable (build/bin/skytrace -> build/lib/skytrace).
+[[nodiscard]] std::string module_dir();
+
+// The address of `symbol` in the module `file_name` (e.g. "skytrace-world.so") of module_dir(),
+// loaded once per process and kept. The error (kNotFound) names the file and the loader's reason.
+[[nodiscard]] Result<void*> module_symbol(const std::string& file_name, const char* symbol);
+
+}  // namespace skytrace
