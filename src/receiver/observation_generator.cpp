@@ -80,6 +80,9 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
     std::stable_partition(settings_.signals.begin(), settings_.signals.end(),
                           [](const Signal& s) { return !is_semicodeless(s); });
   }
+  for (const Signal& signal : settings_.signals) {
+    listed_.push_back(ListedSignal{signal_info_.at(signal), &tracked_.at(signal), data_modulated_.at(signal)});
+  }
   elevation_mask_deg_ = std::max(settings_.elevation_mask_deg, settings_.profile.elevation_mask_deg);
   for (const SatelliteId& sat : ephemerides_.satellites()) {
     const bool wanted = std::any_of(settings_.signals.begin(), settings_.signals.end(),
@@ -138,22 +141,24 @@ Status ObservationGenerator::observe(const GnssTime& tag, EpochObservations& epo
   pending_.clear();
   lines_of_sight_.clear();
   epoch.satellites.reserve(satellites_.size());
-  for (const SatelliteId& sat : satellites_) {
+  flight_time_guess_s_.resize(satellites_.size());
+  for (size_t satellite_index = 0; satellite_index < satellites_.size(); ++satellite_index) {
+    const SatelliteId& sat = satellites_[satellite_index];
+    std::optional<double>& flight_time_guess_s = flight_time_guess_s_[satellite_index];
     SatelliteObservation& obs = reused_slot(epoch.satellites, used++);
     obs.satellite = sat;
     std::optional<stages::RecordState> record = stages::select_default_record(ephemerides_, sat, tag, settings_.signals);
     if (!record) {
       obs.status = SatelliteStatus::kNoEphemeris;
       obs.detail = "no valid broadcast ephemeris";
-      flight_time_guess_s_.erase(sat);
+      flight_time_guess_s.reset();
       continue;
     }
     // The truth: one orbit and clock per satellite, from its reference record (or the precise
     // products below), whatever record each signal's receiver-side message has. It is evaluated
     // once, at a guess of the transmission time (the last epoch's flight time).
     stages::RecordState truth = stages::reference_record(ephemerides_, sat, tag, *record, settings_.signals);
-    const auto guess = flight_time_guess_s_.find(sat);
-    const double guess_s = guess != flight_time_guess_s_.end() ? guess->second : stages::kFirstFlightTimeGuess_s;
+    const double guess_s = flight_time_guess_s.value_or(stages::kFirstFlightTimeGuess_s);
     const GnssTime evaluation_time = epoch.true_time - guess_s;
     const bool from_precise_products = truth_orbits_ != nullptr && settings_.broadcast_truth.count(sat) == 0;
     if (!from_precise_products) stages::evaluate_record(truth, evaluation_time, glonass_orbits_);
@@ -175,7 +180,7 @@ Status ObservationGenerator::observe(const GnssTime& tag, EpochObservations& epo
     }
     const stages::LightTime light_time =
         stages::solve_light_time(truth.state, guess_s, rx_m, epoch.receiver.velocity_mps);
-    flight_time_guess_s_[sat] = light_time.flight_time_s;
+    flight_time_guess_s = light_time.flight_time_s;
     truth.state = light_time.state;
     obs.direction = stages::local_direction(rx_to_enu * (light_time.position_m - rx_m));
     obs.range_m = light_time.range_m;
@@ -345,9 +350,13 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
                                      kC * (p.truth.state.clock_drift_s_per_s + p.truth.state.relativistic_drift_s_per_s),
                                      obs.troposphere_m};
   SatelliteLink link(obs.satellite_position_m, rx_m);  // the budget terms the signals share
-  for (const Signal& signal : settings_.signals) {
+  for (size_t signal_index = 0; signal_index < settings_.signals.size(); ++signal_index) {
+    const Signal& signal = settings_.signals[signal_index];
+    const ListedSignal& listed = listed_[signal_index];
     // A receiver records only what the satellite transmits; the answer is kept for the GPST day.
-    if (signal.system != sat.system || !satellite_signals_.transmitted(sat, signal, tag)) continue;
+    if (signal.system != sat.system) continue;
+    const stages::SatelliteSignals::Facts& facts = satellite_signals_.facts(sat, signal, tag);
+    if (!facts.transmitted) continue;
     // A signal its record declares unusable is not tracked (truth.csv says why).
     stages::RecordState signal_record =
         stages::record_for_signal(ephemerides_, sat, tag, p.record, signal, settings_.signals);
@@ -358,13 +367,13 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     }
     // Multipath: the loops lock on the composite of the signal's paths.
     // A band whose antenna table differs from the first signal's gets its own path amplitudes.
-    const AntennaPattern* antenna = signal_antenna(&tracked_.at(signal));
+    const AntennaPattern* antenna = signal_antenna(listed.tracked);
     const std::vector<ReceivedPath>& through_antenna =
         received.empty() || antenna == received_antenna ? received : received_through(antenna, received, obs);
-    const MultipathErrors multipath = stages::signal_multipath_errors(*signal_info_.at(signal), obs.glonass_channel,
+    const MultipathErrors multipath = stages::signal_multipath_errors(*listed.info, obs.glonass_channel,
                                                                       profile.correlator_spacing_chips, through_antenna);
-    const double cn0_dbhz = stages::signal_cn0_dbhz(profile, tracked_.at(signal), link, obs.direction, attenuation_db,
-                                                    satellite_signals_.power_offset_db(sat, signal, tag),
+    const double cn0_dbhz = stages::signal_cn0_dbhz(profile, *listed.tracked, link, obs.direction, attenuation_db,
+                                                    facts.power_offset_db,
                                                     multipath.power_db);
     if (settings_.incoming_signals) {
       IncomingSignal in;
@@ -430,7 +439,8 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
 
     // Stage 5: the satellite's one clock, the signal's code delay relative to it, the ionosphere,
     // the loop noise and the multipath errors.
-    const SignalInfo& info = *signal_info_.at(signal);
+    const ListedSignal& listed = listed_[static_cast<size_t>(candidate.signal - settings_.signals.data())];
+    const SignalInfo& info = *listed.info;
     SignalMeasurement m;
     m.signal = signal;
     m.carrier_hz = info.carrier_frequency_hz(obs.glonass_channel);
@@ -467,7 +477,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     // time; a foliage fade that broke the phase lock since the last epoch starts a new arc).
     const bool new_arc = lock == stages::TrackingState::Lock::kNewArc || candidate.fade.slipped;
     const auto arc = tracking_.carrier_arc(profile, sat, signal, new_arc,
-                                           cn0_dbhz, aided, data_modulated_.at(signal), tag, last_tag_);
+                                           cn0_dbhz, aided, listed.data_modulated, tag, last_tag_);
     m.loss_of_lock = arc.loss_of_lock;
     m.ambiguity_cycles = arc.ambiguity_cycles;
     m.lock_time_s = arc.lock_time_s;
@@ -509,10 +519,14 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     obs.signals.clear();
     return;
   }
+  // A satellite's signals mostly share one record: each record once into the sets.
+  const orbits::KeplerEphemeris* last_kepler = nullptr;
+  const orbits::GlonassEphemeris* last_glonass = nullptr;
+  const orbits::SbasEphemeris* last_sbas = nullptr;
   for (const auto& [kepler, glonass, sbas] : records_used_) {
-    if (kepler != nullptr) used_kepler_.insert(kepler);
-    if (glonass != nullptr) used_glonass_.insert(glonass);
-    if (sbas != nullptr) used_sbas_.insert(sbas);
+    if (kepler != nullptr && kepler != last_kepler) used_kepler_.insert(last_kepler = kepler);
+    if (glonass != nullptr && glonass != last_glonass) used_glonass_.insert(last_glonass = glonass);
+    if (sbas != nullptr && sbas != last_sbas) used_sbas_.insert(last_sbas = sbas);
   }
 }
 

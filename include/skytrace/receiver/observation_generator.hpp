@@ -138,7 +138,16 @@ class ObservationGenerator {
   std::map<Signal, bool> data_modulated_;
   std::vector<Signal> untrackable_;
   double elevation_mask_deg_ = 0.0;  // the scenario's and the profile's, whichever is higher
-  std::map<SatelliteId, double> flight_time_guess_s_;
+  // Per satellite of satellites_: the last epoch's flight time (nullopt: none yet, or lost).
+  std::vector<std::optional<double>> flight_time_guess_s_;
+  // Per signal of settings_.signals (same order): what the maps above hold, found by position in the
+  // per-signal loops.
+  struct ListedSignal {
+    const SignalInfo* info = nullptr;
+    const TrackedSignal* tracked = nullptr;
+    bool data_modulated = false;
+  };
+  std::vector<ListedSignal> listed_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
   // The truth source's view for this generator's forward-moving queries (precise orbits: fits per

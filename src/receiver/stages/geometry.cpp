@@ -22,12 +22,15 @@ LightTime solve_light_time(const orbits::SatelliteState& at_guess, double guess_
   Eigen::Vector3d sat_position_m;
   double range_m = 0.0;
   double step_s = 0.0;  // transmission time minus evaluation time
+  // Four passes at most; once the flight time repeats exactly, further passes would repeat too.
   for (int iteration = 0; iteration < 4; ++iteration) {
     step_s = guess_s - flight_time_s;
     const Eigen::Vector3d r = r0 + v0 * step_s + 0.5 * a0 * step_s * step_s;
     sat_position_m = rotate_earth_frame(r, kEarthRotation_radps * flight_time_s);
     range_m = (sat_position_m - receiver_m).norm();
+    const double previous_s = flight_time_s;
     flight_time_s = range_m / kC;
+    if (flight_time_s == previous_s) break;
   }
   step_s = guess_s - flight_time_s;
   out.state.clock_bias_s += at_guess.clock_drift_s_per_s * step_s;

@@ -10,21 +10,17 @@ namespace {
 std::int64_t gpst_day(const GnssTime& t) { return static_cast<std::int64_t>(std::floor(t.gpst_seconds_approx() / 86400.0)); }
 }  // namespace
 
-bool SatelliteSignals::transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
+const SatelliteSignals::Facts& SatelliteSignals::facts(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
   const std::int64_t day = gpst_day(t);
-  auto [it, inserted] = transmits_.try_emplace(std::make_pair(sat, signal), day, false);
-  if (inserted || it->second.first != day) it->second = {day, transmits(sat, signal, t)};
-  return it->second.second;
-}
-
-double SatelliteSignals::power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
-  const std::int64_t day = gpst_day(t);
-  auto [it, inserted] = power_offset_db_.try_emplace(std::make_pair(sat, signal), day, 0.0);
-  if (inserted || it->second.first != day) {
+  auto [it, inserted] = facts_.try_emplace(std::make_pair(sat, signal));
+  Facts& f = it->second;
+  if (inserted || f.gpst_day != day) {
+    f.gpst_day = day;
+    f.transmitted = transmits(sat, signal, t);
     const auto info = satellite_info(sat, t);
-    it->second = {day, info ? block_power_offset_db(info->block_id, signal) : 0.0};
+    f.power_offset_db = info ? block_power_offset_db(info->block_id, signal) : 0.0;
   }
-  return it->second.second;
+  return f;
 }
 
 }  // namespace skytrace::receiver::stages

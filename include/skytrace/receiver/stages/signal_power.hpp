@@ -23,12 +23,22 @@ namespace skytrace::receiver::stages {
 // BeiDou-3, ...) and its block's power offset (block_power_offset_db), cached per GPST day.
 class SatelliteSignals {
  public:
-  [[nodiscard]] bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
-  [[nodiscard]] double power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
+  struct Facts {
+    std::int64_t gpst_day = 0;  // the day they hold for
+    bool transmitted = false;
+    double power_offset_db = 0.0;
+  };
+  // Both at once (one lookup): the reference holds until the next call.
+  [[nodiscard]] const Facts& facts(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
+  [[nodiscard]] bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
+    return facts(sat, signal, t).transmitted;
+  }
+  [[nodiscard]] double power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
+    return facts(sat, signal, t).power_offset_db;
+  }
 
  private:
-  std::unordered_map<SignalKey, std::pair<std::int64_t, bool>, SignalKeyHash> transmits_;
-  std::unordered_map<SignalKey, std::pair<std::int64_t, double>, SignalKeyHash> power_offset_db_;
+  std::unordered_map<SignalKey, Facts, SignalKeyHash> facts_;
 };
 
 // C/N0 (dB-Hz) of a signal from a satellite (`link`: its geometry towards the receiver) seen in
