@@ -528,7 +528,9 @@ BroadcastEphemerides::BroadcastEphemerides(NavigationData data) : data_(std::mov
     kepler_slot_[static_cast<size_t>(satellite.system) * 256 + satellite.number] =
         static_cast<std::int32_t>(kepler_satellites_.size());
     const double max_window = max_window_s(data_.kepler, indices);
-    kepler_satellites_.push_back(KeplerSatellite{satellite, std::move(indices), max_window});
+    std::uint32_t messages = 0;
+    for (size_t i : indices) messages |= 1U << static_cast<unsigned>(data_.kepler[i].message);
+    kepler_satellites_.push_back(KeplerSatellite{satellite, std::move(indices), max_window, messages});
   }
 }
 
@@ -542,6 +544,8 @@ const KeplerEphemeris* BroadcastEphemerides::find_kepler(const SatelliteId& sate
                                                           std::span<const Signal> wanted) const {
   const KeplerSatellite* records = kepler_satellite(satellite);
   if (records == nullptr) return nullptr;
+  static_assert(static_cast<unsigned>(NavMessage::kSbas) < 32, "KeplerSatellite::messages has 32 bits");
+  if (message && (records->messages & (1U << static_cast<unsigned>(*message))) == 0) return nullptr;
   // A Galileo data set is first broadcast after its toe (the age of data is never negative), so a
   // receiver at t can only hold records with toe < t; RTKLIB applies the same rule.
   const bool toe_must_be_past = satellite.system == GnssSystem::kGalileo;

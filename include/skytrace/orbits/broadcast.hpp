@@ -145,6 +145,7 @@ class BroadcastEphemerides final : public SatelliteStateSource {
     SatelliteId satellite;
     std::vector<size_t> records;
     double max_window_s = 0.0;
+    std::uint32_t messages = 0;  // bit m: a record of NavMessage m (a request for another finds none at once)
   };
   std::vector<KeplerSatellite> kepler_satellites_;
   std::vector<std::int32_t> kepler_slot_;  // system * 256 + number: index into kepler_satellites_, -1: none
