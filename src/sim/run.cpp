@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstring>
 #include <condition_variable>
@@ -434,6 +435,9 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     }
     return Ok{};
   };
+  // Tracked satellite-epochs per system, counted by index (summary.satellite_epochs_per_system is
+  // filled from them once the epochs are written, before the sinks end their files).
+  std::array<std::int64_t, kAllSystems.size()> tracked_per_system{};
   // Hands every receiver's epoch of one instant to the sinks.
   auto write_instant = [&](const QueuedEpoch& instant) -> Status {
     if (cancellation_requested()) return cancelled_error();
@@ -444,7 +448,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       for (const auto& sat : epoch.satellites) {
         if (sat.status != receiver::SatelliteStatus::kTracked) continue;
         ++summary.satellite_epochs;
-        ++summary.satellite_epochs_per_system[std::string(system_name(sat.satellite.system))];
+        ++tracked_per_system[static_cast<size_t>(sat.satellite.system)];
         summary.observations += static_cast<std::int64_t>(sat.signals.size());
       }
       const auto& fix = instant.fixes[i];
@@ -570,6 +574,10 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (producer_error) return *producer_error;
     if (fixer_error) return *fixer_error;
     if (!consumed) return consumed.error();
+  }
+  for (const GnssSystem system : kAllSystems) {
+    const std::int64_t count = tracked_per_system[static_cast<size_t>(system)];
+    if (count > 0) summary.satellite_epochs_per_system[std::string(system_name(system))] = count;
   }
   // The sinks end their files (the report draws its pages then, the bag and the compressed truth
   // write their last blocks): side by side when threads allow; errors in the sinks' order.
