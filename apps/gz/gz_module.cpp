@@ -6,14 +6,9 @@
 namespace skytrace::gz {
 
 Status run_bridge(const BridgeOptions& options) {
-  auto entry = module_symbol(kGzBackendModule, kGzBackendEntry);
-  if (!entry) return entry.error().with_context("skytrace gz");
-  const GzBackend* table = reinterpret_cast<const GzBackend* (*)()>(*entry)();
-  if (table == nullptr || table->revision != kGzBackendRevision || table->layout != gz_backend_layout()) {
-    return make_error(ErrorCode::kNotFound, module_dir() + "/" + kGzBackendModule +
-                                                " is from another build of skytrace: rebuild the project");
-  }
-  return table->run_bridge(options);
+  auto table = module_table<GzBackend>(kGzBackendModule, kGzBackendEntry, kGzBackendRevision, gz_backend_layout());
+  if (!table) return table.error().with_context("skytrace gz");
+  return (*table)->run_bridge(options);
 }
 
 }  // namespace skytrace::gz

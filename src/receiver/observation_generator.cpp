@@ -60,7 +60,7 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
     if (truth_view_ != nullptr) truth_orbits_ = truth_view_.get();
   }
   // The scenario's signals the receiver can track; the others are left out (run: a warning).
-  std::vector<Signal> trackable;
+  std::vector<std::pair<Signal, ListedSignal>> trackable;
   for (const Signal& signal : settings_.signals) {
     const SignalInfo* info = find_signal_info(signal);
     if (info == nullptr) throw std::invalid_argument("signal " + signal.to_string() + " is not in the catalogue");
@@ -69,19 +69,17 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
       untrackable_.push_back(signal);
       continue;
     }
-    trackable.push_back(signal);
-    signal_info_[signal] = info;
-    tracked_[signal] = *tracked;
-    data_modulated_[signal] = has_data_modulation(*info);
+    trackable.emplace_back(signal, ListedSignal{info, *tracked, has_data_modulation(*info)});
   }
-  settings_.signals = std::move(trackable);
   // Aided semi-codeless channels follow the satellite's L1 C/A channel: the C/A signal comes first.
   if (settings_.profile.semicodeless_aiding_bandwidth_hz > 0.0 || settings_.profile.semicodeless_threshold_dbhz) {
-    std::stable_partition(settings_.signals.begin(), settings_.signals.end(),
-                          [](const Signal& s) { return !is_semicodeless(s); });
+    std::stable_partition(trackable.begin(), trackable.end(),
+                          [](const auto& entry) { return !is_semicodeless(entry.first); });
   }
-  for (const Signal& signal : settings_.signals) {
-    listed_.push_back(ListedSignal{signal_info_.at(signal), &tracked_.at(signal), data_modulated_.at(signal)});
+  settings_.signals.clear();
+  for (auto& [signal, listed] : trackable) {
+    settings_.signals.push_back(signal);
+    listed_.push_back(std::move(listed));
   }
   elevation_mask_deg_ = std::max(settings_.elevation_mask_deg, settings_.profile.elevation_mask_deg);
   for (const SatelliteId& sat : ephemerides_.satellites()) {
@@ -244,14 +242,14 @@ double fade_hold_s(const ReceiverProfile& profile) {
 }  // namespace
 
 const stages::FoliageComposite& ObservationGenerator::band_field(const SatelliteId& sat, const Signal& signal,
-                                                                 const SatelliteObservation& obs,
+                                                                 const SignalInfo& info, const SatelliteObservation& obs,
                                                                  const Eigen::Vector3d& velocity_enu_mps,
                                                                  const Eigen::Vector3d& satellite_enu,
                                                                  const GnssTime& tag) {
   for (const auto& [band, field] : band_fields_) {
     if (band == signal.band) return *field;
   }
-  const double carrier_hz = signal_info_.at(signal)->carrier_frequency_hz(obs.glonass_channel);
+  const double carrier_hz = info.carrier_frequency_hz(obs.glonass_channel);
   const stages::FoliageComposite& field =
       foliage_fading_.composite(sat, signal.band, carrier_hz, obs.vegetation_attenuation_db, obs.vegetation_path_m,
                                 velocity_enu_mps, satellite_enu, tag, last_tag_);
@@ -314,7 +312,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       const Eigen::Vector3d direction_rate =
           stages::direction_rate_per_s(p.light_time.line_of_sight, p.light_time.range_m, p.light_time.velocity_mps,
                                        epoch.receiver.velocity_mps);
-      received_antenna = signal_antenna(settings_.signals.empty() ? nullptr : &tracked_.at(settings_.signals.front()));
+      received_antenna = signal_antenna(listed_.empty() ? nullptr : &listed_.front().tracked);
       stages::ReceivedPaths arriving =
           stages::receive_paths(path_sets[pending_index].paths, *received_antenna, obs.direction,
                                 rx_to_enu * to_world.transpose(), to_world * epoch.receiver.velocity_mps,
@@ -367,12 +365,12 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     }
     // Multipath: the loops lock on the composite of the signal's paths.
     // A band whose antenna table differs from the first signal's gets its own path amplitudes.
-    const AntennaPattern* antenna = signal_antenna(listed.tracked);
+    const AntennaPattern* antenna = signal_antenna(&listed.tracked);
     const std::vector<ReceivedPath>& through_antenna =
         received.empty() || antenna == received_antenna ? received : received_through(antenna, received, obs);
     const MultipathErrors multipath = stages::signal_multipath_errors(*listed.info, obs.glonass_channel,
                                                                       profile.correlator_spacing_chips, through_antenna);
-    const double cn0_dbhz = stages::signal_cn0_dbhz(profile, *listed.tracked, link, obs.direction, attenuation_db,
+    const double cn0_dbhz = stages::signal_cn0_dbhz(profile, listed.tracked, link, obs.direction, attenuation_db,
                                                     facts.power_offset_db,
                                                     multipath.power_db);
     if (settings_.incoming_signals) {
@@ -380,7 +378,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       in.signal = signal;
       SignalMeasurement clean;
       clean.signal = signal;
-      clean.carrier_hz = signal_info_.at(signal)->carrier_frequency_hz(obs.glonass_channel);
+      clean.carrier_hz = listed.info->carrier_frequency_hz(obs.glonass_channel);
       clean.satellite_clock_m = kC * p.truth.state.clock_bias_s;
       clean.group_delay_m = kC * stages::signal_group_delay_s(p.truth, signal_record, signal, p.precise_truth);
       clean.ionosphere_code_m = stages::ionosphere_code_delay_m(obs.ionosphere_l1_m, clean.carrier_hz);
@@ -400,7 +398,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     }
     stages::Candidate candidate{&signal, cn0_dbhz, multipath, std::move(signal_record), nullptr, {}};
     if (fading) {
-      candidate.foliage = &band_field(sat, signal, obs, velocity_enu_mps, satellite_enu, tag);
+      candidate.foliage = &band_field(sat, signal, *listed.info, obs, velocity_enu_mps, satellite_enu, tag);
       candidate.fade = candidate.foliage->for_signal(cn0_dbhz, profile.tracking_threshold_dbhz, fade_hold_s(profile));
       candidate.cn0_dbhz += candidate.fade.cn0_change_db;
     }

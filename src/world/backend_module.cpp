@@ -9,16 +9,8 @@ namespace {
 
 // The module's table, looked up once; `what` names the input that needed it in the error.
 Result<const WorldBackend*> loaded_backend(const std::string& what) {
-  static const Result<const WorldBackend*> loaded = []() -> Result<const WorldBackend*> {
-    auto entry = module_symbol(kWorldBackendModule, kWorldBackendEntry);
-    if (!entry) return entry.error();
-    const WorldBackend* table = reinterpret_cast<const WorldBackend* (*)()>(*entry)();
-    if (table == nullptr || table->revision != kWorldBackendRevision || table->layout != world_backend_layout()) {
-      return make_error(ErrorCode::kNotFound, module_dir() + "/" + kWorldBackendModule +
-                                                  " is from another build of skytrace: rebuild the project");
-    }
-    return table;
-  }();
+  static const Result<const WorldBackend*> loaded = module_table<WorldBackend>(
+      kWorldBackendModule, kWorldBackendEntry, kWorldBackendRevision, world_backend_layout());
   if (!loaded) return loaded.error().with_context(what);
   return loaded;
 }

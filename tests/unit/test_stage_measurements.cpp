@@ -68,8 +68,8 @@ TEST(StageSignalPower, TransmittedSignalsFollowTheCatalogue) {
   for (int prn = 1; prn <= 32; ++prn) {
     const SatelliteId sat{GnssSystem::kGps, static_cast<std::uint8_t>(prn)};
     const bool expected = transmits(sat, l5, t);
-    EXPECT_EQ(cache.transmitted(sat, l5, t), expected);
-    EXPECT_EQ(cache.transmitted(sat, l5, t + 3600.0), expected);  // from the cache
+    EXPECT_EQ(cache.facts(sat, l5, t).transmitted, expected);
+    EXPECT_EQ(cache.facts(sat, l5, t + 3600.0).transmitted, expected);  // from the cache
     (expected ? with_l5 : without_l5)++;
   }
   EXPECT_GT(with_l5, 0);     // Block IIF and III

@@ -133,21 +133,18 @@ class ObservationGenerator {
                          int& channels_used);
 
   GeneratorSettings settings_;
-  std::map<Signal, const SignalInfo*> signal_info_;
-  std::map<Signal, TrackedSignal> tracked_;
-  std::map<Signal, bool> data_modulated_;
+  // Per signal of settings_.signals (same order): its catalogue entry and how the profile tracks
+  // it, found by position in the per-signal loops.
+  struct ListedSignal {
+    const SignalInfo* info = nullptr;
+    TrackedSignal tracked;
+    bool data_modulated = false;
+  };
+  std::vector<ListedSignal> listed_;
   std::vector<Signal> untrackable_;
   double elevation_mask_deg_ = 0.0;  // the scenario's and the profile's, whichever is higher
   // Per satellite of satellites_: the last epoch's flight time (nullopt: none yet, or lost).
   std::vector<std::optional<double>> flight_time_guess_s_;
-  // Per signal of settings_.signals (same order): what the maps above hold, found by position in the
-  // per-signal loops.
-  struct ListedSignal {
-    const SignalInfo* info = nullptr;
-    const TrackedSignal* tracked = nullptr;
-    bool data_modulated = false;
-  };
-  std::vector<ListedSignal> listed_;
   const orbits::BroadcastEphemerides& ephemerides_;
   const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
   // The truth source's view for this generator's forward-moving queries (precise orbits: fits per
@@ -183,7 +180,7 @@ class ObservationGenerator {
   // Foliage fading: a satellite's composite field per band this epoch (advanced once per band).
   std::vector<std::pair<char, const stages::FoliageComposite*>> band_fields_;
   [[nodiscard]] const stages::FoliageComposite& band_field(const SatelliteId& sat, const Signal& signal,
-                                                           const SatelliteObservation& obs,
+                                                           const SignalInfo& info, const SatelliteObservation& obs,
                                                            const Eigen::Vector3d& velocity_enu_mps,
                                                            const Eigen::Vector3d& satellite_enu, const GnssTime& tag);
   // The records a satellite's signals used this epoch, entered into used_* once it is output.

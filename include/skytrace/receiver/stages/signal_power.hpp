@@ -28,14 +28,8 @@ class SatelliteSignals {
     bool transmitted = false;
     double power_offset_db = 0.0;
   };
-  // Both at once (one lookup): the reference holds until the next call.
+  // Both at once (one lookup), kept per GPST day; the reference holds until the next call.
   [[nodiscard]] const Facts& facts(const SatelliteId& sat, const Signal& signal, const GnssTime& t);
-  [[nodiscard]] bool transmitted(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
-    return facts(sat, signal, t).transmitted;
-  }
-  [[nodiscard]] double power_offset_db(const SatelliteId& sat, const Signal& signal, const GnssTime& t) {
-    return facts(sat, signal, t).power_offset_db;
-  }
 
  private:
   std::unordered_map<SignalKey, Facts, SignalKeyHash> facts_;
