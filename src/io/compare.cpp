@@ -17,6 +17,7 @@
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/core/frames.hpp"
+#include "skytrace/core/satellite_catalog.hpp"
 
 namespace skytrace::io {
 namespace {
@@ -352,6 +353,8 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
 
   std::vector<double> pseudorange_residuals_m, doppler_residuals_mps, phase_residuals_m;
   std::vector<double> pseudorange_diffs_m, doppler_diffs_mps, phase_diffs_m;
+  std::vector<SatelliteId> pseudorange_satellites;  // of pseudorange_diffs_m
+  std::map<SatelliteId, std::vector<double>> pseudorange_residuals_by_satellite_m;
   double cn0_sum_dbhz = 0.0;
   double cn0_abs_sum_dbhz = 0.0;
 
@@ -364,6 +367,7 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
     real_phase.advance_to(pair.real_index);
     sim_phase.advance_to(pair.sim_index);
     pseudorange_diffs_m.clear();
+    pseudorange_satellites.clear();
     doppler_diffs_mps.clear();
     phase_diffs_m.clear();
     std::array<double, 256> current_real_cycles{};
@@ -406,6 +410,7 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
           if (!std::isnan(lambda_m)) shift_m = lambda_m * *shift_doppler_hz * tag_offset_s;
         }
         pseudorange_diffs_m.push_back(*real_pr + shift_m - *sim_pr);
+        pseudorange_satellites.push_back(sp.satellite);
       }
 
       const auto real_cn0 = number_at(*sp.real, rc.strength);
@@ -440,9 +445,15 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
         phase_diffs_m.push_back(real_step_m - sim_step_m);
       }
     }
-    if (!pseudorange_diffs_m.empty() &&
-        !append_residuals(pseudorange_diffs_m, pseudorange_residuals_m)) {
-      ++out.single_satellite_epochs;
+    if (!pseudorange_diffs_m.empty()) {
+      if (append_residuals(pseudorange_diffs_m, pseudorange_residuals_m)) {
+        const size_t first = pseudorange_residuals_m.size() - pseudorange_diffs_m.size();
+        for (size_t i = 0; i < pseudorange_satellites.size(); ++i) {
+          pseudorange_residuals_by_satellite_m[pseudorange_satellites[i]].push_back(pseudorange_residuals_m[first + i]);
+        }
+      } else {
+        ++out.single_satellite_epochs;
+      }
     }
     append_residuals(doppler_diffs_mps, doppler_residuals_mps);
     append_residuals(phase_diffs_m, phase_residuals_m);
@@ -451,6 +462,9 @@ SignalComparison compare_signal(const Signal& signal, const FileView& real, cons
   }
 
   out.pseudorange_m = residual_statistics(std::move(pseudorange_residuals_m));
+  for (auto& [satellite, residuals] : pseudorange_residuals_by_satellite_m) {
+    out.pseudorange_by_satellite_m.emplace(satellite, residual_statistics(std::move(residuals)));
+  }
   out.doppler_mps = residual_statistics(std::move(doppler_residuals_mps));
   out.phase_difference_m = residual_statistics(std::move(phase_residuals_m));
   if (out.cn0_count > 0) {
@@ -788,9 +802,18 @@ std::string comparison_to_json(const ComparisonReport& r) {
       "percentiles of |residual|; doppler as range rate (-wavelength * D)";
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& s : r.signals) {
+    // Per satellite, with its block from the catalogue at the first common epoch ("" when unknown).
+    nlohmann::json by_satellite = nlohmann::json::object();
+    for (const auto& [satellite, stats] : s.pseudorange_by_satellite_m) {
+      nlohmann::json entry = statistics_json(stats);
+      const auto info = satellite_info(satellite, r.first_common_epoch);
+      entry["block"] = info ? info->block : std::string();
+      by_satellite[satellite.to_string()] = std::move(entry);
+    }
     rows.push_back({{"signal", s.signal.to_string()},
                     {"system", std::string(system_name(s.signal.system))},
                     {"pseudorange_m", statistics_json(s.pseudorange_m)},
+                    {"pseudorange_by_satellite_m", std::move(by_satellite)},
                     {"doppler_mps", statistics_json(s.doppler_mps)},
                     {"phase_difference_m", statistics_json(s.phase_difference_m)},
                     {"cn0_dbhz",

@@ -380,7 +380,8 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       clean.signal = signal;
       clean.carrier_hz = listed.info->carrier_frequency_hz(obs.glonass_channel);
       clean.satellite_clock_m = kC * p.truth.state.clock_bias_s;
-      clean.group_delay_m = kC * stages::signal_group_delay_s(p.truth, signal_record, signal, p.precise_truth);
+      clean.group_delay_m =
+          kC * stages::signal_group_delay_s(p.truth, signal_record, signal, p.precise_truth, facts.code_bias_m);
       clean.ionosphere_code_m = stages::ionosphere_code_delay_m(obs.ionosphere_l1_m, clean.carrier_hz);
       clean.antenna_phase_centre_m =
           stages::antenna_phase_centre_m(settings_.antenna_phase_centre.get(), signal, obs.direction);
@@ -396,7 +397,7 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
       }
       obs.incoming.push_back(std::move(in));
     }
-    stages::Candidate candidate{&signal, cn0_dbhz, multipath, std::move(signal_record), nullptr, {}};
+    stages::Candidate candidate{&signal, cn0_dbhz, multipath, std::move(signal_record), nullptr, {}, facts.code_bias_m};
     if (fading) {
       candidate.foliage = &band_field(sat, signal, *listed.info, obs, velocity_enu_mps, satellite_enu, tag);
       candidate.fade = candidate.foliage->for_signal(cn0_dbhz, profile.tracking_threshold_dbhz, fade_hold_s(profile));
@@ -443,7 +444,8 @@ void ObservationGenerator::observe_satellite(EpochObservations& epoch, size_t pe
     m.signal = signal;
     m.carrier_hz = info.carrier_frequency_hz(obs.glonass_channel);
     m.satellite_clock_m = kC * p.truth.state.clock_bias_s;
-    m.group_delay_m = kC * stages::signal_group_delay_s(p.truth, candidate.record, signal, p.precise_truth);
+    m.group_delay_m = kC * stages::signal_group_delay_s(p.truth, candidate.record, signal, p.precise_truth,
+                                                       candidate.block_code_bias_m);
     m.ionosphere_code_m = stages::ionosphere_code_delay_m(obs.ionosphere_l1_m, m.carrier_hz);
     m.antenna_phase_centre_m = stages::antenna_phase_centre_m(settings_.antenna_phase_centre.get(), signal, obs.direction);
     m.cn0_dbhz = stages::quantize(cn0_dbhz, profile.cn0_resolution_dbhz);

@@ -168,8 +168,9 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   // header's ANT # / TYPE, which now names the antenna profile in use (ASH701945E_M SCIS; the
   // records unchanged, 0x56b465d10e205e1f before), and in session 8 the G2W columns (L2 P(Y) power
   // per GPS block and the semi-codeless threshold: more G2W records, 0x8584037ad1e1a088 and 264,615
-  // bytes before), then the D2W column (the C/A channel's Doppler, 0x7ed5f051b41c3ed8 before). Update
-  // the value only with a deliberate change of the GPS model.
+  // bytes before), then the D2W column (the C/A channel's Doppler, 0x7ed5f051b41c3ed8 before), and in
+  // session 17 G18's C5Q, 4.1 m later (GPS III's L5 code term; every other value the same,
+  // 0xf122589fc3034df1 before). Update the value only with a deliberate change of the GPS model.
   const auto scenario = test::shared_data_dir().parent_path() / "contract" / "esbc-realistic.yaml";
   if (!std::filesystem::exists(scenario)) GTEST_SKIP() << "contract scenario absent";
   const auto out = dir_ / "gps";
@@ -177,7 +178,7 @@ TEST_F(OneClockPerSatelliteEsbc, GpsWithLnavRecordsOnlyIsExactlyAsBefore) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string bytes = read_bytes(out / "obs.rnx");
   EXPECT_EQ(bytes.size(), 267303u);
-  EXPECT_EQ(fnv1a64(bytes), 0xf122589fc3034df1ULL);
+  EXPECT_EQ(fnv1a64(bytes), 0x4761b8e6045173e6ULL);
 }
 
 }  // namespace

@@ -199,7 +199,8 @@ TEST_F(ValidationStations, LeaveOneOutGsi0759Trimble5700) {
 }
 
 // KMS3 2022-159, PolaRx5 + ASH701945E_M, every signal of the scenario. Measured code p68 over the
-// limit: G5Q 2.86, R1C 2.03, R2C 2.92, R2P 2.76, C5P 2.05 m; the rest meets every limit, R3Q
+// limit: R1C 2.03, R2C 2.92, R2P 2.76, C5P 2.05 m (G5Q was 2.86 before GPS III's L5 code term,
+// fitted on ESBC, and is 0.81 with it); the rest meets every limit, R3Q
 // included (GLONASS-K1 R11 and M+ R21 transmit L3OC: the other GLONASS satellites in view, plain M
 // and M+ whose L3 payload is off, do not).
 TEST_F(ValidationStations, LeaveOneOutKms3PolaRx5) {
@@ -208,7 +209,7 @@ TEST_F(ValidationStations, LeaveOneOutKms3PolaRx5) {
                                     {"real/kms3_rinex4_2022159/KMS300DNK_R_20221591000_01H_MN.rnx"}, "", "", &out);
   if (rows.empty()) GTEST_SKIP() << "KMS3 data absent (../shared/data beside the checkout)";
   const std::map<std::string, double> measured = {
-      {"G5Q", 2.9}, {"R1C", 2.1}, {"R2C", 3.0}, {"R2P", 2.8}, {"C5P", 2.1}};
+      {"R1C", 2.1}, {"R2C", 3.0}, {"R2P", 2.8}, {"C5P", 2.1}};
   for (const char* signal : {"G1C", "G2L", "G2W", "G5Q", "E1C", "E5Q", "E6C", "E7Q", "E8Q", "R1C", "R1P", "R2C",
                              "R2P", "R3Q", "C2I", "C5P", "C6I", "C7I"}) {
     ASSERT_TRUE(rows.count(signal)) << signal;

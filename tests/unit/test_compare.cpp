@@ -211,6 +211,16 @@ TEST_F(Compare, ClockRemovedAndKnownPseudorangeResidualsComeOut) {
   EXPECT_NEAR(gps.pseudorange_m.abs_p68, 2.75 + 0.92 * 0.5, 1e-6);  // rank 0.68 * 44 = 29.92
   EXPECT_NEAR(gps.pseudorange_m.abs_p95, 8.5, 1e-6);
   EXPECT_EQ(gps.single_satellite_epochs, 0u);
+  // The same residuals per satellite: G01 0.75 then 1.5, G02 -0.75 then 0, G05 -8.5 (from 150 s).
+  const auto& by_satellite = gps.pseudorange_by_satellite_m;
+  ASSERT_EQ(by_satellite.size(), 5u);
+  const SatelliteId g01{G::kGps, 1}, g02{G::kGps, 2}, g05{G::kGps, 5};
+  EXPECT_EQ(by_satellite.at(g01).count, 10u);
+  EXPECT_NEAR(by_satellite.at(g01).mean, 1.125, 1e-6);
+  EXPECT_NEAR(by_satellite.at(g02).mean, -0.375, 1e-6);
+  EXPECT_EQ(by_satellite.at(g05).count, 5u);
+  EXPECT_NEAR(by_satellite.at(g05).mean, -8.5, 1e-6);
+  EXPECT_NEAR(by_satellite.at(g05).rms, 8.5, 1e-6);
 
   // Galileo: the inter-system bias goes with the clock. Offsets {0.2, -0.2, 0.4, 1.0}, median 0.3.
   const auto& gal = row(*report, "E1C");
@@ -218,6 +228,7 @@ TEST_F(Compare, ClockRemovedAndKnownPseudorangeResidualsComeOut) {
   EXPECT_NEAR(gal.pseudorange_m.mean, -0.05, 1e-6);
   EXPECT_NEAR(gal.pseudorange_m.rms, std::sqrt((0.01 + 0.25 + 0.01 + 0.49) / 4.0), 1e-6);
   EXPECT_NEAR(gal.pseudorange_m.abs_p95, 0.7, 1e-6);
+  EXPECT_NEAR(gal.pseudorange_by_satellite_m.at(SatelliteId{G::kGalileo, 4}).mean, -0.7, 1e-6);
   // Nothing but the clock in Galileo Doppler and phase: zero residuals.
   EXPECT_EQ(gal.doppler_mps.count, 40u);
   EXPECT_NEAR(gal.doppler_mps.rms, 0.0, 1e-9);
@@ -524,6 +535,11 @@ TEST_F(Compare, TableAndJsonCarryTheSameNumbers) {
   EXPECT_NEAR(j["signals"][0]["pseudorange_m"]["abs_p68"].get<double>(), 3.21, 1e-6);
   EXPECT_EQ(j["signals"][0]["overlap"]["both_tracked"], 45);
   EXPECT_NEAR(j["signals"][0]["overlap"]["real_in_sim"].get<double>(), 0.9, 1e-12);
+  // Per satellite, with the catalogue's block at the first common epoch (G01: SVN 63, Block IIF).
+  const auto& g01 = j["signals"][0]["pseudorange_by_satellite_m"]["G01"];
+  EXPECT_EQ(g01["count"], 10);
+  EXPECT_NEAR(g01["mean"].get<double>(), 1.125, 1e-6);
+  EXPECT_EQ(g01["block"], "GPS-IIF");
 }
 
 }  // namespace

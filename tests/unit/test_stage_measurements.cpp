@@ -76,6 +76,41 @@ TEST(StageSignalPower, TransmittedSignalsFollowTheCatalogue) {
   EXPECT_GT(without_l5, 0);  // IIR and IIR-M
 }
 
+// GPS L5 from an LNAV record: T_GD scaled by (f1/f5)^2 for every block, and Block III's code later
+// by its block term; a CNAV record's ISC describes the signal itself, so the term is not added.
+TEST(StageMeasurementErrors, GpsL5CodeOfBlockIiiIsLateWhereLnavSaysNothing) {
+  const Signal l5 = Signal::parse("G5Q").value();
+  const Signal l1 = Signal::parse("G1C").value();
+  EXPECT_DOUBLE_EQ(block_code_bias_m(SatelliteBlock::kGpsIIIA, l5), 4.1);
+  EXPECT_DOUBLE_EQ(block_code_bias_m(SatelliteBlock::kGpsIIIA, Signal::parse("G5X").value()), 4.1);
+  EXPECT_DOUBLE_EQ(block_code_bias_m(SatelliteBlock::kGpsIIF, l5), 0.0);
+  EXPECT_DOUBLE_EQ(block_code_bias_m(SatelliteBlock::kGpsIIIA, l1), 0.0);
+  EXPECT_DOUBLE_EQ(block_code_bias_m(SatelliteBlock::kGalileoFoc, Signal::parse("E5Q").value()), 0.0);
+
+  orbits::KeplerEphemeris lnav;
+  lnav.satellite = SatelliteId{GnssSystem::kGps, 18};
+  lnav.message = orbits::NavMessage::kGpsLnav;
+  lnav.group_delays.tgd_s = -4.0e-9;
+  RecordState record;
+  record.kepler = &lnav;
+  const double gamma15 = std::pow(kFrequencyL1_Hz / kFrequencyL5_Hz, 2);
+  EXPECT_NEAR(kC * signal_group_delay_s(record, record, l5, false), kC * gamma15 * -4.0e-9, 1e-9);
+  EXPECT_NEAR(kC * signal_group_delay_s(record, record, l5, false, 4.1), kC * gamma15 * -4.0e-9 + 4.1, 1e-9);
+  orbits::KeplerEphemeris cnav = lnav;
+  cnav.message = orbits::NavMessage::kGpsCnav;
+  cnav.group_delays.isc_l5q5_s = 1.0e-9;
+  RecordState cnav_record;
+  cnav_record.kepler = &cnav;
+  EXPECT_NEAR(kC * signal_group_delay_s(cnav_record, cnav_record, l5, false, 4.1), kC * (-4.0e-9 - 1.0e-9), 1e-9);
+
+  // The per-day facts carry the block's term: G18 was a GPS III satellite in 2020, G27 a IIF.
+  SatelliteSignals cache;
+  const GnssTime t = GnssTime::parse_iso8601("2020-06-25T00:00:00", TimeScale::kGpst).value();
+  EXPECT_DOUBLE_EQ(cache.facts(SatelliteId{GnssSystem::kGps, 18}, l5, t).code_bias_m, 4.1);
+  EXPECT_DOUBLE_EQ(cache.facts(SatelliteId{GnssSystem::kGps, 27}, l5, t).code_bias_m, 0.0);
+  EXPECT_DOUBLE_EQ(cache.facts(SatelliteId{GnssSystem::kGps, 18}, l1, t).code_bias_m, 0.0);
+}
+
 TEST(StageMeasurementErrors, IonosphereScalesWithTheInverseSquareOfTheCarrier) {
   EXPECT_DOUBLE_EQ(ionosphere_code_delay_m(3.0, kFrequencyL1_Hz), 3.0);
   EXPECT_NEAR(ionosphere_code_delay_m(3.0, kFrequencyL5_Hz), 3.0 * 1.793270, 1e-5);

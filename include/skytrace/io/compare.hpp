@@ -12,8 +12,8 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
-#include <optional>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -68,6 +68,9 @@ struct SignalComparison {
   Signal signal;
   // Pseudorange real - sim (m).
   ResidualStatistics pseudorange_m;
+  // The same residuals per satellite: a constant offset of one satellite or one satellite block
+  // (a code bias its navigation message does not carry) shows as its mean.
+  std::map<SatelliteId, ResidualStatistics> pseudorange_by_satellite_m;
   // Doppler as range rate, -wavelength * D, real - sim (m/s): its sign matches the pseudorange's.
   ResidualStatistics doppler_mps;
   // Carrier phase change between consecutive common epochs, wavelength * (L(t) - L(t-1)), real -

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "skytrace/core/satellite_catalog.hpp"
+#include "skytrace/receiver/stages/measurement_errors.hpp"
 
 namespace skytrace::receiver::stages {
 
@@ -19,6 +20,7 @@ const SatelliteSignals::Facts& SatelliteSignals::facts(const SatelliteId& sat, c
     f.transmitted = transmits(sat, signal, t);
     const auto info = satellite_info(sat, t);
     f.power_offset_db = info ? block_power_offset_db(info->block_id, signal) : 0.0;
+    f.code_bias_m = info ? block_code_bias_m(info->block_id, signal) : 0.0;
   }
   return f;
 }

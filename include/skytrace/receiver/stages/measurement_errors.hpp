@@ -17,6 +17,7 @@
 #include "skytrace/core/error.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/core/random.hpp"
+#include "skytrace/core/satellite_catalog.hpp"
 #include "skytrace/core/signal.hpp"
 #include "skytrace/core/time.hpp"
 #include "skytrace/receiver/multipath.hpp"
@@ -49,9 +50,19 @@ struct AtmosphereTerms {
 
 // Code group delay (s) of a signal relative to the satellite's one clock: from the group delays of
 // the reference record `truth` or of the signal's own record (group_delay_record), relative to the
-// precise clock when the truth is precise.
+// precise clock when the truth is precise; plus `block_code_bias_m` (block_code_bias_m()) when the
+// record used broadcasts nothing of that part (a GPS L5 signal's LNAV record, which has no ISC).
 [[nodiscard]] double signal_group_delay_s(const RecordState& truth, const RecordState& signal_record,
-                                          const Signal& signal, bool precise_truth);
+                                          const Signal& signal, bool precise_truth, double block_code_bias_m = 0.0);
+
+// The part of a signal's code delay that a satellite generation has and an LNAV record does not
+// broadcast (m, later positive). GPS L5: LNAV has no inter-signal correction, so the model scales
+// T_GD by (f1/f5)^2; real L5 code of GPS III satellites is late against that by a few metres more
+// than on Block IIF, the same at every station (ESBC 2020, KMS3 2022, NYA1 2024). Relative to IIF
+// (0): only differences between satellites reach a receiver's residuals, the common part joins the
+// receiver's own L5 delay. Fitted on ESBC 2020-177 only (docs/validation.md, "GPS L5 code per
+// block"). 0 for every other signal and block; CNAV records carry their ISC and do not use it.
+[[nodiscard]] double block_code_bias_m(SatelliteBlock block, const Signal& signal);
 
 // Multipath errors of a signal (`info`, GLONASS channel `glonass_channel`) whose loops lock on the
 // composite of `paths` with an early-late spacing of `spacing_chips`; none without paths.

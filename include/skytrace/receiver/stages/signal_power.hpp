@@ -20,13 +20,15 @@
 namespace skytrace::receiver::stages {
 
 // What a satellite transmits (core::transmits: GPS L5 only from Block IIF on, no B2I from
-// BeiDou-3, ...) and its block's power offset (block_power_offset_db), cached per GPST day.
+// BeiDou-3, ...), its block's power offset (block_power_offset_db) and the code offset its records
+// do not broadcast (block_code_bias_m), cached per GPST day.
 class SatelliteSignals {
  public:
   struct Facts {
     std::int64_t gpst_day = 0;  // the day they hold for
     bool transmitted = false;
     double power_offset_db = 0.0;
+    double code_bias_m = 0.0;
   };
   // Both at once (one lookup), kept per GPST day; the reference holds until the next call.
   [[nodiscard]] const Facts& facts(const SatelliteId& sat, const Signal& signal, const GnssTime& t);

@@ -37,6 +37,7 @@ struct Candidate {
   // field and this signal's fades (nullptr: none).
   const FoliageComposite* foliage = nullptr;
   FoliageFade fade;
+  double block_code_bias_m = 0.0;  // SatelliteSignals::Facts::code_bias_m
 };
 
 // Why a satellite's signals are not tracked at an epoch (the last reason met), and when its new
