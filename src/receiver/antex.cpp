@@ -170,6 +170,11 @@ class Parser {
         a.serial = std::string(field(line, 20, 20));
         satellite = is_satellite_code(a.serial);
         if (!satellite && a.type.empty()) return lines_.error_at(i, "expected an antenna type in columns 1-16");
+        // IGS antenna codes have no blank inside; one that had could not be named in a scenario or a
+        // RINEX header (split_igs_antenna_name), so the calibration would silently never apply.
+        if (!satellite && a.type.find_first_of(" \t") != std::string::npos) {
+          return lines_.error_at(i, "expected an IGS antenna type without blanks in columns 1-16, got '" + a.type + "'");
+        }
         if (!satellite && a.radome.empty()) a.radome = "NONE";
         have_type = true;
       } else if (has_label(line, "DAZI")) {

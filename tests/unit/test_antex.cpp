@@ -222,11 +222,19 @@ TEST(Antex, MalformedRecordsAreRefusedWithFileAndLine) {
   // A block cut short, and a frequency without its end.
   const std::string cut = good.substr(0, good.rfind("END OF ANTENNA") - 60);
   EXPECT_NE(error_of(cut).find("END OF"), std::string::npos) << error_of(cut);
-  const std::string unended = header() + antenna("TEST0 NONE", "", 0.0,
+  const std::string unended = header() + antenna("TEST0           NONE", "", 0.0,
                                                   record("   G01", "START OF FREQUENCY") + offset(0, 0, 1) +
                                                       row("   NOAZI", {0, 0, 0, 0}) +
                                                       frequency("G02", offset(0, 0, 1) + row("   NOAZI", {0, 0, 0, 0})));
   EXPECT_NE(error_of(unended).find("expected END OF FREQUENCY of G01"), std::string::npos) << error_of(unended);
+  // A type with a blank inside (no IGS code has one): no scenario or RINEX header could name it
+  // (found by fuzz_antex: "LEIAR25.R3  '" in columns 1-16).
+  const std::string blank_type = header() + antenna("LEIAR25.R3  '   LEIT", "", 0.0,
+                                                    frequency("G01", offset(0, 0, 1) + row("   NOAZI", {0, 0, 0, 0})));
+  EXPECT_NE(error_of(blank_type).find("broken.atx:5: expected an IGS antenna type without blanks in columns 1-16, got "
+                                      "'LEIAR25.R3  ''"),
+            std::string::npos)
+      << error_of(blank_type);
   // The line number is the broken one: the antenna's end (line 6) comes without its TYPE / SERIAL NO.
   const std::string no_type = header() + record("", "START OF ANTENNA") + record("     0.0", "DAZI") + record("", "END OF ANTENNA");
   EXPECT_NE(error_of(no_type).find("broken.atx:6"), std::string::npos) << error_of(no_type);
