@@ -80,9 +80,7 @@ void register_iq_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv.zst (nor paths.csv.zst)");
   cmd->add_option("--truth-format", args->truth_format, "csv.zst (default) or csv, as for skytrace run");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
-  cmd->add_option("--threads", args->threads,
-                  "Computing threads, 1-1024 (default: one per hardware thread); 1 computes and writes on one "
-                  "thread, from 2 on the writing and the truth's compression run on threads of their own beside them");
+  cmd->add_option("--threads", args->threads, "Threads to use, 1-1024 (default: one per hardware thread)");
   cmd->add_option("--set", args->overrides, "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable)");
   cmd->callback([args, sample_rate, format, bands, &exit_code]() {
     RunArgs with_iq = *args;
@@ -107,7 +105,9 @@ void register_run_command(CLI::App& app, int& exit_code) {
                   "the same as --set output.truth_format=FORMAT");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");
   cmd->add_option("--threads", args->threads,
-                  "Threads to use, 1-1024 (default: one per hardware thread); the outputs are the same for any number");
+                  "Computing threads, 1-1024 (default: one per hardware thread); the outputs are the same for any "
+                  "number. 1 computes and writes on one thread; from 2 on, the writing and the truth's compression "
+                  "run on threads of their own beside them (docs/performance.md)");
   cmd->add_option("--set", args->overrides,
                   "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable), e.g. --set models.ionosphere=none "
                   "--set ephemeris.precise_orbits=[]");
