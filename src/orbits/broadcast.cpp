@@ -53,11 +53,6 @@ bool is_kepler_system(GnssSystem system) {
          system == GnssSystem::kQzss || system == GnssSystem::kNavic;
 }
 
-bool is_cnav(NavMessage message) {
-  return message == NavMessage::kGpsCnav || message == NavMessage::kGpsCnav2 ||
-         message == NavMessage::kQzssCnav || message == NavMessage::kQzssCnav2;
-}
-
 double squared(double x) { return x * x; }
 
 std::string format_time(const GnssTime& t) { return t.to_iso8601(TimeScale::kGpst, t.fraction_s() == 0.0 ? 0 : 3); }

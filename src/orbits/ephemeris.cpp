@@ -5,6 +5,11 @@
 
 namespace skytrace::orbits {
 
+bool is_cnav(NavMessage message) {
+  return message == NavMessage::kGpsCnav || message == NavMessage::kGpsCnav2 || message == NavMessage::kQzssCnav ||
+         message == NavMessage::kQzssCnav2;
+}
+
 std::string_view to_string(NavMessage message) {
   switch (message) {
     case NavMessage::kGpsLnav: return "LNAV";

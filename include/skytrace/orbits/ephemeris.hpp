@@ -27,6 +27,8 @@ enum class NavMessage : std::uint8_t {
   kSbas,
 };
 [[nodiscard]] std::string_view to_string(NavMessage message);  // "LNAV", "INAV", "D1", ... (RINEX 4 names)
+// GPS or QZSS CNAV / CNAV-2: the messages that broadcast inter-signal corrections (ISC).
+[[nodiscard]] bool is_cnav(NavMessage message);
 
 // Time a receiver needs, from the moment it tracks a satellite, to collect a complete ephemeris and
 // clock of the message: the period at which the message repeats them (the receiver starts

@@ -38,8 +38,7 @@ double signal_group_delay_s(const RecordState& truth, const RecordState& signal_
                             bool precise_truth, double block_code_bias_m) {
   const RecordState& delays = group_delay_record(truth, signal_record, signal);
   double delay_s = precise_truth ? precise_clock_group_delay_s(truth, delays, signal) : group_delay_of(delays, signal);
-  const bool broadcast_has_it = delays.kepler != nullptr && (delays.kepler->message == orbits::NavMessage::kGpsCnav ||
-                                                             delays.kepler->message == orbits::NavMessage::kGpsCnav2);
+  const bool broadcast_has_it = delays.kepler != nullptr && orbits::is_cnav(delays.kepler->message);
   if (block_code_bias_m != 0.0 && !broadcast_has_it) delay_s += block_code_bias_m / kC;
   return delay_s;
 }
