@@ -134,10 +134,6 @@ class BeidouB1iSignals final : public BandSignals {
 
   int code_length() const override { return kB1iCodeLength; }
   Result<const std::int8_t*> code(int prn) override {
-    if (beidou_geo_prn(prn)) {
-      return make_error(ErrorCode::kUnsupported, "BeiDou B1I samples: C" + std::to_string(prn) +
-                                                     " is a GEO satellite (D2 message), which is not generated");
-    }
     auto it = satellites_.find(prn);
     if (it == satellites_.end()) {
       auto code = beidou_b1i_code(prn);
@@ -148,37 +144,43 @@ class BeidouB1iSignals final : public BandSignals {
     return it->second.code.data();
   }
   double centre_hz() const override { return kB1iCarrier_hz; }
-  // BDT = GPST - 14 s, weeks from 2006-01-01 (GPS week 1356). D1: 6 s subframes of 300 bits, each
-  // 20 ms bit spread by the Neumann-Hoffman code's 20 chips.
+  // BDT = GPST - 14 s, weeks from 2006-01-01 (GPS week 1356). D1 (MEO, IGSO): 6 s subframes of
+  // 300 bits, each 20 ms bit spread by the Neumann-Hoffman code's 20 chips. D2 (GEO): 3 s frames of
+  // five 0.6 s subframes, 2 ms bits (two code periods) and no secondary code.
   int sign(int prn, std::int64_t period_ms) override {
     Satellite& s = satellites_.at(prn);
     const std::int64_t bdt_ms = period_ms + (static_cast<std::int64_t>(first_week_ - 1356) * 604800 - 14) * 1000;
-    const std::int64_t bit_index = floor_div(bdt_ms, 20);
+    const bool geo = beidou_geo_prn(prn);
+    const std::int64_t bit_ms = geo ? 2 : 20;
+    const std::int64_t bit_index = floor_div(bdt_ms, bit_ms);
     const std::int64_t subframe_index = floor_div(bit_index, 300);
-    const std::int64_t subframe_sow_total = subframe_index * 6;
-    const int week = static_cast<int>(floor_div(subframe_sow_total, 604800));
-    const int sow = static_cast<int>(subframe_sow_total - 604800LL * week);
-    if (sow != s.subframe_start_sow || week != s.subframe_week) {
-      s.subframe_start_sow = sow;
-      s.subframe_week = week;
+    if (subframe_index != s.subframe_index) {
+      s.subframe_index = subframe_index;
+      // D1 subframes start every 6 s; D2's subframes carry the SOW of their frame (every 3 s).
+      const std::int64_t frame_index = geo ? floor_div(subframe_index, 5) : subframe_index;
+      const std::int64_t start_total_s = frame_index * (geo ? 3 : 6);
+      const int week = static_cast<int>(floor_div(start_total_s, 604800));
+      const int sow = static_cast<int>(start_total_s - 604800LL * week);
       const GnssTime t = GnssTime::from_week_tow(TimeScale::kBdt, week, sow);
       const orbits::KeplerEphemeris* record = record_at_ ? record_at_(prn, t) : nullptr;
-      if (record != nullptr) {
-        s.subframe = d1_subframe(*record, ionosphere_, week, sow);
-      } else {
+      if (record == nullptr) {
         s.subframe.fill(0);
+      } else if (geo) {
+        s.subframe = d2_subframe(*record, ionosphere_, week, sow, static_cast<int>(subframe_index - frame_index * 5) + 1);
+      } else {
+        s.subframe = d1_subframe(*record, ionosphere_, week, sow);
       }
     }
     const auto bit = static_cast<size_t>(bit_index - subframe_index * 300);
+    const int data = s.subframe[bit] != 0 ? -1 : 1;
+    if (geo) return data;
     const auto nh_chip = static_cast<size_t>(bdt_ms - bit_index * 20);
-    return (s.subframe[bit] != 0 ? -1 : 1) * beidou_nh_code()[nh_chip];
+    return data * beidou_nh_code()[nh_chip];
   }
-
  private:
   struct Satellite {
     std::array<std::int8_t, kB1iCodeLength> code{};
-    int subframe_start_sow = -1;
-    int subframe_week = -1;
+    std::int64_t subframe_index = std::numeric_limits<std::int64_t>::min();  // the one `subframe` holds
     std::array<std::uint8_t, 300> subframe{};
   };
   orbits::IonosphereCoefficients ionosphere_;

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 
-#include "skytrace/baseband/beidou_b1i.hpp"
 #include "skytrace/baseband/synthesizer.hpp"
 #include "skytrace/sim/sinks.hpp"
 
@@ -97,8 +96,10 @@ class IqSink final : public EpochSink {
         band.signal = Signal{GnssSystem::kBeiDou, '2', 'I'};
         signals = baseband::make_beidou_b1i_signals(
             ephemerides->data().ionosphere, first_week, [ephemerides](int prn, const GnssTime& t) {
-              return ephemerides->find_kepler(SatelliteId{GnssSystem::kBeiDou, static_cast<std::uint8_t>(prn)}, t,
-                                              orbits::NavMessage::kBeiDouD1);
+              // GEO satellites broadcast D2, the others D1: the record a receiver decodes from each.
+              const SatelliteId sat{GnssSystem::kBeiDou, static_cast<std::uint8_t>(prn)};
+              return ephemerides->find_kepler(sat, t, orbits::is_beidou_geo(sat) ? orbits::NavMessage::kBeiDouD2
+                                                                                 : orbits::NavMessage::kBeiDouD1);
             });
       } else {
         band.signal = Signal{GnssSystem::kGlonass, '1', 'C'};
@@ -121,8 +122,6 @@ class IqSink final : public EpochSink {
       for (const receiver::SatelliteObservation& sat : obs.satellites) {
         for (const receiver::IncomingSignal& in : sat.incoming) {
           if (in.signal != band.signal) continue;  // compared as a value: no text per signal and epoch
-          // BeiDou GEO satellites send D2, which is not generated: they are left out of the samples.
-          if (band.name == "B1" && baseband::beidou_geo_prn(sat.satellite.prn())) continue;
           baseband::Arrival a;
           a.id = sat.satellite.prn();
           a.carrier_hz = in.carrier_hz;
@@ -170,7 +169,7 @@ class IqSink final : public EpochSink {
     const std::string out_dir = "gnss-sdr-" + band.name;
     std::string t;
     t += "; GNSS-SDR configuration written by skytrace for " + band.file_name + " (" +
-         (gps ? "GPS L1 C/A" : beidou ? "BeiDou B1I of MEO and IGSO satellites" : "GLONASS L1OF, centred on 1602 MHz") +
+         (gps ? "GPS L1 C/A" : beidou ? "BeiDou B1I: D1 of MEO and IGSO satellites, D2 of GEO ones" : "GLONASS L1OF, centred on 1602 MHz") +
          ")\n";
     t += fmt::format("; {} complex samples at {:.0f} samples/s ({} bytes each); run from this folder:\n",
                      band.synthesizer->samples_written(), fs, baseband::bytes_per_sample(format_));
@@ -197,7 +196,9 @@ class IqSink final : public EpochSink {
     t += "Acquisition_" + id + ".implementation=" + system + "_PCPS_Acquisition\n";
     t += "Acquisition_" + id + ".item_type=gr_complex\n";
     t += "Acquisition_" + id + ".coherent_integration_time_ms=1\nAcquisition_" + id + ".pfa=0.01\n";
-    t += "Acquisition_" + id + ".doppler_max=6000\nAcquisition_" + id + ".doppler_step=250\n";
+    // B1I at 100 Hz steps: a GEO satellite (D2's 2 ms bits) is pulled in only from close to its
+    // Doppler, and GNSS-SDR drops it when its bit synchronisation takes long.
+    t += "Acquisition_" + id + ".doppler_max=6000\nAcquisition_" + id + ".doppler_step=" + (beidou ? "100" : "250") + "\n";
     t += "Acquisition_" + id + ".max_dwells=1\nAcquisition_" + id + ".dump=false\n";
     t += "Tracking_" + id + ".implementation=" + system + "_DLL_PLL_Tracking\n";
     t += "Tracking_" + id + ".item_type=gr_complex\n";

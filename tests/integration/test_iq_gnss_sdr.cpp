@@ -382,24 +382,26 @@ TEST_F(IqGnssSdr, GlonassStringsDecodeToTheRecordsAndItFixes) {
             << fixes << " fixes, worst 3D " << worst_m << " m; " << r1c->dump() << "\n";
 }
 
-// BeiDou B1I (MEO and IGSO; GEO satellites send D2, not generated), 90 s at 5 MS/s: GNSS-SDR
-// decodes D1 into nav.rnx's records and fixes. Its BeiDou RINEX files need two repairs before
+// BeiDou B1I, 90 s at 5 MS/s: GNSS-SDR decodes D1 (MEO, IGSO) and D2 (GEO: the record in ten
+// pages of 3 s) into nav.rnx's records and fixes. Its BeiDou RINEX files need two repairs before
 // they are read: the observation epochs are GPS time under a "BDT" label (its fixes and the
 // epochs agree in GPS time), and the navigation header's TIME SYSTEM CORR and LEAP SECONDS lines
 // leave integer fields blank or zero-padded (refused as malformed by the reader).
-TEST_F(IqGnssSdr, BeidouD1DecodesToTheRecordsAndItFixesWithinFiveMetres) {
+TEST_F(IqGnssSdr, BeidouD1AndD2DecodeToTheRecordsAndItFixesWithinFiveMetres) {
   const auto dir = run_both("B1", "--sample-rate 5e6 --set time.duration_s=90 --set models.ionosphere=none");
   const std::string log = read_text(dir / "gnss-sdr.log");
   auto sim = io::read_rinex_obs(dir / "obs.rnx");
   auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
   ASSERT_TRUE(sim && sim_nav);
-  std::set<int> in_samples;
+  std::set<int> in_samples, geo_in_samples;
   for (const auto& epoch : sim->epochs) {
     for (const auto& s : epoch.satellites) {
-      if (!baseband::beidou_geo_prn(s.satellite.number)) in_samples.insert(s.satellite.number);
+      in_samples.insert(s.satellite.number);
+      if (baseband::beidou_geo_prn(s.satellite.number)) geo_in_samples.insert(s.satellite.number);
     }
   }
   ASSERT_GE(in_samples.size(), 5u);
+  ASSERT_GE(geo_in_samples.size(), 1u);  // C05 from Denmark
   const auto nav_path = file_ending(dir / "gnss-sdr-B1", 'N');
   const auto obs_path = file_ending(dir / "gnss-sdr-B1", 'O');
   ASSERT_TRUE(nav_path && obs_path) << log.substr(log.size() > 4000 ? log.size() - 4000 : 0);
@@ -408,8 +410,10 @@ TEST_F(IqGnssSdr, BeidouD1DecodesToTheRecordsAndItFixesWithinFiveMetres) {
   auto real_nav = orbits::read_rinex_nav(dir / "gnss-sdr-nav.rnx");
   ASSERT_TRUE(real_nav) << real_nav.error().message;
   ASSERT_GE(real_nav->kepler.size(), 4u);
+  std::set<int> geo_decoded;
   for (const auto& decoded : real_nav->kepler) {
     SCOPED_TRACE(decoded.satellite.to_string());
+    if (baseband::beidou_geo_prn(decoded.satellite.number)) geo_decoded.insert(decoded.satellite.number);
     EXPECT_TRUE(in_samples.contains(decoded.satellite.number));
     const orbits::KeplerEphemeris* ours = nullptr;
     for (const auto& eph : sim_nav->kepler) {
@@ -426,7 +430,16 @@ TEST_F(IqGnssSdr, BeidouD1DecodesToTheRecordsAndItFixesWithinFiveMetres) {
     EXPECT_NEAR(decoded.crs_m, ours->crs_m, 1e-6);
     EXPECT_NEAR(decoded.af0_s, ours->af0_s, 1e-12);
     EXPECT_NEAR(decoded.af1_s_per_s, ours->af1_s_per_s, 1e-17);
+    // The harmonic terms and rates (D2 splits Cuc and Cic over two pages).
+    EXPECT_NEAR(decoded.cuc_rad, ours->cuc_rad, 1e-9);
+    EXPECT_NEAR(decoded.cus_rad, ours->cus_rad, 1e-9);
+    EXPECT_NEAR(decoded.cic_rad, ours->cic_rad, 1e-9);
+    EXPECT_NEAR(decoded.cis_rad, ours->cis_rad, 1e-9);
+    EXPECT_NEAR(decoded.crc_m, ours->crc_m, 0.02);
+    EXPECT_NEAR(decoded.delta_n_rad_per_s, ours->delta_n_rad_per_s, 1e-12);
+    EXPECT_NEAR(decoded.idot_rad_per_s, ours->idot_rad_per_s, 1e-12);
   }
+  EXPECT_EQ(geo_decoded, geo_in_samples);
   auto real = io::read_rinex_obs(dir / "gnss-sdr-obs.rnx");
   ASSERT_TRUE(real) << real.error().message;
   const auto [tag_offset_s, p68_m] = code_after_time_tag_fit(
@@ -436,8 +449,8 @@ TEST_F(IqGnssSdr, BeidouD1DecodesToTheRecordsAndItFixesWithinFiveMetres) {
   const auto [fixes, worst_m] = fixes_against_antenna(log);
   EXPECT_GE(fixes, 5);
   EXPECT_LE(worst_m, 5.0);
-  std::cout << "GNSS-SDR BeiDou: " << in_samples.size() << " satellites in the samples, " << real_nav->kepler.size()
-            << " records decoded, time tag offset " << tag_offset_s << " s, code p68 " << p68_m << " m after it, "
+  std::cout << "GNSS-SDR BeiDou: " << in_samples.size() << " satellites in the samples (" << geo_in_samples.size()
+            << " GEO), " << real_nav->kepler.size() << " records decoded (" << geo_decoded.size() << " GEO), time tag offset " << tag_offset_s << " s, code p68 " << p68_m << " m after it, "
             << fixes << " fixes, worst 3D " << worst_m << " m\n";
 }
 

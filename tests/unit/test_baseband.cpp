@@ -7,6 +7,7 @@
 #include <cmath>
 #include <complex>
 #include <cstring>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -482,6 +483,45 @@ TEST(BeidouB1i, BchWordsAreMultiplesOfTheGeneratorAndDetectEveryOneBitError) {
   }
 }
 
+// The information bits of a D1 or D2 subframe as a receiver recovers them: word 1's first 15 bits,
+// then each BCH word checked and its information bits taken (words 2-10 de-interleaved).
+std::array<int, 300> information_bits(const std::array<std::uint8_t, 300>& bits) {
+  std::array<int, 300> data{};
+  for (int i = 0; i < 30; ++i) data[static_cast<size_t>(i)] = bits[static_cast<size_t>(i)];
+  std::uint32_t w1 = 0;
+  for (int i = 15; i < 30; ++i) w1 = (w1 << 1) | bits[static_cast<size_t>(i)];
+  EXPECT_EQ(bch_remainder(w1), 0u);
+  for (int w = 1; w < 10; ++w) {
+    std::uint32_t a = 0, b = 0;
+    for (int c = 0; c < 15; ++c) {
+      a = (a << 1) | bits[static_cast<size_t>(30 * w + 2 * c)];
+      b = (b << 1) | bits[static_cast<size_t>(30 * w + 2 * c + 1)];
+    }
+    EXPECT_EQ(bch_remainder(a), 0u) << "word " << w + 1;
+    EXPECT_EQ(bch_remainder(b), 0u) << "word " << w + 1;
+    for (int i = 0; i < 11; ++i) {
+      data[static_cast<size_t>(30 * w + i)] = static_cast<int>((a >> (14 - i)) & 1U);
+      data[static_cast<size_t>(30 * w + 11 + i)] = static_cast<int>((b >> (14 - i)) & 1U);
+    }
+  }
+  return data;
+}
+
+// A field of the information bits (1-based first bit and length of each part, MSB first).
+std::uint64_t field_of(const std::array<int, 300>& data, std::initializer_list<std::pair<int, int>> parts) {
+  std::uint64_t v = 0;
+  for (auto [first, n] : parts) {
+    for (int i = 0; i < n; ++i) v = (v << 1) | static_cast<std::uint64_t>(data[static_cast<size_t>(first - 1 + i)]);
+  }
+  return v;
+}
+
+// Two's complement of `bits` bits.
+std::int64_t signed_of(std::uint64_t raw, int bits) {
+  return ((raw >> (bits - 1)) & 1U) != 0 ? static_cast<std::int64_t>(raw) - (std::int64_t{1} << bits)
+                                         : static_cast<std::int64_t>(raw);
+}
+
 TEST(BeidouB1i, D1SubframesReadBack) {
   orbits::KeplerEphemeris e;
   e.satellite = SatelliteId{GnssSystem::kBeiDou, 19};
@@ -490,33 +530,8 @@ TEST(BeidouB1i, D1SubframesReadBack) {
   e.eccentricity = 0.00123456;
   e.iode = 1;
   for (const int start : {345606, 345612}) {  // subframes 2 and 3: (start / 6) % 5 + 1
-    const auto bits = d1_subframe(e, {}, 758, start);
-    // Undo the interleaving and check every BCH word.
-    std::array<int, 300> data{};
-    for (int i = 0; i < 30; ++i) data[static_cast<size_t>(i)] = bits[static_cast<size_t>(i)];
-    std::uint32_t w1 = 0;
-    for (int i = 15; i < 30; ++i) w1 = (w1 << 1) | bits[static_cast<size_t>(i)];
-    EXPECT_EQ(bch_remainder(w1), 0u);
-    for (int w = 1; w < 10; ++w) {
-      std::uint32_t a = 0, b = 0;
-      for (int c = 0; c < 15; ++c) {
-        a = (a << 1) | bits[static_cast<size_t>(30 * w + 2 * c)];
-        b = (b << 1) | bits[static_cast<size_t>(30 * w + 2 * c + 1)];
-      }
-      EXPECT_EQ(bch_remainder(a), 0u) << "word " << w + 1;
-      EXPECT_EQ(bch_remainder(b), 0u) << "word " << w + 1;
-      for (int i = 0; i < 11; ++i) {
-        data[static_cast<size_t>(30 * w + i)] = static_cast<int>((a >> (14 - i)) & 1U);
-        data[static_cast<size_t>(30 * w + 11 + i)] = static_cast<int>((b >> (14 - i)) & 1U);
-      }
-    }
-    auto field = [&](std::initializer_list<std::pair<int, int>> parts) {
-      std::uint64_t v = 0;
-      for (auto [first, n] : parts) {
-        for (int i = 0; i < n; ++i) v = (v << 1) | static_cast<std::uint64_t>(data[static_cast<size_t>(first - 1 + i)]);
-      }
-      return v;
-    };
+    const std::array<int, 300> data = information_bits(d1_subframe(e, {}, 758, start));
+    auto field = [&](std::initializer_list<std::pair<int, int>> parts) { return field_of(data, parts); };
     EXPECT_EQ(field({{1, 11}}), 0b11100010010u);
     const auto subframe = static_cast<int>(field({{16, 3}}));
     EXPECT_EQ(static_cast<int>(field({{19, 8}, {31, 12}})), start);
@@ -528,6 +543,126 @@ TEST(BeidouB1i, D1SubframesReadBack) {
       EXPECT_EQ(subframe, 3);
       EXPECT_EQ(field({{43, 10}, {61, 5}}), (345600u / 8u) & 0x7FFFu);
     }
+  }
+}
+
+// D2 of a GEO satellite: the ten pages of subframe 1 (one per 3 s frame) read back with the bit
+// table of BDS-SIS-ICD-B1I-3.0 5.3.2 give the record, the fields split over two pages included
+// (negative values among them, whose two's complement crosses the page boundary).
+TEST(BeidouB1i, D2PagesReadBackToTheRecord) {
+  orbits::KeplerEphemeris e;
+  e.satellite = SatelliteId{GnssSystem::kBeiDou, 3};
+  e.sqrt_a_sqrtm = 6493.40234375;
+  e.toe_sow = 345600.0;
+  e.toc = GnssTime::from_week_tow(TimeScale::kBdt, 758, 345600.0);
+  e.eccentricity = 0.000512345;
+  e.i0_rad = 0.0412;
+  e.omega0_rad = -2.87;
+  e.omega_rad = -1.234;
+  e.m0_rad = 2.5;
+  e.delta_n_rad_per_s = 2.1e-9;
+  e.omega_dot_rad_per_s = -3.2e-9;
+  e.idot_rad_per_s = -4.5e-10;
+  e.cuc_rad = -7.3e-6;
+  e.cus_rad = 1.1e-5;
+  e.cic_rad = -3.4e-8;
+  e.cis_rad = 2.2e-8;
+  e.crc_m = -412.5;
+  e.crs_m = 120.25;
+  e.af0_s = -4.3e-4;
+  e.af1_s_per_s = -3.9e-11;
+  e.iode = 17;
+  e.iodc = 9;
+  e.group_delays.tgd1_s = -2.5e-9;
+  e.group_delays.tgd2_s = 7.1e-9;
+  const double pi = constants::kPi;
+  std::map<int, std::array<int, 300>> pages;
+  for (int k = 0; k < 10; ++k) {
+    const int frame_sow = 345600 + 3 * k;
+    const std::array<int, 300> data = information_bits(d2_subframe(e, {}, 758, frame_sow, 1));
+    EXPECT_EQ(field_of(data, {{1, 11}}), 0b11100010010u);
+    EXPECT_EQ(field_of(data, {{16, 3}}), 1u);
+    EXPECT_EQ(static_cast<int>(field_of(data, {{19, 8}, {31, 12}})), frame_sow);
+    pages[static_cast<int>(field_of(data, {{43, 4}}))] = data;
+  }
+  ASSERT_EQ(pages.size(), 10u);
+  ASSERT_EQ(pages.begin()->first, 1);
+  const auto get = [&](int page, std::initializer_list<std::pair<int, int>> parts) { return field_of(pages[page], parts); };
+  // A field sent as its high bits on one page and its low bits on the next, as a signed value.
+  const auto joined = [&](int page, std::initializer_list<std::pair<int, int>> high,
+                          std::initializer_list<std::pair<int, int>> low, int low_bits, int bits) {
+    return signed_of((get(page, high) << low_bits) | get(page + 1, low), bits);
+  };
+  const auto near = [](std::int64_t raw, double lsb, double value) { EXPECT_NEAR(static_cast<double>(raw) * lsb, value, lsb / 2); };
+  EXPECT_EQ(get(1, {{47, 1}}), 0u);
+  EXPECT_EQ(get(1, {{48, 5}}), 9u);
+  EXPECT_EQ(get(1, {{65, 13}}), 758u);
+  EXPECT_EQ(get(1, {{78, 5}, {91, 12}}), 345600u / 8u);
+  EXPECT_EQ(signed_of(get(1, {{103, 10}}), 10), -25);
+  EXPECT_EQ(signed_of(get(1, {{121, 10}}), 10), 71);
+  near(signed_of(get(3, {{101, 12}, {121, 12}}), 24), std::ldexp(1.0, -33), e.af0_s);
+  near(joined(3, {{133, 4}}, {{47, 6}, {61, 12}}, 18, 22), std::ldexp(1.0, -50), e.af1_s_per_s);
+  EXPECT_EQ(get(4, {{92, 5}}), 17u);
+  near(signed_of(get(4, {{97, 16}}), 16), std::ldexp(pi, -43), e.delta_n_rad_per_s);
+  near(joined(4, {{121, 14}}, {{47, 4}}, 4, 18), std::ldexp(1.0, -31), e.cuc_rad);
+  near(signed_of(get(5, {{51, 2}, {61, 22}, {91, 8}}), 32), std::ldexp(pi, -31), e.m0_rad);
+  near(signed_of(get(5, {{99, 14}, {121, 4}}), 18), std::ldexp(1.0, -31), e.cus_rad);
+  near(static_cast<std::int64_t>((get(5, {{125, 10}}) << 22) | get(6, {{47, 6}, {61, 16}})), std::ldexp(1.0, -33), e.eccentricity);
+  near(static_cast<std::int64_t>(get(6, {{77, 6}, {91, 22}, {121, 4}})), std::ldexp(1.0, -19), e.sqrt_a_sqrtm);
+  near(joined(6, {{125, 10}}, {{47, 6}, {61, 2}}, 8, 18), std::ldexp(1.0, -31), e.cic_rad);
+  near(signed_of(get(7, {{63, 18}}), 18), std::ldexp(1.0, -31), e.cis_rad);
+  EXPECT_EQ(get(7, {{81, 2}, {91, 15}}) * 8u, 345600u);
+  near(joined(7, {{106, 7}, {121, 14}}, {{47, 6}, {61, 5}}, 11, 32), std::ldexp(pi, -31), e.i0_rad);
+  near(signed_of(get(8, {{66, 17}, {91, 1}}), 18), std::ldexp(1.0, -6), e.crc_m);
+  near(signed_of(get(8, {{92, 18}}), 18), std::ldexp(1.0, -6), e.crs_m);
+  near(joined(8, {{110, 3}, {121, 16}}, {{47, 5}}, 5, 24), std::ldexp(pi, -43), e.omega_dot_rad_per_s);
+  near(signed_of(get(9, {{52, 1}, {61, 22}, {91, 9}}), 32), std::ldexp(pi, -31), e.omega0_rad);
+  near(joined(9, {{100, 13}, {121, 14}}, {{47, 5}}, 5, 32), std::ldexp(pi, -31), e.omega_rad);
+  near(signed_of(get(10, {{52, 1}, {61, 13}}), 14), std::ldexp(pi, -43), e.idot_rad_per_s);
+  // Subframes 2-5 of a frame: their number, the frame's SOW and a page number.
+  for (int id = 2; id <= 5; ++id) {
+    const std::array<int, 300> data = information_bits(d2_subframe(e, {}, 758, 345603, id));
+    EXPECT_EQ(field_of(data, {{16, 3}}), static_cast<std::uint64_t>(id));
+    EXPECT_EQ(field_of(data, {{19, 8}, {31, 12}}), 345603u);
+    if (id == 5) {
+      EXPECT_EQ(field_of(data, {{44, 7}}), 115201u % 120u + 1u);
+    } else {
+      EXPECT_EQ(field_of(data, {{43, 4}}), 115201u % 6u + 1u);
+    }
+  }
+}
+
+// A GEO satellite's samples carry D2: 2 ms bits (two code periods) without the Neumann-Hoffman
+// code, subframe k of a frame starting (k - 1) * 0.6 s after it; a MEO one D1's 20 ms bits with it.
+TEST(BeidouB1i, GeoSatellitesSendD2AtFiveHundredBitsPerSecond) {
+  orbits::KeplerEphemeris e;
+  e.satellite = SatelliteId{GnssSystem::kBeiDou, 3};
+  e.sqrt_a_sqrtm = 6493.4;
+  e.toe_sow = 345600.0;
+  e.iode = 5;
+  const int gps_week = 758 + 1356;
+  auto signals = make_beidou_b1i_signals({}, gps_week, [&](int, const GnssTime&) { return &e; });
+  ASSERT_TRUE(signals->code(3));
+  ASSERT_TRUE(signals->code(19));
+  // Milliseconds since the GPS week's start of BDT second 345603 (BDT = GPST - 14 s).
+  const std::int64_t frame_ms = (345603 + 14) * 1000LL;
+  for (int id = 1; id <= 5; ++id) {
+    const auto bits = d2_subframe(e, {}, 758, 345603, id);
+    const std::int64_t start_ms = frame_ms + (id - 1) * 600;
+    int wrong = 0;
+    for (int b = 0; b < 300; ++b) {
+      const int expected = bits[static_cast<size_t>(b)] != 0 ? -1 : 1;
+      wrong += signals->sign(3, start_ms + 2 * b) != expected ? 1 : 0;
+      wrong += signals->sign(3, start_ms + 2 * b + 1) != expected ? 1 : 0;
+    }
+    EXPECT_EQ(wrong, 0) << "subframe " << id;
+  }
+  // C19 (MEO): within one D1 bit the signs follow the Neumann-Hoffman code.
+  const std::int64_t d1_bit_ms = (345606 + 14) * 1000LL;
+  const int first = signals->sign(19, d1_bit_ms);
+  for (int chip = 0; chip < 20; ++chip) {
+    EXPECT_EQ(signals->sign(19, d1_bit_ms + chip),
+              first * beidou_nh_code()[static_cast<size_t>(chip)] * beidou_nh_code()[0]);
   }
 }
 

@@ -80,8 +80,8 @@ struct SynthesizerSettings {
   bool noise = true;
 };
 
-// BeiDou B1I of MEO and IGSO satellites, ids PRN 6-58: D1 from the record `record_at` gives
-// (nullptr: no data), centred on 1561.098 MHz. A GEO PRN's code is refused (D2 is not generated).
+// BeiDou B1I, ids PRN 1-63: D1 (MEO and IGSO) or D2 (GEO: PRN 1-5, 59-63) from the record
+// `record_at` gives (nullptr: no data), centred on 1561.098 MHz.
 [[nodiscard]] std::unique_ptr<BandSignals> make_beidou_b1i_signals(
     orbits::IonosphereCoefficients ionosphere, int first_week,
     std::function<const orbits::KeplerEphemeris*(int prn, const GnssTime& t)> record_at);
