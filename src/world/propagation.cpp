@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <optional>
 #include <tuple>
@@ -913,6 +914,135 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
   return index;
 }
 
+// For diffraction over `edge` then reflection off facet nf (the receiver's image in its plane
+// `image`, the plane normal . x = plane): the edge's direction and the band of satellite directions
+// s (as s . axis, a little wide) whose stationary point on the edge seen from the image (Keller's
+// cone, keller_point) lies above the plane and projects, along the line to the image, into the
+// facet's bounding rectangle; none when no direction within cell_reach_rad of cell_axis does.
+// The point moves along the edge monotonically with s . axis, which makes the band exact.
+std::optional<PropagationScene::FacetEdge> PropagationScene::facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
+                                                          double plane, const DiffractionEdge& edge,
+                                                          const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+  Eigen::Vector3d axis = edge.end_m - edge.start_m;
+  const double length = axis.norm();
+  if (!(length > 0.0)) return std::nullopt;
+  axis /= length;
+  // Where the edge lies above the plane: above(u) = above0 + u rate.
+  const double above0 = nf.normal.dot(edge.start_m) - plane;
+  const double rate = nf.normal.dot(axis);
+  double ua = 0.0, ub = length;
+  if (rate == 0.0) {
+    if (above0 <= 0.0) return std::nullopt;
+  } else if (rate > 0.0) {
+    ua = std::max(ua, -above0 / rate);
+  } else {
+    ub = std::min(ub, -above0 / rate);
+  }
+  if (!(ua < ub)) return std::nullopt;
+  // The projections of the two ends into the plane's (u, v), and their weights above + h.
+  const auto project = [&](double u, double& weight) {
+    const Eigen::Vector3d q = edge.start_m + u * axis;
+    const double above = std::max(above0 + u * rate, 0.0);
+    weight = above + nf.height_m;
+    const Eigen::Vector3d p = q + above / weight * (image - q) - f.origin_m;
+    return Eigen::Vector2d(p.dot(f.axis_u), p.dot(f.axis_v));
+  };
+  double weight_a = 0.0, weight_b = 0.0;
+  const Eigen::Vector2d pa = project(ua, weight_a), pb = project(ub, weight_b);
+  // The segment pa-pb clipped to the rectangle (Liang-Barsky), a micrometre wide.
+  constexpr double kSlack_m = 1e-6;
+  double t0 = 0.0, t1 = 1.0;
+  const Eigen::Vector2d d = pb - pa;
+  for (int c = 0; c < 2; ++c) {
+    const double lo = f.min_uv[c] - kSlack_m - pa[c], hi = f.max_uv[c] + kSlack_m - pa[c];
+    if (d[c] == 0.0) {
+      if (lo > 0.0 || hi < 0.0) return std::nullopt;
+      continue;
+    }
+    const double ta = lo / d[c], tb = hi / d[c];
+    t0 = std::max(t0, std::min(ta, tb));
+    t1 = std::min(t1, std::max(ta, tb));
+  }
+  if (t0 > t1) return std::nullopt;
+  // Back to the edge: the projection is projective, t = lambda w_b / ((1 - lambda) w_a + lambda w_b).
+  const auto u_at = [&](double t) { return ua + (ub - ua) * (t * weight_a / ((1.0 - t) * weight_b + t * weight_a)); };
+  const double u0 = u_at(t0), u1 = u_at(t1);
+  // keller_point: u = c rho / sqrt(1 - c^2) - along, so c = (u + along) / sqrt((u + along)^2 + rho^2).
+  const Eigen::Vector3d w = edge.start_m - image;
+  const double along = w.dot(axis);
+  const double rho = (w - along * axis).norm();
+  const auto cos_at = [&](double u) { return (u + along) / std::hypot(u + along, rho); };
+  FacetEdge out;
+  out.axis = axis;
+  out.cos_min = std::min(cos_at(u0), cos_at(u1)) - 1e-9;
+  out.cos_max = std::max(cos_at(u0), cos_at(u1)) + 1e-9;
+  // The directions of the cell: s . axis within the cosines of the cell's angle to the axis
+  // plus and minus its reach.
+  const double angle = std::acos(std::clamp(cell_axis.dot(axis), -1.0, 1.0));
+  const double cell_max = std::cos(std::max(angle - cell_reach_rad, 0.0));
+  const double cell_min = std::cos(std::min(angle + cell_reach_rad, std::numbers::pi));
+  if (out.cos_max < cell_min || out.cos_min > cell_max) return std::nullopt;
+  return out;
+}
+
+struct PropagationScene::ReflectedEdgeIndex {
+  // Beyond this many pairs in all cells (48 MB) the index starts afresh: the satellites have moved
+  // on from most of the cells it holds.
+  static constexpr std::size_t kMaxEntries = 1'000'000;
+
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  std::vector<std::size_t> facets;  // the second-order facets (scene indices) the pairs index
+  double excess_max_m = 0.0;
+  mutable std::mutex mutex;
+  mutable std::map<std::pair<int, std::size_t>, std::shared_ptr<const std::vector<FacetEdge>>> lists;  // (cell, object)
+  mutable std::size_t entries = 0;
+};
+
+std::shared_ptr<const PropagationScene::ReflectedEdgeIndex> PropagationScene::reflected_edge_index(
+    const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets, double excess_max_m) const {
+  const std::lock_guard lock(cache_mutex_);
+  auto cached = reflected_edge_indexes_.find([&](const ReflectedEdgeIndex& index) {
+    return index.origin_m == origin_m && index.excess_max_m == excess_max_m && index.facets.size() == facets.size() &&
+           std::equal(facets.begin(), facets.end(), index.facets.begin(),
+                      [](const NearFacet& f, std::size_t i) { return f.index == i; });
+  });
+  if (cached) return cached;
+  // A moving antenna never comes back to the very same point: index only a point met before.
+  if (!reflected_edge_indexes_.met_before(origin_m)) return nullptr;
+  auto index = std::make_shared<ReflectedEdgeIndex>();
+  index->origin_m = origin_m;
+  index->excess_max_m = excess_max_m;
+  for (const NearFacet& f : facets) index->facets.push_back(f.index);
+  reflected_edge_indexes_.keep(index);
+  return index;
+}
+
+std::shared_ptr<const std::vector<PropagationScene::FacetEdge>> PropagationScene::facet_edge_pairs(
+    const ReflectedEdgeIndex& index, std::size_t object, const Eigen::Vector3d& s, const FacetEdgeSearch& search) {
+  using Cells = DoubleBounceIndex;
+  const int row = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0)));
+  const int column = Cells::column_of(std::atan2(s.y(), s.x()));
+  const std::pair<int, std::size_t> key{row * Cells::kColumns + column, object};
+  {
+    const std::lock_guard lock(index.mutex);
+    if (auto it = index.lists.find(key); it != index.lists.end()) return it->second;
+    if (index.entries >= ReflectedEdgeIndex::kMaxEntries) {
+      index.lists.clear();
+      index.entries = 0;
+    }
+  }
+  const double elevation = (row + 0.5) * Cells::kCell_rad - std::numbers::pi / 2.0;
+  const double azimuth = (column + 0.5) * Cells::kCell_rad - std::numbers::pi;
+  const Eigen::Vector3d centre(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                               std::sin(elevation));
+  // No direction of a cell is farther than one cell size from its centre.
+  auto pairs = std::make_shared<const std::vector<FacetEdge>>(search(centre, Cells::kCell_rad + Cells::kMargin_rad));
+  const std::lock_guard lock(index.mutex);
+  auto [it, inserted] = index.lists.emplace(key, pairs);
+  if (inserted) index.entries += pairs->size();
+  return it->second;
+}
+
 std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                              const PathSearchSettings& settings) const {
   const Eigen::Vector3d& r = origin_m;
@@ -1004,6 +1134,11 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   while (v_max < 100.0 && knife_edge_loss_db(v_max) < std::min(settings.max_diffraction_loss_db, -settings.min_relative_power_db)) v_max += 0.05;
   const double blocked_excess_max_m = v_max * v_max * wavelength_m / 4.0;
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
+  // A static antenna's facet-edge pairs for diffraction then reflection, by sky cell.
+  const std::shared_ptr<const ReflectedEdgeIndex> edge_index =
+      settings.max_reflection_order >= 2 && settings.diffraction && !edges_.empty() && !second_order_facets.empty()
+          ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m)
+          : nullptr;
 
   // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A taken in
   // B gives the point on B, the line from there to the first image the point on A. Pairs go facet
@@ -1283,86 +1418,173 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       for (const Sphere& sphere : object_spheres) farthest_edge_m = std::max(farthest_edge_m, (sphere.centre_m - r).norm() + sphere.radius_m);
       // Only an edge on the object's outline seen from the satellite (one face lit, the other
       // not) bends the wave into the shadow.
-      std::vector<std::vector<char>> on_outline;
-      for (const std::size_t object : objects) {
-        on_outline.emplace_back();
-        for (const std::size_t e : object_edges_[object]) {
-          on_outline.back().push_back(edges_[e].face_normal_a.dot(s) * edges_[e].face_normal_b.dot(s) <= 0.0 ? 1 : 0);
-        }
-      }
-      for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
+      const auto outline = [&](std::size_t e) { return edges_[e].face_normal_a.dot(s) * edges_[e].face_normal_b.dot(s) <= 0.0; };
+      // What a second-order facet offers whatever the satellite: the receiver's image in it, its
+      // plane, and the cone from the image through its bounding sphere (the reflection point lies
+      // on the segment from the image to an edge point, and on the facet).
+      struct FacetSight {
+        Eigen::Vector3d image = Eigen::Vector3d::Zero();
+        double plane = 0.0;  // normal . x = plane
+        bool cone = false;
+        Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+        double sin = 1.0, cos = 0.0;
+      };
+      const auto facet_sight = [&](std::size_t f_index) {
         const NearFacet& nf = second_order_facets[f_index];
         const Facet& f = facets_[nf.index];
-        const Eigen::Vector3d image = r - 2.0 * nf.height_m * nf.normal;
-        // The reflection point lies on the segment from the image to an edge point, no farther from
-        // the image's line towards the satellite than that edge point (h with h^2 <= 2 D excess,
-        // D its distance from the image): the facet must come that close to the line.
-        {
-          const Eigen::Vector3d m = f.centre_m - image;
-          const double along = m.dot(s);
-          const double reach_m = std::sqrt(2.0 * blocked_excess_max_m * (farthest_edge_m + 2.0 * nf.height_m));
-          if (along < -f.radius_m || m.squaredNorm() - along * along > (f.radius_m + reach_m) * (f.radius_m + reach_m)) continue;
-        }
-        const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane
-        // An edge point the image's line may use lies near that line (excess within the bound).
-        const auto may_reach_image = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-          return may_reach_line(image, s, blocked_excess_max_m, centre_m, radius_m);
-        };
-        // The reflection point lies on the segment from the image to the edge point and on the
-        // facet: an edge point lies in the cone from the image through the facet's bounding sphere.
-        const Eigen::Vector3d to_facet = f.centre_m - image;
+        FacetSight v;
+        v.image = r - 2.0 * nf.height_m * nf.normal;
+        v.plane = nf.normal.dot(r) - nf.height_m;
+        const Eigen::Vector3d to_facet = f.centre_m - v.image;
         const double facet_distance_m = to_facet.norm();
-        const bool facet_cone = facet_distance_m > f.radius_m;
-        const Eigen::Vector3d facet_axis = facet_cone ? Eigen::Vector3d(to_facet / facet_distance_m) : Eigen::Vector3d::Zero();
-        const double facet_sin = facet_cone ? f.radius_m / facet_distance_m : 1.0;
-        const double facet_cos = std::sqrt(1.0 - facet_sin * facet_sin);
-        const auto through_facet = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-          if (!facet_cone) return true;
-          const Eigen::Vector3d m = centre_m - image;
+        v.cone = facet_distance_m > f.radius_m;
+        if (v.cone) {
+          v.axis = to_facet / facet_distance_m;
+          v.sin = f.radius_m / facet_distance_m;
+          v.cos = std::sqrt(1.0 - v.sin * v.sin);
+        }
+        return v;
+      };
+      // Whether a sphere may hold an edge point such a path uses: on the receiver's side of the
+      // facet's plane, within the cone through the facet, and near the image's line towards the
+      // satellite (excess within the bound), the last as `reach` says.
+      const auto may_hold = [&](const NearFacet& nf, const FacetSight& v, const Eigen::Vector3d& centre_m, double radius_m,
+                                auto&& reach) {
+        if (nf.normal.dot(centre_m) - v.plane + radius_m <= 0.0) return false;
+        if (v.cone) {
+          const Eigen::Vector3d m = centre_m - v.image;
           const double distance_m = m.norm();
-          if (distance_m <= radius_m) return true;
-          const double sin_b = radius_m / distance_m, cos_b = std::sqrt(1.0 - sin_b * sin_b);
-          // cos of (the facet's half angle + the sphere's), a hair wide
-          return m.dot(facet_axis) >= distance_m * (facet_cos * cos_b - facet_sin * sin_b - 1e-9);
-        };
-        // ... and on the receiver's side of the facet's plane.
-        const auto may_hold = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-          return nf.normal.dot(centre_m) - plane + radius_m > 0.0 && through_facet(centre_m, radius_m) &&
-                 may_reach_image(centre_m, radius_m);
-        };
-        for (std::size_t rank = 0; rank < objects.size(); ++rank) {
-          if (!may_hold(object_spheres[rank].centre_m, object_spheres[rank].radius_m)) continue;
-          const std::size_t object = objects[rank];
+          if (distance_m > radius_m) {
+            const double sin_b = radius_m / distance_m, cos_b = std::sqrt(1.0 - sin_b * sin_b);
+            // cos of (the facet's half angle + the sphere's), a hair wide
+            if (m.dot(v.axis) < distance_m * (v.cos * cos_b - v.sin * sin_b - 1e-9)) return false;
+          }
+        }
+        return reach(v.image, centre_m, radius_m);
+      };
+      const auto reach_line = [&](const Eigen::Vector3d& image, const Eigen::Vector3d& centre_m, double radius_m) {
+        return may_reach_line(image, s, blocked_excess_max_m, centre_m, radius_m);
+      };
+      // The facet as this satellite sees it: its sight, or none when it cannot come close enough
+      // to the image's line (h with h^2 <= 2 D excess, D the edge point's distance from the image).
+      const auto facet_for_satellite = [&](std::size_t f_index) -> std::optional<FacetSight> {
+        const NearFacet& nf = second_order_facets[f_index];
+        const Facet& f = facets_[nf.index];
+        FacetSight v = facet_sight(f_index);
+        const Eigen::Vector3d m = f.centre_m - v.image;
+        const double along = m.dot(s);
+        const double reach_m = std::sqrt(2.0 * blocked_excess_max_m * (farthest_edge_m + 2.0 * nf.height_m));
+        if (along < -f.radius_m || m.squaredNorm() - along * along > (f.radius_m + reach_m) * (f.radius_m + reach_m)) {
+          return std::nullopt;
+        }
+        return v;
+      };
+      // One edge of an object's outline with one facet: the edge point where the image's line
+      // bends over it, and the reflection point between them on the facet.
+      const auto try_edge = [&](std::size_t f_index, const FacetSight& v, std::size_t e) {
+        const NearFacet& nf = second_order_facets[f_index];
+        const Facet& f = facets_[nf.index];
+        const DiffractionEdge& edge = edges_[e];
+        if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_line)) return;
+        const std::optional<Eigen::Vector3d> keller = keller_point(edge, v.image, s);
+        if (!keller) return;
+        const Eigen::Vector3d& q = *keller;
+        const Eigen::Vector3d from_image = q - v.image;
+        const double d_image = from_image.norm();
+        if (d_image < 1e-3 || from_image.dot(s) <= 0.0) return;
+        // The edge on the receiver's side of the facet, and the image in its shadow: the
+        // image's line towards the satellite passes on the object's side of the edge.
+        const double above = nf.normal.dot(q) - v.plane;
+        if (above <= 1e-6) return;
+        if ((v.image + from_image.dot(s) * s - q).dot(edge.outward) >= 0.0) return;
+        const double excess = d_image - s.dot(from_image);
+        if (excess > blocked_excess_max_m) return;
+        const Eigen::Vector3d point = q + above / (above + nf.height_m) * (v.image - q);
+        if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) return;
+        const double d1 = (point - r).norm();
+        if (d1 < 1e-3 || d1 > settings.radius_m) return;
+        const double v_fresnel = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+        reflected_hits.push_back(ReflectedEdgeHit{f_index, e, q, point, d_image, v_fresnel, knife_edge_loss_db(v_fresnel)});
+      };
+      // A static antenna: the facet-edge pairs that may serve a satellite in its sky cell, found
+      // once per cell and object (docs/performance.md); the same hits as the search below.
+      std::shared_ptr<const std::vector<FacetEdge>> listed;
+      if (edge_index && objects.size() == 1) {
+        const std::size_t object = objects.front();
+        if (edge_index) listed = facet_edge_pairs(*edge_index, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+          // Near the image's line for some direction within the cell: the line's reach at the
+          // sphere's distance widened by the cell's angle (or the sphere near the image).
+          const auto reach_cell = [&](const Eigen::Vector3d& image, const Eigen::Vector3d& centre_m, double radius_m) {
+            const Eigen::Vector3d m = centre_m - image;
+            const double distance_m = m.norm();
+            const double rho_m = radius_m + std::sqrt(2.0 * blocked_excess_max_m * (distance_m + radius_m));
+            if (distance_m <= std::sqrt(rho_m * rho_m + radius_m * radius_m) * (1.0 + 1e-9) + 1e-9 || rho_m >= distance_m) return true;
+            const double angle = std::acos(std::clamp(m.dot(cell_axis) / distance_m, -1.0, 1.0));
+            return angle <= std::asin(rho_m / distance_m) + cell_reach_rad;
+          };
+          std::vector<FacetEdge> pairs;
           const auto& clusters = object_clusters_[object];
-          for (std::size_t g = 0; g < group_spheres[rank].size(); ++g) {
-            if (!may_hold(group_spheres[rank][g].centre_m, group_spheres[rank][g].radius_m)) continue;
-            for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
-              const EdgeCluster& cluster = clusters[c_index];
-              if (!may_hold(cluster.centre_m, cluster.radius_m)) continue;
-              for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
-                if (on_outline[rank][k] == 0) continue;
-                const std::size_t e = object_edges_[object][k];
-                const DiffractionEdge& edge = edges_[e];
-                if (!may_hold(edge.midpoint_m, edge.half_length_m)) continue;
-                const std::optional<Eigen::Vector3d> keller = keller_point(edge, image, s);
-                if (!keller) continue;
-                const Eigen::Vector3d& q = *keller;
-                const Eigen::Vector3d from_image = q - image;
-                const double d_image = from_image.norm();
-                if (d_image < 1e-3 || from_image.dot(s) <= 0.0) continue;
-                // The edge on the receiver's side of the facet, and the image in its shadow: the
-                // image's line towards the satellite passes on the object's side of the edge.
-                const double above = nf.normal.dot(q) - plane;
-                if (above <= 1e-6) continue;
-                if ((image + from_image.dot(s) * s - q).dot(edge.outward) >= 0.0) continue;
-                const double excess = d_image - s.dot(from_image);
-                if (excess > blocked_excess_max_m) continue;
-                const Eigen::Vector3d point = q + above / (above + nf.height_m) * (image - q);
-                if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
-                const double d1 = (point - r).norm();
-                if (d1 < 1e-3 || d1 > settings.radius_m) continue;
-                const double v = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
-                reflected_hits.push_back(ReflectedEdgeHit{f_index, e, q, point, d_image, v, knife_edge_loss_db(v)});
+          for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
+            const NearFacet& nf = second_order_facets[f_index];
+            const FacetSight v = facet_sight(f_index);
+            if (!may_hold(nf, v, object_spheres[0].centre_m, object_spheres[0].radius_m, reach_cell)) continue;
+            for (std::size_t g = 0; g < group_spheres[0].size(); ++g) {
+              if (!may_hold(nf, v, group_spheres[0][g].centre_m, group_spheres[0][g].radius_m, reach_cell)) continue;
+              for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
+                const EdgeCluster& cluster = clusters[c_index];
+                if (!may_hold(nf, v, cluster.centre_m, cluster.radius_m, reach_cell)) continue;
+                for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+                  const DiffractionEdge& edge = edges_[object_edges_[object][k]];
+                  if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_cell)) continue;
+                  if (auto pair = facet_edge_band(nf, facets_[nf.index], v.image, v.plane, edge, cell_axis, cell_reach_rad)) {
+                    pair->facet = static_cast<std::uint32_t>(f_index);
+                    pair->edge = static_cast<std::uint32_t>(k);
+                    pairs.push_back(*pair);
+                  }
+                }
+              }
+            }
+          }
+          return pairs;
+        });
+      }
+      if (listed) {
+        const std::size_t object = objects.front();
+        std::size_t current = std::numeric_limits<std::size_t>::max();
+        std::optional<FacetSight> v;
+        for (const FacetEdge& pair : *listed) {
+          const double c = s.dot(pair.axis);  // as keller_point works it out
+          if (c < pair.cos_min || c > pair.cos_max) continue;
+          if (pair.facet != current) {
+            current = pair.facet;
+            v = facet_for_satellite(current);
+          }
+          const std::size_t e = object_edges_[object][pair.edge];
+          if (v && outline(e)) try_edge(current, *v, e);
+        }
+      } else {
+        std::vector<std::vector<char>> on_outline;
+        for (const std::size_t object : objects) {
+          on_outline.emplace_back();
+          for (const std::size_t e : object_edges_[object]) on_outline.back().push_back(outline(e) ? 1 : 0);
+        }
+        for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
+          const NearFacet& nf = second_order_facets[f_index];
+          const std::optional<FacetSight> v = facet_for_satellite(f_index);
+          if (!v) continue;
+          const auto hold = [&](const Eigen::Vector3d& centre_m, double radius_m) { return may_hold(nf, *v, centre_m, radius_m, reach_line); };
+          for (std::size_t rank = 0; rank < objects.size(); ++rank) {
+            if (!hold(object_spheres[rank].centre_m, object_spheres[rank].radius_m)) continue;
+            const std::size_t object = objects[rank];
+            const auto& clusters = object_clusters_[object];
+            for (std::size_t g = 0; g < group_spheres[rank].size(); ++g) {
+              if (!hold(group_spheres[rank][g].centre_m, group_spheres[rank][g].radius_m)) continue;
+              for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
+                const EdgeCluster& cluster = clusters[c_index];
+                if (!hold(cluster.centre_m, cluster.radius_m)) continue;
+                for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+                  if (on_outline[rank][k] != 0) try_edge(f_index, *v, object_edges_[object][k]);
+                }
               }
             }
           }

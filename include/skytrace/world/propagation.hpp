@@ -11,7 +11,9 @@
 
 #include <array>
 #include <complex>
+#include <cstdint>
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -174,6 +176,34 @@ class PropagationScene final : public PathQuery {
                                                                const std::vector<double>& plane_a,
                                                                const std::vector<Eigen::Vector3d>& image_of) const;
 
+  // Diffraction then reflection (over an edge of the blocking object, then off a second-order
+  // facet) for an antenna that stays where it was: per sky cell and object, the facet-edge pairs
+  // that may serve a satellite in the cell, found once (docs/performance.md).
+  struct FacetEdge {
+    std::uint32_t facet = 0;  // index into the second-order facets
+    std::uint32_t edge = 0;   // index into object_edges_[object]
+    // The edge's unit direction, and the band of satellite directions s (as s . axis) whose
+    // stationary point on the edge, seen from the receiver's image in the facet, projects into
+    // the facet's bounding rectangle: no other direction can use the pair.
+    Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+    double cos_min = 0.0, cos_max = 0.0;
+  };
+  struct ReflectedEdgeIndex;
+  // The pair of facet nf (the receiver's image in its plane normal . x = plane) and the edge, with
+  // its band; none when no direction within cell_reach_rad of cell_axis is in the band.
+  static std::optional<FacetEdge> facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
+                                                  double plane, const DiffractionEdge& edge,
+                                                  const Eigen::Vector3d& cell_axis, double cell_reach_rad);
+  using FacetEdgeSearch = std::function<std::vector<FacetEdge>(const Eigen::Vector3d& cell_axis, double cell_reach_rad)>;
+  // The index for an antenna found at the same point in an earlier call, else none.
+  std::shared_ptr<const ReflectedEdgeIndex> reflected_edge_index(const Eigen::Vector3d& origin_m,
+                                                                 const std::vector<NearFacet>& facets,
+                                                                 double excess_max_m) const;
+  // The pairs for satellite direction s and the object, `search` finding them for its cell when
+  // the index has none yet (a superset of what any direction in the cell can use).
+  static std::shared_ptr<const std::vector<FacetEdge>> facet_edge_pairs(const ReflectedEdgeIndex& index, std::size_t object,
+                                                                        const Eigen::Vector3d& s, const FacetEdgeSearch& search);
+
   std::shared_ptr<const PathQuery> scene_;
   std::vector<Facet> facets_;
   std::vector<DiffractionEdge> edges_;
@@ -230,6 +260,7 @@ class PropagationScene final : public PathQuery {
   mutable RecentResults<Candidates> candidate_sets_;
   mutable RecentResults<DoubleBounceIndex> double_bounce_indexes_;
   mutable RecentResults<PatchSight> patch_sights_;
+  mutable RecentResults<ReflectedEdgeIndex> reflected_edge_indexes_;
 };
 
 }  // namespace skytrace::world
