@@ -107,7 +107,8 @@ void register_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--threads", args->threads,
                   "Computing threads, 1-1024 (default: one per hardware thread); the outputs are the same for any "
                   "number. 1 computes and writes on one thread; from 2 on, the writing and the truth's compression "
-                  "run on threads of their own beside them (docs/performance.md)");
+                  "run on threads of their own beside them, and a scenario's receivers are observed side by side on "
+                  "the threads the fixes leave (docs/performance.md)");
   cmd->add_option("--set", args->overrides,
                   "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable), e.g. --set models.ionosphere=none "
                   "--set ephemeris.precise_orbits=[]");

@@ -16,6 +16,7 @@
 #include <deque>
 #include <mutex>
 #include <future>
+#include <functional>
 #include <thread>
 #include <cmath>
 #include <random>
@@ -220,6 +221,66 @@ class EpochQueue {
   bool cancelled_ = false;
   std::mutex mutex_;
   std::condition_variable not_full_, not_empty_;
+};
+
+// Threads that stay for the run and do their share of each batch of work: share 0 on the caller's
+// thread, shares 1 .. size - 1 on their own (long-lived threads are spread over the cores by the
+// scheduler, where threads started for each batch were measured sharing the caller's core).
+class ObserverCrew {
+ public:
+  explicit ObserverCrew(size_t size) {
+    for (size_t share = 1; share < size; ++share) threads_.emplace_back([this, share] { serve(share); });
+  }
+  ObserverCrew(const ObserverCrew&) = delete;
+  ObserverCrew& operator=(const ObserverCrew&) = delete;
+  ~ObserverCrew() {
+    {
+      std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    start_.notify_all();
+    for (std::thread& t : threads_) t.join();
+  }
+  // Runs work(share) for every share, returning when all are done.
+  void run(const std::function<void(size_t)>& work) {
+    {
+      std::lock_guard lock(mutex_);
+      work_ = &work;
+      pending_ = threads_.size();
+      ++generation_;
+    }
+    start_.notify_all();
+    work(0);
+    std::unique_lock lock(mutex_);
+    done_.wait(lock, [&] { return pending_ == 0; });
+    work_ = nullptr;
+  }
+
+ private:
+  void serve(size_t share) {
+    std::uint64_t seen = 0;
+    for (;;) {
+      const std::function<void(size_t)>* work = nullptr;
+      {
+        std::unique_lock lock(mutex_);
+        start_.wait(lock, [&] { return stopping_ || generation_ != seen; });
+        if (stopping_) return;
+        seen = generation_;
+        work = work_;
+      }
+      (*work)(share);
+      std::lock_guard lock(mutex_);
+      if (--pending_ == 0) done_.notify_one();
+    }
+  }
+
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable start_, done_;
+  const std::function<void(size_t)>* work_ = nullptr;
+  size_t pending_ = 0;
+  std::uint64_t generation_ = 0;
+  bool stopping_ = false;
 };
 
 struct ReceiverRun {
@@ -490,15 +551,79 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     return solve_instant(out);
   };
   const bool computes_fixes = std::any_of(receivers.begin(), receivers.end(), [](const ReceiverRun& rx) { return rx.fixes != nullptr; });
+  const bool pipeline = threads > 1 && (options.write_truth || computes_fixes);
+  // Receivers observed side by side: each receiver's generator keeps its state from epoch to
+  // epoch and shares nothing that changes with the others (the world's path caches give the same
+  // paths whoever fills them), so a batch of epochs can be split by receiver among threads, every
+  // receiver's epochs in order, and the outputs are the same bytes for any split. The computing
+  // threads beyond the fix stage's observe; models that move with the epochs (world.moving) keep
+  // one thread, as they are placed for one epoch at a time.
+  const bool models_move = resources->world && !resources->world->moving.empty();
+  const size_t observers =
+      models_move ? 1
+                  : std::min(receivers.size(),
+                             static_cast<size_t>(std::max(1, pipeline && computes_fixes ? threads - 1 : threads)));
+  ObserverCrew observer_crew(observers);
+  // Observes the instants k0 .. k0 + count - 1 into batch[0 .. count) (every receiver: the
+  // observations and what the fix engine reads of them), the receivers dealt in turn to
+  // `observers` threads. The error of the earliest epoch (then receiver) is the one returned.
+  auto observe_batch = [&](std::int64_t k0, EpochBatch& batch, size_t count) -> Status {
+    for (size_t j = 0; j < count; ++j) {
+      batch[j].index = k0 + static_cast<std::int64_t>(j);
+      batch[j].receivers.resize(receivers.size());
+      batch[j].measurements.resize(receivers.size());
+    }
+    std::vector<std::optional<std::pair<std::pair<std::int64_t, size_t>, Error>>> errors(observers);
+    const std::function<void(size_t)> observe_share = [&](size_t share) {
+      for (size_t i = share; i < receivers.size(); i += observers) {
+        ReceiverRun& rx = receivers[i];
+        for (size_t j = 0; j < count; ++j) {
+          QueuedEpoch& item = batch[j];
+          if (auto st = rx.generator->observe(epoch_tag(item.index), item.receivers[i]); !st) {
+            auto& first = errors[share];
+            if (!first || std::pair{item.index, i} < first->first) first.emplace(std::pair{item.index, i}, st.error());
+            break;  // its later epochs need this one's state
+          }
+          if (rx.fixes != nullptr || rx.is_base) {
+            to_measurements(item.receivers[i], item.measurements[i]);
+          } else {
+            item.measurements[i] = positioning::EpochMeasurements{};
+          }
+        }
+      }
+    };
+    observer_crew.run(observe_share);
+    const std::pair<std::pair<std::int64_t, size_t>, Error>* earliest = nullptr;
+    for (const auto& e : errors) {
+      if (e && (earliest == nullptr || e->first < earliest->first)) earliest = &*e;
+    }
+    if (earliest != nullptr) return earliest->second;
+    return Ok{};
+  };
+  // Receiver-epochs per batch: 64 per observing thread.
+  const size_t batch_receiver_epochs = 64 * observers;
 
-  if (threads == 1 || (!options.write_truth && !computes_fixes)) {
-    // One thread computes and writes: a run given one thread, and one without truth or fixes, where
-    // writing costs a fraction of computing (measured faster than handing epochs between threads,
-    // docs/performance.md).
-    QueuedEpoch instant;
-    for (std::int64_t k = 0; k < epoch_count; ++k) {
-      if (auto st = observe_instant(k, instant); !st) return st.error();
-      if (auto st = write_instant(instant); !st) return st.error();
+  if (!pipeline) {
+    // One thread writes: a run given one thread, and one without truth or fixes, where writing
+    // costs a fraction of computing (measured faster than handing epochs between threads,
+    // docs/performance.md); it also computes, unless several receivers are observed side by side.
+    if (observers == 1) {
+      QueuedEpoch instant;
+      for (std::int64_t k = 0; k < epoch_count; ++k) {
+        if (auto st = observe_instant(k, instant); !st) return st.error();
+        if (auto st = write_instant(instant); !st) return st.error();
+      }
+    } else {
+      EpochBatch batch(std::max<size_t>(1, batch_receiver_epochs / receivers.size()));
+      for (std::int64_t k0 = 0; k0 < epoch_count; k0 += static_cast<std::int64_t>(batch.size())) {
+        const auto count = static_cast<size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(batch.size()), epoch_count - k0));
+        if (cancellation_requested()) return cancelled_error();
+        if (auto st = observe_batch(k0, batch, count); !st) return st.error();
+        for (size_t j = 0; j < count; ++j) {
+          if (auto st = solve_instant(batch[j]); !st) return st.error();
+          if (auto st = write_instant(batch[j]); !st) return st.error();
+        }
+      }
     }
   } else {
     // With truth or fixes, the epochs are computed on threads of their own while this thread formats
@@ -513,6 +638,26 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     std::optional<Error> producer_error, fixer_error;
     std::thread producer([&] {
       EpochBatch batch;
+      if (observers > 1) {
+        // Several receivers side by side: whole batches at once.
+        const size_t epochs_per_batch = std::max<size_t>(1, batch_receiver_epochs / receivers.size());
+        for (std::int64_t k0 = 0; k0 < epoch_count && !observed.cancelled() && !cancellation_requested();
+             k0 += static_cast<std::int64_t>(epochs_per_batch)) {
+          const auto count = static_cast<size_t>(std::min<std::int64_t>(static_cast<std::int64_t>(epochs_per_batch), epoch_count - k0));
+          batch.resize(count);
+          Status st = observe_batch(k0, batch, count);
+          for (size_t j = 0; st && !fix_stage && j < count; ++j) st = solve_instant(batch[j]);
+          if (!st) {
+            producer_error = st.error();
+            observed.close();
+            return;
+          }
+          if (!observed.push(std::move(batch))) return;
+          batch = observed.reuse_spent();
+        }
+        observed.close();
+        return;
+      }
       size_t filled = 0;  // items of `batch` holding this batch's epochs (a reused batch has more)
       size_t receiver_epochs = 0;
       for (std::int64_t k = 0; k < epoch_count && !observed.cancelled() && !cancellation_requested(); ++k) {

@@ -174,5 +174,56 @@ TEST(RunThreads, OutputsAreTheSameBytesForAnyNumberOfThreads) {
   }
 }
 
+// Receivers observed side by side (from 3 threads with fixes, 2 without) give the same files as one
+// thread: a base, its RTK rover and a third receiver in the quick start's courtyard with multipath
+// (the world's path caches shared by the threads), with the default outputs and with neither truth
+// nor fixes (the single writing thread's path).
+TEST(RunThreads, ReceiversObservedSideBySideGiveTheSameBytes) {
+  const auto dir = test::make_temp_dir("run_threads_receivers");
+  const auto scenario = dir / "receivers.yaml";
+  std::ofstream(scenario) << "name: threads-receivers\n"
+                             "time: {start: 2026-03-01T12:00:00, scale: GPST, duration_s: 300, interval_s: 1}\n"
+                             "receivers:\n"
+                             "  - {name: BASE, position: {world_enu_m: [-5.0, 0.0, 1.5]}, profile: septentrio-polarx5,"
+                             " signals: [G1C, G2W, E1C, E7Q, C2I]}\n"
+                             "  - {name: ROVR, position: {world_enu_m: [5.0, 3.0, 1.5]}, profile: ublox-f9p,"
+                             " signals: [G1C, G2L, E1C, E7Q, C2I, C7I], rtk: {base: BASE}}\n"
+                             "  - {name: THIRD, position: {world_enu_m: [0.0, -8.0, 1.5]}, profile: septentrio-polarx5,"
+                             " signals: [G1C, R1C, E1C]}\n"
+                             "world: {sdf: " << (test::source_dir() / "examples" / "worlds" / "courtyard.sdf").string() << "}\n"
+                             "ephemeris: {nominal: true}\n"
+                             "models: {ionosphere: klobuchar, troposphere: saastamoinen, receiver_clock: profile, noise: true,"
+                             " multipath: true}\n"
+                             "seed: 5\n";
+  for (const std::string outputs : {"", " --no-truth --set output.fix=false"}) {
+    std::map<std::string, std::string> first;
+    for (const int threads : {1, 2, 3, 4}) {
+      const auto out = dir / ("t" + std::to_string(threads));
+      std::filesystem::remove_all(out);
+      const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                       test::shell_quote(scenario.string()) + " --out " + test::shell_quote(out.string()) +
+                                       " --quiet --threads " + std::to_string(threads) + outputs + " 2>&1");
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      std::map<std::string, std::string> files;
+      for (const auto& entry : std::filesystem::directory_iterator(out)) {
+        if (!entry.is_regular_file() || entry.path().filename() == "summary.json") continue;
+        std::ifstream in(entry.path(), std::ios::binary);
+        std::stringstream bytes;
+        bytes << in.rdbuf();
+        files[entry.path().filename().string()] = bytes.str();
+      }
+      EXPECT_TRUE(files.count("obs_THIRD.rnx")) << threads;
+      if (first.empty()) {
+        first = std::move(files);
+        continue;
+      }
+      ASSERT_EQ(files.size(), first.size()) << threads << outputs;
+      for (const auto& [name, bytes] : first) {
+        EXPECT_TRUE(files[name] == bytes) << name << " differs with " << threads << " threads" << outputs;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace skytrace
