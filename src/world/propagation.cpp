@@ -118,6 +118,19 @@ bool may_reach_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& s, dou
   return h_min * h_min <= 2.0 * excess_max_m * (m.norm() + radius_m);
 }
 
+// may_reach_line for some direction s within reach_rad of `axis`: the line's reach at the sphere's
+// distance widened by that angle (or the sphere near the origin, where a line could also pass it
+// backwards within the excess).
+bool may_reach_cone(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, double reach_rad, double excess_max_m,
+                    const Eigen::Vector3d& centre_m, double radius_m) {
+  const Eigen::Vector3d m = centre_m - origin;
+  const double distance_m = m.norm();
+  const double rho_m = radius_m + std::sqrt(2.0 * excess_max_m * (distance_m + radius_m));
+  if (distance_m <= std::sqrt(rho_m * rho_m + radius_m * radius_m) * (1.0 + 1e-9) + 1e-9 || rho_m >= distance_m) return true;
+  const double angle = std::acos(std::clamp(m.dot(axis) / distance_m, -1.0, 1.0));
+  return angle <= std::asin(rho_m / distance_m) + reach_rad;
+}
+
 // The point of the edge where the ray from `origin` and the direction s towards the satellite make
 // equal angles with it (Keller's cone: the stationary path over the edge), if it lies inside the edge.
 std::optional<Eigen::Vector3d> keller_point(const DiffractionEdge& edge, const Eigen::Vector3d& origin, const Eigen::Vector3d& s) {
@@ -967,10 +980,16 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::facet_edge_band(con
   // Back to the edge: the projection is projective, t = lambda w_b / ((1 - lambda) w_a + lambda w_b).
   const auto u_at = [&](double t) { return ua + (ub - ua) * (t * weight_a / ((1.0 - t) * weight_b + t * weight_a)); };
   const double u0 = u_at(t0), u1 = u_at(t1);
-  // keller_point: u = c rho / sqrt(1 - c^2) - along, so c = (u + along) / sqrt((u + along)^2 + rho^2).
   const Eigen::Vector3d w = edge.start_m - image;
   const double along = w.dot(axis);
-  const double rho = (w - along * axis).norm();
+  return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach_rad);
+}
+
+std::optional<PropagationScene::FacetEdge> PropagationScene::band_of(const Eigen::Vector3d& axis, double along, double rho,
+                                                                    double u0, double u1, const Eigen::Vector3d& cell_axis,
+                                                                    double cell_reach_rad) {
+  // keller_point: u = c rho / sqrt(1 - c^2) - along, so c = (u + along) / sqrt((u + along)^2 + rho^2),
+  // increasing with u.
   const auto cos_at = [&](double u) { return (u + along) / std::hypot(u + along, rho); };
   FacetEdge out;
   out.axis = axis;
@@ -985,6 +1004,29 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::facet_edge_band(con
   return out;
 }
 
+// For knife-edge diffraction over `edge` from `origin`: the edge's direction and the band of
+// satellite directions s (as s . axis, a little wide) whose stationary point (keller_point) lies
+// on the edge within radius_m of the origin; none when no direction within cell_reach_rad of
+// cell_axis is in the band.
+std::optional<PropagationScene::FacetEdge> PropagationScene::edge_band(const DiffractionEdge& edge, const Eigen::Vector3d& origin,
+                                                                      double radius_m, const Eigen::Vector3d& cell_axis,
+                                                                      double cell_reach_rad) {
+  Eigen::Vector3d axis = edge.end_m - edge.start_m;
+  const double length = axis.norm();
+  if (!(length > 0.0)) return std::nullopt;
+  axis /= length;
+  const Eigen::Vector3d w = edge.start_m - origin;
+  const double along = w.dot(axis);
+  // |w + u axis| <= radius_m, a little wide.
+  const double reach = radius_m * (1.0 + 1e-9) + 1e-6;
+  const double discriminant = along * along - w.squaredNorm() + reach * reach;
+  if (discriminant < 0.0) return std::nullopt;
+  const double u0 = std::max(0.0, -along - std::sqrt(discriminant));
+  const double u1 = std::min(length, -along + std::sqrt(discriminant));
+  if (!(u0 <= u1)) return std::nullopt;
+  return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach_rad);
+}
+
 struct PropagationScene::ReflectedEdgeIndex {
   // Beyond this many pairs in all cells (48 MB) the index starts afresh: the satellites have moved
   // on from most of the cells it holds.
@@ -994,7 +1036,9 @@ struct PropagationScene::ReflectedEdgeIndex {
   std::vector<std::size_t> facets;  // the second-order facets (scene indices) the pairs index
   double excess_max_m = 0.0;
   mutable std::mutex mutex;
-  mutable std::map<std::pair<int, std::size_t>, std::shared_ptr<const std::vector<FacetEdge>>> lists;  // (cell, object)
+  // (cell, object): the pairs for diffraction then reflection; and for knife-edge diffraction
+  // over the object alone (`facet` unused).
+  mutable std::map<std::pair<int, std::size_t>, std::shared_ptr<const std::vector<FacetEdge>>> lists, edge_lists;
   mutable std::size_t entries = 0;
 };
 
@@ -1018,16 +1062,19 @@ std::shared_ptr<const PropagationScene::ReflectedEdgeIndex> PropagationScene::re
 }
 
 std::shared_ptr<const std::vector<PropagationScene::FacetEdge>> PropagationScene::facet_edge_pairs(
-    const ReflectedEdgeIndex& index, std::size_t object, const Eigen::Vector3d& s, const FacetEdgeSearch& search) {
+    const ReflectedEdgeIndex& index, bool knife_edges, std::size_t object, const Eigen::Vector3d& s,
+    const FacetEdgeSearch& search) {
+  auto& lists = knife_edges ? index.edge_lists : index.lists;
   using Cells = DoubleBounceIndex;
   const int row = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0)));
   const int column = Cells::column_of(std::atan2(s.y(), s.x()));
   const std::pair<int, std::size_t> key{row * Cells::kColumns + column, object};
   {
     const std::lock_guard lock(index.mutex);
-    if (auto it = index.lists.find(key); it != index.lists.end()) return it->second;
+    if (auto it = lists.find(key); it != lists.end()) return it->second;
     if (index.entries >= ReflectedEdgeIndex::kMaxEntries) {
       index.lists.clear();
+      index.edge_lists.clear();
       index.entries = 0;
     }
   }
@@ -1038,7 +1085,7 @@ std::shared_ptr<const std::vector<PropagationScene::FacetEdge>> PropagationScene
   // No direction of a cell is farther than one cell size from its centre.
   auto pairs = std::make_shared<const std::vector<FacetEdge>>(search(centre, Cells::kCell_rad + Cells::kMargin_rad));
   const std::lock_guard lock(index.mutex);
-  auto [it, inserted] = index.lists.emplace(key, pairs);
+  auto [it, inserted] = lists.emplace(key, pairs);
   if (inserted) index.entries += pairs->size();
   return it->second;
 }
@@ -1136,9 +1183,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
   // A static antenna's facet-edge pairs for diffraction then reflection, by sky cell.
   const std::shared_ptr<const ReflectedEdgeIndex> edge_index =
-      settings.max_reflection_order >= 2 && settings.diffraction && !edges_.empty() && !second_order_facets.empty()
-          ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m)
-          : nullptr;
+      settings.diffraction && !edges_.empty() ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m) : nullptr;
 
   // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A taken in
   // B gives the point on B, the line from there to the first image the point on A. Pairs go facet
@@ -1315,24 +1360,56 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       auto may_reach = [&](const Eigen::Vector3d& centre_m, double radius_m) {
         return may_reach_line(r, s, excess_max_m, centre_m, radius_m);
       };
-      for (const std::size_t object : objects) {
-        for (const EdgeCluster& cluster : object_clusters_[object]) {
-        if (!may_reach(cluster.centre_m, cluster.radius_m)) continue;
-        for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
-          const std::size_t e = object_edges_[object][k];
-          const DiffractionEdge& edge = edges_[e];
-          if (!may_reach(edge.midpoint_m, edge.half_length_m)) continue;
-          const std::optional<Eigen::Vector3d> keller = keller_point(edge, r, s);
-          if (!keller) continue;
-          const Eigen::Vector3d& q = *keller;
-          const double d2 = (q - r).norm();
-          if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(s) <= 0.0) continue;
-          const double excess = d2 - s.dot(q - r);
-          if (excess > excess_max_m) continue;
-          const double v_magnitude = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
-          const double v = blocked ? v_magnitude : -v_magnitude;
-          hits.push_back(EdgeHit{e, q, excess, v, knife_edge_loss_db(v)});
+      const auto try_knife_edge = [&](std::size_t e) {
+        const DiffractionEdge& edge = edges_[e];
+        if (!may_reach(edge.midpoint_m, edge.half_length_m)) return;
+        const std::optional<Eigen::Vector3d> keller = keller_point(edge, r, s);
+        if (!keller) return;
+        const Eigen::Vector3d& q = *keller;
+        const double d2 = (q - r).norm();
+        if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(s) <= 0.0) return;
+        const double excess = d2 - s.dot(q - r);
+        if (excess > excess_max_m) return;
+        const double v_magnitude = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+        const double v = blocked ? v_magnitude : -v_magnitude;
+        hits.push_back(EdgeHit{e, q, excess, v, knife_edge_loss_db(v)});
+      };
+      // A static antenna behind an object: its edges that may serve a direction of the satellite's
+      // sky cell, each with its band of directions (as for diffraction then reflection below).
+      std::shared_ptr<const std::vector<FacetEdge>> knife_listed;
+      if (edge_index && blocked && objects.size() == 1) {
+        const std::size_t object = objects.front();
+        knife_listed = facet_edge_pairs(*edge_index, true, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+          const auto reach_cell = [&](const Eigen::Vector3d& centre_m, double radius_m) {
+            return may_reach_cone(r, cell_axis, cell_reach_rad, excess_max_m, centre_m, radius_m);
+          };
+          std::vector<FacetEdge> entries;
+          for (const EdgeCluster& cluster : object_clusters_[object]) {
+            if (!reach_cell(cluster.centre_m, cluster.radius_m)) continue;
+            for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+              const DiffractionEdge& edge = edges_[object_edges_[object][k]];
+              if (!reach_cell(edge.midpoint_m, edge.half_length_m)) continue;
+              if (auto entry = edge_band(edge, r, settings.radius_m, cell_axis, cell_reach_rad)) {
+                entry->edge = static_cast<std::uint32_t>(k);
+                entries.push_back(*entry);
+              }
+            }
+          }
+          return entries;
+        });
+      }
+      if (knife_listed) {
+        const std::size_t object = objects.front();
+        for (const FacetEdge& entry : *knife_listed) {
+          const double c = s.dot(entry.axis);  // as keller_point works it out
+          if (c >= entry.cos_min && c <= entry.cos_max) try_knife_edge(object_edges_[object][entry.edge]);
         }
+      } else {
+        for (const std::size_t object : objects) {
+          for (const EdgeCluster& cluster : object_clusters_[object]) {
+            if (!may_reach(cluster.centre_m, cluster.radius_m)) continue;
+            for (std::size_t k = cluster.begin; k < cluster.end; ++k) try_knife_edge(object_edges_[object][k]);
+          }
         }
       }
       if (!blocked) {
@@ -1511,16 +1588,11 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       std::shared_ptr<const std::vector<FacetEdge>> listed;
       if (edge_index && objects.size() == 1) {
         const std::size_t object = objects.front();
-        if (edge_index) listed = facet_edge_pairs(*edge_index, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+        if (edge_index) listed = facet_edge_pairs(*edge_index, false, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
           // Near the image's line for some direction within the cell: the line's reach at the
           // sphere's distance widened by the cell's angle (or the sphere near the image).
           const auto reach_cell = [&](const Eigen::Vector3d& image, const Eigen::Vector3d& centre_m, double radius_m) {
-            const Eigen::Vector3d m = centre_m - image;
-            const double distance_m = m.norm();
-            const double rho_m = radius_m + std::sqrt(2.0 * blocked_excess_max_m * (distance_m + radius_m));
-            if (distance_m <= std::sqrt(rho_m * rho_m + radius_m * radius_m) * (1.0 + 1e-9) + 1e-9 || rho_m >= distance_m) return true;
-            const double angle = std::acos(std::clamp(m.dot(cell_axis) / distance_m, -1.0, 1.0));
-            return angle <= std::asin(rho_m / distance_m) + cell_reach_rad;
+            return may_reach_cone(image, cell_axis, cell_reach_rad, blocked_excess_max_m, centre_m, radius_m);
           };
           std::vector<FacetEdge> pairs;
           const auto& clusters = object_clusters_[object];

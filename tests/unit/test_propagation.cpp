@@ -252,7 +252,8 @@ TEST(Propagation, SecondOrderReflectionInTheCanyon) {
 }
 
 // A static antenna's double bounces come from an index of the facet pairs by sky cell, its
-// diffractions then reflections from an index of facet-edge pairs by sky cell and object, and its
+// knife edges and its diffractions then reflections from indexes of edges and of facet-edge pairs
+// by sky cell and object (each with its band of directions), and its
 // view of the scattering patches is traced once, all kept from its second call at the same point
 // (a moving antenna searches and traces each time). They must give the same paths, bit for bit: a
 // block of buildings turned every way, scattering on, and satellite directions all over the sky.
@@ -285,7 +286,7 @@ TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
     const double azimuth = std::numbers::pi * (3.0 - std::sqrt(5.0)) * i;
     sky.emplace_back(std::sqrt(1.0 - z * z) * std::cos(azimuth), std::sqrt(1.0 - z * z) * std::sin(azimuth), z);
   }
-  int double_bounces = 0, diffracted_reflections = 0;
+  int double_bounces = 0, diffracted_reflections = 0, knife_edges = 0;
   for (const Eigen::Vector3d& rx : {Eigen::Vector3d(2.0, 3.0, 1.5), Eigen::Vector3d(-12.0, 1.0, 1.5), Eigen::Vector3d(10.0, -8.0, 20.0)}) {
     const auto full = propagation(w)->paths(rx, sky, settings);
     const auto scene = propagation(w);
@@ -307,11 +308,13 @@ TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
         EXPECT_EQ(a.diffraction_v, b.diffraction_v);
         double_bounces += a.type == PathType::kReflected && a.reflections == 2 ? 1 : 0;
         diffracted_reflections += a.type == PathType::kDiffracted && a.reflections == 1 ? 1 : 0;
+        knife_edges += a.type == PathType::kDiffracted && a.reflections == 0 ? 1 : 0;
       }
     }
   }
   EXPECT_GT(double_bounces, 100);  // enough to mean something
   EXPECT_GT(diffracted_reflections, 100);
+  EXPECT_GT(knife_edges, 100);
 }
 
 // The excess delay of the path diffracted once and reflected once, moved a little from the

@@ -176,9 +176,10 @@ class PropagationScene final : public PathQuery {
                                                                const std::vector<double>& plane_a,
                                                                const std::vector<Eigen::Vector3d>& image_of) const;
 
-  // Diffraction then reflection (over an edge of the blocking object, then off a second-order
-  // facet) for an antenna that stays where it was: per sky cell and object, the facet-edge pairs
-  // that may serve a satellite in the cell, found once (docs/performance.md).
+  // Knife-edge diffraction over the blocking object, and diffraction then reflection (over one of
+  // its edges, then off a second-order facet), for an antenna that stays where it was: per sky cell
+  // and object, the edges and the facet-edge pairs that may serve a satellite in the cell, each
+  // with the band of directions it can serve, found once (docs/performance.md).
   struct FacetEdge {
     std::uint32_t facet = 0;  // index into the second-order facets
     std::uint32_t edge = 0;   // index into object_edges_[object]
@@ -194,15 +195,25 @@ class PropagationScene final : public PathQuery {
   static std::optional<FacetEdge> facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
                                                   double plane, const DiffractionEdge& edge,
                                                   const Eigen::Vector3d& cell_axis, double cell_reach_rad);
+  // The edge's direction and band for knife-edge diffraction from `origin` (Keller's point within
+  // radius_m), `facet` unused; none when no direction within cell_reach_rad of cell_axis is in it.
+  static std::optional<FacetEdge> edge_band(const DiffractionEdge& edge, const Eigen::Vector3d& origin, double radius_m,
+                                            const Eigen::Vector3d& cell_axis, double cell_reach_rad);
+  // The band of s . axis for Keller points between u0 and u1 along an edge whose start lies `along`
+  // the axis from the origin and rho from its line; none when it misses the cell.
+  static std::optional<FacetEdge> band_of(const Eigen::Vector3d& axis, double along, double rho, double u0, double u1,
+                                          const Eigen::Vector3d& cell_axis, double cell_reach_rad);
   using FacetEdgeSearch = std::function<std::vector<FacetEdge>(const Eigen::Vector3d& cell_axis, double cell_reach_rad)>;
   // The index for an antenna found at the same point in an earlier call, else none.
   std::shared_ptr<const ReflectedEdgeIndex> reflected_edge_index(const Eigen::Vector3d& origin_m,
                                                                  const std::vector<NearFacet>& facets,
                                                                  double excess_max_m) const;
-  // The pairs for satellite direction s and the object, `search` finding them for its cell when
-  // the index has none yet (a superset of what any direction in the cell can use).
-  static std::shared_ptr<const std::vector<FacetEdge>> facet_edge_pairs(const ReflectedEdgeIndex& index, std::size_t object,
-                                                                        const Eigen::Vector3d& s, const FacetEdgeSearch& search);
+  // The pairs (knife_edges: the edges alone) for satellite direction s and the object, `search`
+  // finding them for its cell when the index has none yet (a superset of what any direction in the
+  // cell can use).
+  static std::shared_ptr<const std::vector<FacetEdge>> facet_edge_pairs(const ReflectedEdgeIndex& index, bool knife_edges,
+                                                                        std::size_t object, const Eigen::Vector3d& s,
+                                                                        const FacetEdgeSearch& search);
 
   std::shared_ptr<const PathQuery> scene_;
   std::vector<Facet> facets_;
