@@ -1034,7 +1034,8 @@ struct PropagationScene::ReflectedEdgeIndex {
 
   Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
   std::vector<std::size_t> facets;  // the second-order facets (scene indices) the pairs index
-  double excess_max_m = 0.0;
+  double excess_max_m = 0.0;        // the largest excess over an edge of a blocked satellite's path
+  double radius_m = 0.0;            // the search radius
   mutable std::mutex mutex;
   // (cell, object): the pairs for diffraction then reflection; and for knife-edge diffraction
   // over the object alone (`facet` unused).
@@ -1043,10 +1044,11 @@ struct PropagationScene::ReflectedEdgeIndex {
 };
 
 std::shared_ptr<const PropagationScene::ReflectedEdgeIndex> PropagationScene::reflected_edge_index(
-    const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets, double excess_max_m) const {
+    const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets, double excess_max_m, double radius_m) const {
   const std::lock_guard lock(cache_mutex_);
   auto cached = reflected_edge_indexes_.find([&](const ReflectedEdgeIndex& index) {
-    return index.origin_m == origin_m && index.excess_max_m == excess_max_m && index.facets.size() == facets.size() &&
+    return index.origin_m == origin_m && index.excess_max_m == excess_max_m && index.radius_m == radius_m &&
+           index.facets.size() == facets.size() &&
            std::equal(facets.begin(), facets.end(), index.facets.begin(),
                       [](const NearFacet& f, std::size_t i) { return f.index == i; });
   });
@@ -1056,6 +1058,7 @@ std::shared_ptr<const PropagationScene::ReflectedEdgeIndex> PropagationScene::re
   auto index = std::make_shared<ReflectedEdgeIndex>();
   index->origin_m = origin_m;
   index->excess_max_m = excess_max_m;
+  index->radius_m = radius_m;
   for (const NearFacet& f : facets) index->facets.push_back(f.index);
   reflected_edge_indexes_.keep(index);
   return index;
@@ -1183,7 +1186,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
   // A static antenna's facet-edge pairs for diffraction then reflection, by sky cell.
   const std::shared_ptr<const ReflectedEdgeIndex> edge_index =
-      settings.diffraction && !edges_.empty() ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m) : nullptr;
+      settings.diffraction && !edges_.empty() ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m, settings.radius_m)
+                                              : nullptr;
 
   // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A taken in
   // B gives the point on B, the line from there to the first image the point on A. Pairs go facet
@@ -1588,7 +1592,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       std::shared_ptr<const std::vector<FacetEdge>> listed;
       if (edge_index && objects.size() == 1) {
         const std::size_t object = objects.front();
-        if (edge_index) listed = facet_edge_pairs(*edge_index, false, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+        listed = facet_edge_pairs(*edge_index, false, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
           // Near the image's line for some direction within the cell: the line's reach at the
           // sphere's distance widened by the cell's angle (or the sphere near the image).
           const auto reach_cell = [&](const Eigen::Vector3d& image, const Eigen::Vector3d& centre_m, double radius_m) {

@@ -207,7 +207,7 @@ class PropagationScene final : public PathQuery {
   // The index for an antenna found at the same point in an earlier call, else none.
   std::shared_ptr<const ReflectedEdgeIndex> reflected_edge_index(const Eigen::Vector3d& origin_m,
                                                                  const std::vector<NearFacet>& facets,
-                                                                 double excess_max_m) const;
+                                                                 double excess_max_m, double radius_m) const;
   // The pairs (knife_edges: the edges alone) for satellite direction s and the object, `search`
   // finding them for its cell when the index has none yet (a superset of what any direction in the
   // cell can use).
