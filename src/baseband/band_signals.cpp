@@ -140,6 +140,7 @@ class BeidouB1iSignals final : public BandSignals {
       if (!code) return code.error();
       it = satellites_.emplace(prn, Satellite{}).first;
       it->second.code = *code;
+      it->second.geo = beidou_geo_prn(prn);
     }
     return it->second.code.data();
   }
@@ -150,7 +151,7 @@ class BeidouB1iSignals final : public BandSignals {
   int sign(int prn, std::int64_t period_ms) override {
     Satellite& s = satellites_.at(prn);
     const std::int64_t bdt_ms = period_ms + (static_cast<std::int64_t>(first_week_ - 1356) * 604800 - 14) * 1000;
-    const bool geo = beidou_geo_prn(prn);
+    const bool geo = s.geo;
     const std::int64_t bit_ms = geo ? 2 : 20;
     const std::int64_t bit_index = floor_div(bdt_ms, bit_ms);
     const std::int64_t subframe_index = floor_div(bit_index, 300);
@@ -180,6 +181,7 @@ class BeidouB1iSignals final : public BandSignals {
  private:
   struct Satellite {
     std::array<std::int8_t, kB1iCodeLength> code{};
+    bool geo = false;  // D2 rather than D1, known once per satellite (sign() runs every millisecond)
     std::int64_t subframe_index = std::numeric_limits<std::int64_t>::min();  // the one `subframe` holds
     std::array<std::uint8_t, 300> subframe{};
   };

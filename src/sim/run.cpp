@@ -527,6 +527,15 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     if (!resources->world || resources->world->moving.empty()) return Ok{};
     return move_models_to(*resources->world, epoch_tag(k));
   };
+  // What the fix engine reads of receiver i's epoch: receivers with fixes, and RTK bases (their
+  // rovers' corrections), need it.
+  auto measure = [&](size_t i, QueuedEpoch& item) {
+    if (receivers[i].fixes != nullptr || receivers[i].is_base) {
+      to_measurements(item.receivers[i], item.measurements[i]);
+    } else {
+      item.measurements[i] = positioning::EpochMeasurements{};
+    }
+  };
   // Every receiver's observations at epoch k.
   auto observe_only = [&](std::int64_t k, QueuedEpoch& out) -> Status {
     if (auto st = move_models(k); !st) return st;
@@ -537,12 +546,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     for (size_t i = 0; i < receivers.size(); ++i) {
       ReceiverRun& rx = receivers[i];
       if (auto st = rx.generator->observe(epoch_tag(k), out.receivers[i]); !st) return st;
-      // Receivers with fixes, and RTK bases (their rovers' corrections), need them.
-      if (rx.fixes != nullptr || rx.is_base) {
-        to_measurements(out.receivers[i], out.measurements[i]);
-      } else {
-        out.measurements[i] = positioning::EpochMeasurements{};
-      }
+      measure(i, out);
     }
     return Ok{};
   };
@@ -584,11 +588,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
             if (!first || std::pair{item.index, i} < first->first) first.emplace(std::pair{item.index, i}, st.error());
             break;  // its later epochs need this one's state
           }
-          if (rx.fixes != nullptr || rx.is_base) {
-            to_measurements(item.receivers[i], item.measurements[i]);
-          } else {
-            item.measurements[i] = positioning::EpochMeasurements{};
-          }
+          measure(i, item);
         }
       }
     };
