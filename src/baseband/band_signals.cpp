@@ -1,4 +1,5 @@
 // The bands' signals for the synthesizer: codes, data symbols by transmission time, FDMA offsets.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -22,13 +23,13 @@ class GpsL1caSignals final : public BandSignals {
       : lnav_(std::move(lnav)), first_week_(first_week), record_at_(std::move(record_at)) {}
 
   int code_length() const override { return kCaCodeLength; }
-  Result<const std::int8_t*> code(int prn) override {
+  Result<const float*> code(int prn, int /*form*/) override {
     auto it = satellites_.find(prn);
     if (it == satellites_.end()) {
       auto code = gps_ca_code(prn);
       if (!code) return code.error();
       it = satellites_.emplace(prn, Satellite{}).first;
-      it->second.code = *code;
+      std::copy(code->begin(), code->end(), it->second.code.begin());
     }
     return it->second.code.data();
   }
@@ -58,7 +59,7 @@ class GpsL1caSignals final : public BandSignals {
 
  private:
   struct Satellite {
-    std::array<std::int8_t, kCaCodeLength> code{};
+    std::array<float, kCaCodeLength> code{};
     int subframe_start_sow = -1;
     int subframe_week = -1;
     std::array<std::uint8_t, kLnavBitsPerSubframe> subframe{};
@@ -76,9 +77,14 @@ class GlonassL1ofSignals final : public BandSignals {
       : gnav_(gnav), first_week_(first_week), record_at_(std::move(record_at)) {}
 
   int code_length() const override { return kGlonassCodeLength; }
-  Result<const std::int8_t*> code(int slot) override {
+  Result<const float*> code(int slot, int /*form*/) override {
     satellites_.try_emplace(slot);
-    return glonass_ranging_code().data();
+    static const std::array<float, kGlonassCodeLength> kCode = [] {
+      std::array<float, kGlonassCodeLength> c{};
+      std::copy(glonass_ranging_code().begin(), glonass_ranging_code().end(), c.begin());
+      return c;
+    }();
+    return kCode.data();
   }
   double centre_hz() const override { return kGlonassBandCentre_hz; }
   // Strings of 2 s aligned to the Moscow day (UTC(SU) + 3 h): 170 data symbols of 10 ms, then the
@@ -133,13 +139,13 @@ class BeidouB1iSignals final : public BandSignals {
       : ionosphere_(std::move(ionosphere)), first_week_(first_week), record_at_(std::move(record_at)) {}
 
   int code_length() const override { return kB1iCodeLength; }
-  Result<const std::int8_t*> code(int prn) override {
+  Result<const float*> code(int prn, int /*form*/) override {
     auto it = satellites_.find(prn);
     if (it == satellites_.end()) {
       auto code = beidou_b1i_code(prn);
       if (!code) return code.error();
       it = satellites_.emplace(prn, Satellite{}).first;
-      it->second.code = *code;
+      std::copy(code->begin(), code->end(), it->second.code.begin());
       it->second.geo = beidou_geo_prn(prn);
     }
     return it->second.code.data();
@@ -180,7 +186,7 @@ class BeidouB1iSignals final : public BandSignals {
   }
  private:
   struct Satellite {
-    std::array<std::int8_t, kB1iCodeLength> code{};
+    std::array<float, kB1iCodeLength> code{};
     bool geo = false;  // D2 rather than D1, known once per satellite (sign() runs every millisecond)
     std::int64_t subframe_index = std::numeric_limits<std::int64_t>::min();  // the one `subframe` holds
     std::array<std::uint8_t, 300> subframe{};

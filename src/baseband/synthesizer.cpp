@@ -90,9 +90,13 @@ Status BasebandSynthesizer::add_instant(double time_s, const std::vector<Arrival
   now.time_s = time_s;
   for (const Arrival& a : arrivals) {
     if (!codes_.contains(a.id)) {
-      auto code = signals_->code(a.id);
-      if (!code) return code.error();
-      codes_[a.id] = *code;
+      std::vector<const float*> forms;
+      for (int form = 0; form < signals_->forms(); ++form) {
+        auto code = signals_->code(a.id, form);
+        if (!code) return code.error();
+        forms.push_back(*code);
+      }
+      codes_[a.id] = std::move(forms);
     }
     now.arrivals[a.id] = a;
   }
@@ -112,14 +116,17 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
   const auto block = static_cast<std::int64_t>(std::floor(fs * 1e-3));  // samples per block, at most 1 ms
   const auto end_sample = static_cast<std::int64_t>(std::ceil(to.time_s * fs - 1e-6));
   const CarrierTable& lut = carrier_table();
-  // start_sow_ * 1000 = whole ms + a fraction: transmission times are counted in ms from the run's
-  // first week's start.
+  // Transmission times are counted in code periods from the run's first week's start: the start's
+  // whole periods, and its fraction of one carried with the small numbers of the run.
+  const int period_ms = signals_->code_period_ms();
   const double start_ms = start_sow_ * 1000.0;
   const auto start_ms_whole = static_cast<std::int64_t>(std::floor(start_ms));
-  const double start_ms_fraction = start_ms - static_cast<double>(start_ms_whole);
+  const std::int64_t start_periods_whole = start_ms_whole / period_ms;
+  const double start_ms_fraction =
+      static_cast<double>(start_ms_whole - start_periods_whole * period_ms) + (start_ms - static_cast<double>(start_ms_whole));
 
   struct Replica {
-    const std::int8_t* code;
+    const std::vector<const float*>* forms;
     int id;
     const Arrival* a0;
     const Arrival* a1;
@@ -135,7 +142,7 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
     const double direct_amplitude = std::sqrt(2.0 * std::pow(10.0, a0.antenna_cn0_dbhz / 10.0) / fs);
     const std::vector<ArrivalPath> direct_only = {ArrivalPath{}};
     for (const ArrivalPath& path : a0.paths.empty() ? direct_only : a0.paths) {
-      replicas.push_back(Replica{codes_.at(id), id, &a0, &it->second, path, direct_amplitude * std::abs(path.amplitude),
+      replicas.push_back(Replica{&codes_.at(id), id, &a0, &it->second, path, direct_amplitude * std::abs(path.amplitude),
                                  a0.carrier_hz - signals_->centre_hz()});
     }
   }
@@ -170,9 +177,10 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
         return -(l + excess_m / wavelength_m) + std::arg(r.path.amplitude) / (2.0 * std::numbers::pi) +
                r.carrier_offset_hz * t;
       };
-      // Transmission time (satellite clock) in ms since the first week's start.
-      const double xb = (tb - range_at(tb) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction;
-      const double xe = (te - range_at(te) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction;
+      // Transmission time (satellite clock) in code periods since the first week's start, less the
+      // start's whole periods.
+      const double xb = ((tb - range_at(tb) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction) / period_ms;
+      const double xe = ((te - range_at(te) / constants::kSpeedOfLight_mps) * 1000.0 + start_ms_fraction) / period_ms;
       const auto period_b = static_cast<std::int64_t>(std::floor(xb));
       const double chip = (xb - static_cast<double>(period_b)) * code_length;
       const double chips_per_sample = (xe - xb) * code_length / static_cast<double>(n);
@@ -188,9 +196,9 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
           static_cast<std::int64_t>(std::llround((phase_b - std::floor(phase_b)) * kFraction)));
       auto chip_fixed = static_cast<std::uint64_t>(chip * kFraction);
       const std::uint64_t kCodeEnd = static_cast<std::uint64_t>(code_length) << 32;
-      std::int64_t period = start_ms_whole + period_b;
+      std::int64_t period = start_periods_whole + period_b;
       const auto amplitude = static_cast<float>(r.amplitude);
-      const std::int8_t* code = r.code;
+      const std::vector<const float*>& forms = *r.forms;
       const float* cos_table = lut.cos_table.data();
       const float* sin_table = lut.sin_table.data();
       size_t i = 0;
@@ -199,10 +207,11 @@ Status BasebandSynthesizer::synthesize(const Instant& from, const Instant& to, s
         size_t segment = chip_fixed >= kCodeEnd ? 0 : static_cast<size_t>((kCodeEnd - chip_fixed + chip_step - 1) / chip_step);
         segment = std::min(segment, n - i);
         const float a = amplitude * static_cast<float>(signals_->sign(r.id, period));
+        const float* code = forms.size() == 1 ? forms[0] : forms[static_cast<size_t>(signals_->form(r.id, period))];
         float* re = re_.data() + i;
         float* im = im_.data() + i;
         for (size_t k = 0; k < segment; ++k) {
-          const float v = a * static_cast<float>(code[chip_fixed >> 32]);
+          const float v = a * code[chip_fixed >> 32];
           const std::uint32_t lut_index = carrier >> (32 - kLutBits);
           re[k] += v * cos_table[lut_index];
           im[k] += v * sin_table[lut_index];

@@ -642,8 +642,8 @@ TEST(BeidouB1i, GeoSatellitesSendD2AtFiveHundredBitsPerSecond) {
   e.iode = 5;
   const int gps_week = 758 + 1356;
   auto signals = make_beidou_b1i_signals({}, gps_week, [&](int, const GnssTime&) { return &e; });
-  ASSERT_TRUE(signals->code(3));
-  ASSERT_TRUE(signals->code(19));
+  ASSERT_TRUE(signals->code(3, 0));
+  ASSERT_TRUE(signals->code(19, 0));
   // Milliseconds since the GPS week's start of BDT second 345603 (BDT = GPST - 14 s).
   const std::int64_t frame_ms = (345603 + 14) * 1000LL;
   for (int id = 1; id <= 5; ++id) {

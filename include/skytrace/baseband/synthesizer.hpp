@@ -49,17 +49,24 @@ struct Arrival {
   std::vector<ArrivalPath> paths;
 };
 
-// The signals of one band: each satellite's spreading code (one period per millisecond), its data
-// symbols, and the band's centre (a carrier off it, GLONASS FDMA, sits at its offset).
+// The signals of one band: each satellite's code waveform (one period every code_period_ms()), its
+// data symbols, and the band's centre (a carrier off it, GLONASS FDMA, sits at its offset).
 class BandSignals {
  public:
   virtual ~BandSignals() = default;
-  [[nodiscard]] virtual int code_length() const = 0;  // chips per 1 ms period
-  [[nodiscard]] virtual Result<const std::int8_t*> code(int id) = 0;
+  [[nodiscard]] virtual int code_period_ms() const { return 1; }  // Galileo E1: 4
+  // Values per code period: the chips, or the sub-chips of a BOC waveform (Galileo E1: 12 a chip).
+  [[nodiscard]] virtual int code_length() const = 0;
+  // The waveform of one code period, code_length() values of unit mean square; `form` is one of
+  // forms() variants (Galileo E1: its pilot's secondary chip agreeing with the data symbol or not).
+  [[nodiscard]] virtual Result<const float*> code(int id, int form) = 0;
+  [[nodiscard]] virtual int forms() const { return 1; }
   [[nodiscard]] virtual double centre_hz() const = 0;  // the band's centre: 0 Hz of the samples
-  // The data symbol (+1 / -1) of the code period that starts `period_ms` ms after the start of
-  // GPS week `first_week` (transmission time by the satellite's clock, GPST).
-  [[nodiscard]] virtual int sign(int id, std::int64_t period_ms) = 0;
+  // The data symbol (+1 / -1) and the waveform's form of the code period that starts
+  // `period * code_period_ms()` ms after the start of GPS week `first_week` (transmission time by
+  // the satellite's clock, GPST).
+  [[nodiscard]] virtual int sign(int id, std::int64_t period) = 0;
+  [[nodiscard]] virtual int form(int /*id*/, std::int64_t /*period*/) { return 0; }
 };
 
 // GPS L1 C/A, ids PRN 1-32: LNAV from the record `record_at` gives (nullptr: no data).
@@ -111,7 +118,7 @@ class BasebandSynthesizer {
   std::unique_ptr<BandSignals> signals_;
   int first_week_ = 0;
   double start_sow_ = 0.0;  // start's seconds of that week
-  std::map<int, const std::int8_t*> codes_;
+  std::map<int, std::vector<const float*>> codes_;  // per id, each form's waveform
   std::optional<Instant> previous_;
   RandomStream noise_;
   std::int64_t samples_written_ = 0;
