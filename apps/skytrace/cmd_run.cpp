@@ -68,15 +68,15 @@ void register_iq_command(CLI::App& app, int& exit_code) {
   auto format = std::make_shared<std::string>("sc8");
   auto bands = std::make_shared<std::vector<std::string>>();
   CLI::App* cmd = app.add_subcommand(
-      "iq", "Write complex baseband samples of the scenario's first receiver (GPS L1 C/A) with a GNSS-SDR "
+      "iq", "Write complex baseband samples of the scenario's first receiver (GPS L1 C/A, Galileo E1, GLONASS L1OF, BeiDou B1I) with a GNSS-SDR "
             "configuration, beside obs.rnx and truth of the same run");
   cmd->add_option("scenario", args->scenario, "Scenario YAML file (see docs/scenario.md)")->required();
   cmd->add_option("--out", args->out_dir, "Output folder (created if missing)")->required();
-  cmd->add_option("--sample-rate", *sample_rate, "Complex samples per second (at least 2.046e6 for L1 C/A)")
+  cmd->add_option("--sample-rate", *sample_rate, "Complex samples per second (at least 2.046e6 for L1 C/A, 4.092e6 for E1 and B1, 8.9e6 for G1)")
       ->capture_default_str();
   cmd->add_option("--format", *format, "sc8 (int8 I/Q), sc16 (int16 I/Q) or gr_complex (float32 I/Q)")
       ->capture_default_str();
-  cmd->add_option("--band", *bands, "Band to write (repeatable): L1 (GPS L1 C/A; the default)");
+  cmd->add_option("--band", *bands, "Band to write (repeatable): L1 (GPS L1 C/A; the default), E1 (Galileo E1 OS), G1 (GLONASS L1OF), B1 (BeiDou B1I)");
   cmd->add_flag("--no-truth", args->no_truth, "Do not write truth.csv.zst (nor paths.csv.zst)");
   cmd->add_option("--truth-format", args->truth_format, "csv.zst (default) or csv, as for skytrace run");
   cmd->add_flag("-q,--quiet", args->quiet, "No progress bar and no summary lines");

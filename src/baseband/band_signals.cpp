@@ -6,6 +6,7 @@
 #include <string>
 
 #include "skytrace/baseband/beidou_b1i.hpp"
+#include "skytrace/baseband/galileo_e1.hpp"
 #include "skytrace/baseband/synthesizer.hpp"
 
 namespace skytrace::baseband {
@@ -197,6 +198,74 @@ class BeidouB1iSignals final : public BandSignals {
   std::map<int, Satellite> satellites_;
 };
 
+
+class GalileoE1Signals final : public BandSignals {
+ public:
+  GalileoE1Signals(InavCommon inav, int first_week,
+                   std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at)
+      : inav_(std::move(inav)), first_week_(first_week), record_at_(std::move(record_at)) {}
+
+  int code_period_ms() const override { return kE1CodePeriod_ms; }
+  int code_length() const override { return kE1ChipsPerCode * kE1SubchipsPerChip; }
+  int forms() const override { return 2; }
+  Result<const float*> code(int prn, int form) override {
+    auto it = satellites_.find(prn);
+    if (it == satellites_.end()) {
+      auto b = galileo_e1_primary_code(prn, false);
+      if (!b) return b.error();
+      auto c = galileo_e1_primary_code(prn, true);
+      if (!c) return c.error();
+      it = satellites_.emplace(prn, Satellite{}).first;
+      it->second.waveforms[0] = galileo_e1_cboc_waveform(*b, *c, 1);
+      it->second.waveforms[1] = galileo_e1_cboc_waveform(*b, *c, -1);
+    }
+    return it->second.waveforms[static_cast<size_t>(form)].data();
+  }
+  double centre_hz() const override { return kE1Carrier_hz; }
+  // GST runs with GPST (weeks from 1999-08-22, GPS week 1024): pages of 2 s (an even and an odd
+  // part of 250 symbols, one per 4 ms code period), 15 a 30 s subframe. On E1-B the even parts
+  // start at odd seconds of GST (E5b's at even ones), so a nominal subframe starts at TOW 1 (mod 30).
+  int sign(int prn, std::int64_t period) override {
+    Satellite& s = satellites_.at(prn);
+    const std::int64_t page_index = floor_div(period - kInavSymbolsPerPagePart, 2 * kInavSymbolsPerPagePart);
+    if (page_index != s.page_index) {
+      s.page_index = page_index;
+      const std::int64_t start_total_s = page_index * 2 + 1;
+      const int week = first_week_ + static_cast<int>(floor_div(start_total_s, 604800));
+      const int tow = static_cast<int>(start_total_s - 604800 * floor_div(start_total_s, 604800));
+      const orbits::KeplerEphemeris* record =
+          record_at_ ? record_at_(prn, GnssTime::from_week_tow(TimeScale::kGpst, week, tow)) : nullptr;
+      if (record != nullptr) {
+        const int type = inav_e1b_word_type((tow + 29) % 30 / 2);
+        const auto parts = inav_page_parts(inav_word(type, *record, inav_, week - 1024, tow));
+        s.symbols[0] = inav_part_symbols(parts[0]);
+        s.symbols[1] = inav_part_symbols(parts[1]);
+      } else {
+        s.symbols[0].fill(1);
+        s.symbols[1].fill(1);
+      }
+    }
+    const std::int64_t in_page = period - kInavSymbolsPerPagePart - page_index * 2 * kInavSymbolsPerPagePart;
+    return s.symbols[static_cast<size_t>(in_page / kInavSymbolsPerPagePart)]
+                    [static_cast<size_t>(in_page % kInavSymbolsPerPagePart)];
+  }
+  // E1-C's secondary chip (one per code period, restarting every 100 ms of GST) against the symbol.
+  int form(int prn, std::int64_t period) override {
+    const int secondary = galileo_e1c_secondary_code()[static_cast<size_t>(period - 25 * floor_div(period, 25))];
+    return secondary == sign(prn, period) ? 0 : 1;
+  }
+
+ private:
+  struct Satellite {
+    std::array<std::vector<float>, 2> waveforms;  // the pilot's chip agreeing with the symbol, or not
+    std::int64_t page_index = std::numeric_limits<std::int64_t>::min();  // the page `symbols` holds
+    std::array<std::array<std::int8_t, kInavSymbolsPerPagePart>, 2> symbols{};  // even part, odd part
+  };
+  InavCommon inav_;
+  int first_week_;
+  std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at_;
+  std::map<int, Satellite> satellites_;
+};
 }  // namespace
 
 std::unique_ptr<BandSignals> make_gps_l1ca_signals(
@@ -207,6 +276,11 @@ std::unique_ptr<BandSignals> make_gps_l1ca_signals(
 std::unique_ptr<BandSignals> make_glonass_l1of_signals(
     GnavCommon gnav, int first_week, std::function<const orbits::GlonassEphemeris*(int, const GnssTime&)> record_at) {
   return std::make_unique<GlonassL1ofSignals>(gnav, first_week, std::move(record_at));
+}
+
+std::unique_ptr<BandSignals> make_galileo_e1_signals(
+    InavCommon inav, int first_week, std::function<const orbits::KeplerEphemeris*(int, const GnssTime&)> record_at) {
+  return std::make_unique<GalileoE1Signals>(std::move(inav), first_week, std::move(record_at));
 }
 
 std::unique_ptr<BandSignals> make_beidou_b1i_signals(

@@ -49,10 +49,33 @@ baseband::GnavCommon gnav_common(const orbits::BroadcastEphemerides& ephemerides
   return c;
 }
 
+baseband::InavCommon inav_common(const orbits::BroadcastEphemerides& ephemerides, const GnssTime& start) {
+  baseband::InavCommon c;
+  const orbits::NavigationData& nav = ephemerides.data();
+  c.ionosphere = nav.ionosphere.galileo;
+  const WeekTow at = start.to_week_tow(TimeScale::kGpst);
+  c.leap_seconds = nav.leap_seconds.value_or(gps_minus_utc_s(start));
+  c.leap_seconds_future = c.leap_seconds;
+  c.leap_week = at.week - 1024;
+  c.utc_week = at.week - 1024;
+  c.utc_tot_s = static_cast<int>(std::floor(at.tow_s / 3600.0)) * 3600;
+  for (const auto& correction : nav.time_corrections) {
+    if (correction.type != "GAUT") continue;
+    c.utc_a0_s = correction.a0_s;
+    c.utc_a1_s_per_s = correction.a1_s_per_s;
+    const WeekTow ref = correction.reference_time.to_week_tow(TimeScale::kGpst);
+    c.utc_week = ref.week - 1024;
+    c.utc_tot_s = static_cast<int>(std::floor(ref.tow_s / 3600.0)) * 3600;
+  }
+  return c;
+}
+
 // One band of the samples: its file, its synthesizer and the signal of the observations it takes.
 struct IqBand {
-  std::string name;  // L1 | G1
-  Signal signal;  // G1C | C2I | R1C: the observations it takes
+  std::string name;  // L1 | E1 | G1 | B1
+  Signal signal;  // G1C | E1C | R1C | C2I: the observations it takes
+  // What the samples carry beyond that signal's power: E1C is E1's pilot, half of E1 OS's power.
+  double power_beyond_signal_db = 0.0;
   std::string file_name;
   std::unique_ptr<StagedFile> file;
   std::unique_ptr<baseband::BasebandSynthesizer> synthesizer;
@@ -82,7 +105,7 @@ class IqSink final : public EpochSink {
       s.sample_rate_hz = iq.sample_rate_hz;
       s.format = *format;
       s.start = c.scenario->time.start;
-      s.seed = c.scenario->seed + (name == "L1" ? 0 : name == "G1" ? 1 : 2);  // independent noise per band
+      s.seed = c.scenario->seed + (name == "L1" ? 0 : name == "G1" ? 1 : name == "B1" ? 2 : 3);  // independent noise per band
       s.noise = true;
       std::unique_ptr<baseband::BandSignals> signals;
       if (name == "L1") {
@@ -91,6 +114,14 @@ class IqSink final : public EpochSink {
             lnav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
               return ephemerides->find_kepler(SatelliteId{GnssSystem::kGps, static_cast<std::uint8_t>(prn)}, t,
                                               orbits::NavMessage::kGpsLnav);
+            });
+      } else if (name == "E1") {
+        band.signal = Signal{GnssSystem::kGalileo, '1', 'C'};
+        band.power_beyond_signal_db = 10.0 * std::log10(2.0);
+        signals = baseband::make_galileo_e1_signals(
+            inav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
+              return ephemerides->find_kepler(SatelliteId{GnssSystem::kGalileo, static_cast<std::uint8_t>(prn)}, t,
+                                              orbits::NavMessage::kGalileoInav);
             });
       } else if (name == "B1") {
         band.signal = Signal{GnssSystem::kBeiDou, '2', 'I'};
@@ -128,7 +159,7 @@ class IqSink final : public EpochSink {
           a.pseudorange_m = in.pseudorange_m;
           a.carrier_phase_cycles = in.carrier_phase_cycles;
           a.doppler_hz = in.doppler_hz;
-          a.antenna_cn0_dbhz = in.antenna_cn0_dbhz;
+          a.antenna_cn0_dbhz = in.antenna_cn0_dbhz + band.power_beyond_signal_db;
           for (const receiver::IncomingPath& p : in.paths) {
             a.paths.push_back(baseband::ArrivalPath{p.excess_delay_m, p.excess_delay_rate_mps, p.amplitude});
           }
@@ -163,13 +194,17 @@ class IqSink final : public EpochSink {
     const double fs = settings_.sample_rate_hz;
     const size_t channels = std::max<size_t>(4, band.synthesizer->most_satellites());
     const bool gps = band.name == "L1";
+    const bool galileo = band.name == "E1";
     const bool beidou = band.name == "B1";
-    const std::string id = gps ? "1C" : beidou ? "B1" : "1G";
+    const std::string id = gps ? "1C" : galileo ? "1B" : beidou ? "B1" : "1G";
     const char* system = gps ? "GPS_L1_CA" : beidou ? "BEIDOU_B1I" : "GLONASS_L1_CA";
     const std::string out_dir = "gnss-sdr-" + band.name;
     std::string t;
     t += "; GNSS-SDR configuration written by skytrace for " + band.file_name + " (" +
-         (gps ? "GPS L1 C/A" : beidou ? "BeiDou B1I: D1 of MEO and IGSO satellites, D2 of GEO ones" : "GLONASS L1OF, centred on 1602 MHz") +
+         (gps       ? "GPS L1 C/A"
+          : galileo ? "Galileo E1 OS: E1-B with I/NAV, E1-C pilot, CBOC(6,1,1/11)"
+          : beidou  ? "BeiDou B1I: D1 of MEO and IGSO satellites, D2 of GEO ones"
+                    : "GLONASS L1OF, centred on 1602 MHz") +
          ")\n";
     t += fmt::format("; {} complex samples at {:.0f} samples/s ({} bytes each); run from this folder:\n",
                      band.synthesizer->samples_written(), fs, baseband::bytes_per_sample(format_));
@@ -193,25 +228,44 @@ class IqSink final : public EpochSink {
     t += "Resampler.implementation=Pass_Through\nResampler.item_type=gr_complex\n";
     t += "Channels_" + id + ".count=" + std::to_string(channels) + "\n";
     t += "Channels.in_acquisition=1\nChannel.signal=" + id + "\n";
-    t += "Acquisition_" + id + ".implementation=" + system + "_PCPS_Acquisition\n";
-    t += "Acquisition_" + id + ".item_type=gr_complex\n";
-    t += "Acquisition_" + id + ".coherent_integration_time_ms=1\nAcquisition_" + id + ".pfa=0.01\n";
-    // B1I at 100 Hz steps: a GEO satellite (D2's 2 ms bits) is pulled in only from close to its
-    // Doppler, and GNSS-SDR drops it when its bit synchronisation takes long.
-    t += "Acquisition_" + id + ".doppler_max=6000\nAcquisition_" + id + ".doppler_step=" + (beidou ? "100" : "250") + "\n";
-    t += "Acquisition_" + id + ".max_dwells=1\nAcquisition_" + id + ".dump=false\n";
-    t += "Tracking_" + id + ".implementation=" + system + "_DLL_PLL_Tracking\n";
-    t += "Tracking_" + id + ".item_type=gr_complex\n";
-    // Wide loops to pull in, then 10 ms correlations with narrow ones (profiles/gnss-sdr.yaml).
-    t += "Tracking_" + id + ".pll_bw_hz=20.0\nTracking_" + id + ".dll_bw_hz=2.0\n";
-    t += "Tracking_" + id + ".early_late_space_chips=0.5\n";
-    if (!beidou) {  // B1I's 1 ms symbols carry the Neumann-Hoffman code: plain loops
-      t += "Tracking_" + id + ".extend_correlation_symbols=10\nTracking_" + id + ".pll_bw_narrow_hz=5.0\n";
-      t += "Tracking_" + id + ".dll_bw_narrow_hz=0.5\n";
+    if (galileo) {
+      // 4 ms coherent (one E1 code period) with a BOC(1,1) replica. Every period may flip the data
+      // symbol and the pilot's secondary chip, and a flip inside the window splits the peak into
+      // two lobes about 175 Hz either side; GNSS-SDR then pulled the PLL to a false lock 125 Hz off
+      // and never synchronised to the secondary code. Searching both halves of 8 ms
+      // (bit_transition_flag) in 50 Hz steps hands tracking a Doppler within 25 Hz.
+      t += "Acquisition_1B.implementation=Galileo_E1_PCPS_Ambiguous_Acquisition\n";
+      t += "Acquisition_1B.item_type=gr_complex\nAcquisition_1B.coherent_integration_time_ms=4\n";
+      t += "Acquisition_1B.pfa=0.0001\nAcquisition_1B.acquire_pilot=true\nAcquisition_1B.bit_transition_flag=true\n";
+      t += "Acquisition_1B.doppler_max=5000\nAcquisition_1B.doppler_step=50\n";
+      t += "Acquisition_1B.max_dwells=1\nAcquisition_1B.dump=false\n";
+      // VEML on the pilot (its secondary code wiped once synchronised), 4 ms correlations.
+      t += "Tracking_1B.implementation=Galileo_E1_DLL_PLL_VEML_Tracking\nTracking_1B.item_type=gr_complex\n";
+      t += "Tracking_1B.track_pilot=true\nTracking_1B.pll_bw_hz=15.0\nTracking_1B.dll_bw_hz=2.0\n";
+      t += "Tracking_1B.early_late_space_chips=0.15\nTracking_1B.very_early_late_space_chips=0.5\n";
+      t += "Tracking_1B.dump=false\n";
+      t += "TelemetryDecoder_1B.implementation=Galileo_E1B_Telemetry_Decoder\nTelemetryDecoder_1B.dump=false\n";
+    } else {
+      t += "Acquisition_" + id + ".implementation=" + system + "_PCPS_Acquisition\n";
+      t += "Acquisition_" + id + ".item_type=gr_complex\n";
+      t += "Acquisition_" + id + ".coherent_integration_time_ms=1\nAcquisition_" + id + ".pfa=0.01\n";
+      // B1I at 100 Hz steps: a GEO satellite (D2's 2 ms bits) is pulled in only from close to its
+      // Doppler, and GNSS-SDR drops it when its bit synchronisation takes long.
+      t += "Acquisition_" + id + ".doppler_max=6000\nAcquisition_" + id + ".doppler_step=" + (beidou ? "100" : "250") + "\n";
+      t += "Acquisition_" + id + ".max_dwells=1\nAcquisition_" + id + ".dump=false\n";
+      t += "Tracking_" + id + ".implementation=" + system + "_DLL_PLL_Tracking\n";
+      t += "Tracking_" + id + ".item_type=gr_complex\n";
+      // Wide loops to pull in, then 10 ms correlations with narrow ones (profiles/gnss-sdr.yaml).
+      t += "Tracking_" + id + ".pll_bw_hz=20.0\nTracking_" + id + ".dll_bw_hz=2.0\n";
+      t += "Tracking_" + id + ".early_late_space_chips=0.5\n";
+      if (!beidou) {  // B1I's 1 ms symbols carry the Neumann-Hoffman code: plain loops
+        t += "Tracking_" + id + ".extend_correlation_symbols=10\nTracking_" + id + ".pll_bw_narrow_hz=5.0\n";
+        t += "Tracking_" + id + ".dll_bw_narrow_hz=0.5\n";
+      }
+      t += "Tracking_" + id + ".dump=false\n";
+      t += "TelemetryDecoder_" + id + ".implementation=" + system + "_Telemetry_Decoder\n";
+      t += "TelemetryDecoder_" + id + ".dump=false\n";
     }
-    t += "Tracking_" + id + ".dump=false\n";
-    t += "TelemetryDecoder_" + id + ".implementation=" + system + "_Telemetry_Decoder\n";
-    t += "TelemetryDecoder_" + id + ".dump=false\n";
     // Carrier-smoothed pseudoranges, as receivers report them.
     t += "Observables.implementation=Hybrid_Observables\nObservables.dump=false\n";
     t += "Observables.enable_carrier_smoothing=true\nObservables.smoothing_factor=200\n";

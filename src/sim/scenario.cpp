@@ -17,6 +17,25 @@
 #include "skytrace/world/loaders.hpp"
 
 namespace skytrace::sim {
+
+const std::vector<IqBand>& iq_bands() {
+  // Main lobes: L1 C/A 2.046 MHz; E1's BOC(1,1) +-2.046 MHz; GLONASS L1OF's channels -7..+6 at
+  // 562.5 kHz around 1602 MHz with +-0.511 MHz each (-4.45 to +3.89 MHz); B1I 2.046 Mchip/s.
+  static const std::vector<IqBand> bands = {
+      {"L1", "G1C", "GPS L1 C/A", 2.046e6},
+      {"E1", "E1C", "Galileo E1 OS", 4.092e6},
+      {"G1", "R1C", "GLONASS L1OF", 8.9e6},
+      {"B1", "C2I", "BeiDou B1I", 4.092e6},
+  };
+  return bands;
+}
+
+const IqBand* find_iq_band(const std::string& name) {
+  for (const IqBand& band : iq_bands()) {
+    if (name == band.name) return &band;
+  }
+  return nullptr;
+}
 namespace {
 
 // Scenario keys with their path and line in every message (core/yaml_field.hpp).
@@ -419,28 +438,29 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
       if (auto c = iq->child("bands")) {
         settings.bands.clear();
         for (const auto& band : c->as_list_or_single()) {
-          const std::string name = band.as_choice({"L1", "G1", "B1"});
+          const std::string name = band.as_string();
+          if (find_iq_band(name) == nullptr) {
+            std::string names;
+            for (const IqBand& b : iq_bands()) names += std::string(names.empty() ? "" : ", ") + b.name;
+            band.fail("unknown value '" + name + "' (expected one of: " + names + ")");
+          }
           if (std::find(settings.bands.begin(), settings.bands.end(), name) == settings.bands.end()) {
             settings.bands.push_back(name);
           }
         }
       }
       for (const std::string& band : settings.bands) {
-        // L1: GPS L1 C/A. G1: GLONASS L1OF around 1602 MHz, channels -7..+6 at 562.5 kHz with their
-        // main lobes (+-0.511 MHz): -4.45 to +3.89 MHz needs 8.9 MS/s complex.
-        // B1: BeiDou B1I, 2.046 Mchip/s: a main lobe 4.092 MHz wide.
-        const std::string signal = band == "L1" ? "G1C" : band == "B1" ? "C2I" : "R1C";
-        const double need_hz = band == "L1" ? 2.046e6 : band == "B1" ? 4.092e6 : 8.9e6;
-        if (settings.sample_rate_hz < need_hz) {
+        const IqBand& spec = *find_iq_band(band);
+        if (settings.sample_rate_hz < spec.min_sample_rate_hz) {
           iq->fail(fmt::format("sample_rate_hz {:.6g}: band {} needs at least {:.4g} complex samples/s", settings.sample_rate_hz,
-                               band, need_hz));
+                               band, spec.min_sample_rate_hz));
         }
         const bool tracks = !s.receivers.empty() &&
                             std::any_of(s.receivers.front().signals.begin(), s.receivers.front().signals.end(),
-                                        [&](const Signal& sig) { return sig.to_string() == signal; });
+                                        [&](const Signal& sig) { return sig.to_string() == spec.signal; });
         if (!tracks) {
-          iq->fail("band " + band + " (" + (band == "L1" ? "GPS L1 C/A" : band == "B1" ? "BeiDou B1I" : "GLONASS L1OF") +
-                   "): the first receiver does not list signal " + signal + " in receiver.signals");
+          iq->fail("band " + band + " (" + spec.description + "): the first receiver does not list signal " + spec.signal +
+                   " in receiver.signals");
         }
       }
       s.output.iq = settings;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "skytrace/baseband/galileo_e1.hpp"
 #include "skytrace/baseband/gps_l1ca.hpp"
 #include "skytrace/baseband/glonass_l1of.hpp"
 #include "skytrace/core/random.hpp"
@@ -91,6 +92,12 @@ struct SynthesizerSettings {
 // `record_at` gives (nullptr: no data), centred on 1561.098 MHz.
 [[nodiscard]] std::unique_ptr<BandSignals> make_beidou_b1i_signals(
     orbits::IonosphereCoefficients ionosphere, int first_week,
+    std::function<const orbits::KeplerEphemeris*(int prn, const GnssTime& t)> record_at);
+
+// Galileo E1 OS (E1-B with I/NAV, E1-C pilot, CBOC), ids PRN 1-50: the record `record_at` gives
+// (nullptr: no data), centred on 1575.42 MHz; 4 ms code periods.
+[[nodiscard]] std::unique_ptr<BandSignals> make_galileo_e1_signals(
+    InavCommon inav, int first_week,
     std::function<const orbits::KeplerEphemeris*(int prn, const GnssTime& t)> record_at);
 
 class BasebandSynthesizer {

@@ -174,8 +174,19 @@ struct WorldSettings {
 struct IqSettings {
   double sample_rate_hz = 4e6;
   std::string format = "sc8";  // sc8 | sc16 | gr_complex: interleaved int8, int16 or float32 I/Q
-  std::vector<std::string> bands = {"L1"};  // L1: GPS L1 C/A
+  std::vector<std::string> bands = {"L1"};  // L1: GPS L1 C/A (iq_bands() lists them all)
 };
+
+// A band `skytrace iq` writes: the signal whose observations it takes from the first receiver,
+// and the complex sample rate its main lobes need.
+struct IqBand {
+  const char* name;         // L1 | E1 | G1 | B1
+  const char* signal;       // G1C | E1C | R1C | C2I
+  const char* description;  // "GPS L1 C/A", ...
+  double min_sample_rate_hz;
+};
+[[nodiscard]] const std::vector<IqBand>& iq_bands();
+[[nodiscard]] const IqBand* find_iq_band(const std::string& name);
 
 struct OutputSettings {
   std::string rinex_version = "3.04";  // 3.04 | 4.00
