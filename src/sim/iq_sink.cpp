@@ -239,10 +239,12 @@ class IqSink final : public EpochSink {
       t += "Acquisition_1B.pfa=0.0001\nAcquisition_1B.acquire_pilot=true\nAcquisition_1B.bit_transition_flag=true\n";
       t += "Acquisition_1B.doppler_max=5000\nAcquisition_1B.doppler_step=50\n";
       t += "Acquisition_1B.max_dwells=1\nAcquisition_1B.dump=false\n";
-      // VEML on the pilot (its secondary code wiped once synchronised), 4 ms correlations.
+      // VEML on the pilot: 4 ms correlations to pull in, then, synchronised to the secondary code
+      // and with it wiped, 20 ms ones with narrow loops (4 ms left the Doppler's p68 at 0.047 m/s).
       t += "Tracking_1B.implementation=Galileo_E1_DLL_PLL_VEML_Tracking\nTracking_1B.item_type=gr_complex\n";
       t += "Tracking_1B.track_pilot=true\nTracking_1B.pll_bw_hz=15.0\nTracking_1B.dll_bw_hz=2.0\n";
       t += "Tracking_1B.early_late_space_chips=0.15\nTracking_1B.very_early_late_space_chips=0.5\n";
+      t += "Tracking_1B.extend_correlation_symbols=5\nTracking_1B.pll_bw_narrow_hz=5.0\nTracking_1B.dll_bw_narrow_hz=0.5\n";
       t += "Tracking_1B.dump=false\n";
       t += "TelemetryDecoder_1B.implementation=Galileo_E1B_Telemetry_Decoder\nTelemetryDecoder_1B.dump=false\n";
     } else {
