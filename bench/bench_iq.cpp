@@ -1,4 +1,4 @@
-// IQ sample generation (baseband/synthesizer): seconds of GPS L1 C/A, GLONASS L1OF and BeiDou B1I samples per second of CPU
+// IQ sample generation (baseband/synthesizer): seconds of GPS L1 C/A, Galileo E1, GLONASS L1OF and BeiDou B1I samples per second of CPU
 // on one core, for the case (12 satellites, 3 paths each, 4 MS/s, sc8) and its parts.
 // Items processed = complex samples; "real time" is items_per_second >= the sample rate.
 #include <benchmark/benchmark.h>
@@ -121,6 +121,27 @@ void BM_BeidouB1iSamples(benchmark::State& state) {
   });
 }
 BENCHMARK(BM_BeidouB1iSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// Galileo E1 OS (CBOC, 4 ms periods, I/NAV without records): `satellites` satellites at 5 MS/s,
+// one path each.
+void BM_GalileoE1Samples(benchmark::State& state) {
+  const int satellites = static_cast<int>(state.range(0));
+  const double wavelength_m = constants::kSpeedOfLight_mps / 1575.42e6;
+  run_seconds(state, 5e6, make_galileo_e1_signals({}, 2111, nullptr), [&](double t) {
+    std::vector<Arrival> out;
+    for (int k = 0; k < satellites; ++k) {
+      Arrival a;
+      a.id = 1 + k;
+      a.doppler_hz = -3000.0 + 600.0 * k;
+      a.pseudorange_m = 23.5e6 + 3.0e5 * k - a.doppler_hz * wavelength_m * t;
+      a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
+      a.antenna_cn0_dbhz = 45.0;
+      out.push_back(std::move(a));
+    }
+    return out;
+  });
+}
+BENCHMARK(BM_GalileoE1Samples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 

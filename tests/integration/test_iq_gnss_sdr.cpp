@@ -715,7 +715,9 @@ TEST(IqBadInput, RatesBandsAndSignalsTheReceiverLacksAreRefusedWithNothingWritte
       {"--band G1 --sample-rate 4e6 --set 'receiver.signals=[R1C]'", "band G1 needs at least 8.9e+06 complex samples/s"},
       {"--band G1 --sample-rate 9e6 --set 'receiver.signals=[G1C]'", "does not list signal R1C"},
       {"--band B1 --sample-rate 3e6 --set 'receiver.signals=[C2I]'", "band B1 needs at least 4.092e+06 complex samples/s"},
-      {"--band E1", "output.iq.bands"},
+      {"--band L5", "output.iq.bands"},
+      {"--band E1 --sample-rate 3e6 --set 'receiver.signals=[E1C]'", "band E1 needs at least 4.092e+06 complex samples/s"},
+      {"--band E1 --sample-rate 5e6 --set 'receiver.signals=[G1C]'", "does not list signal E1C"},
       {"--format sc4", "output.iq.format"},
       {"--set 'receiver.signals=[E1C]'", "does not list signal G1C"},
   };
