@@ -412,7 +412,18 @@ void copy_repaired(const std::filesystem::path& from, const std::filesystem::pat
 // off the instant it measures (GNSS-SDR's receiver time, not steered for GLONASS): that offset
 // times each satellite's range rate is fitted out with the clock before the code is compared.
 TEST_F(IqGnssSdr, GlonassStringsDecodeToTheRecordsAndItFixes) {
-  const auto dir = run_both("G1", "--sample-rate 9e6 --set time.duration_s=60 --set models.ionosphere=none");
+  const auto dir = run_both("G1", "--sample-rate 9e6 --set time.duration_s=60 --set models.ionosphere=none", true);
+  // A run without its fixes (GNSS-SDR's acquisition late under load) is repeated once on the same
+  // samples, as for GPS and BeiDou.
+  const auto run_complete = [&] {
+    const auto [fixes, worst_m] = fixes_against_antenna(read_text(dir / "gnss-sdr.log"));
+    return file_ending(dir / "gnss-sdr-G1", 'G') && fixes >= 10 && worst_m <= 20.0;
+  };
+  if (!run_complete()) {
+    std::cout << "GNSS-SDR's first run missed a fix or a limit: run again on the same samples\n";
+    run_receiver(dir, "G1");
+  }
+  std::filesystem::remove(dir / "iq_G1.sc8");
   const std::string log = read_text(dir / "gnss-sdr.log");
   auto sim = io::read_rinex_obs(dir / "obs.rnx");
   auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
@@ -498,7 +509,19 @@ TEST_F(IqGnssSdr, GlonassStringsDecodeToTheRecordsAndItFixes) {
 // epochs agree in GPS time), and the navigation header's TIME SYSTEM CORR and LEAP SECONDS lines
 // leave integer fields blank or zero-padded (refused as malformed by the reader).
 TEST_F(IqGnssSdr, BeidouD1AndD2DecodeToTheRecordsAndItFixesWithinFiveMetres) {
-  const auto dir = run_both("B1", "--sample-rate 5e6 --set time.duration_s=90 --set models.ionosphere=none");
+  const auto dir = run_both("B1", "--sample-rate 5e6 --set time.duration_s=90 --set models.ionosphere=none", true);
+  // As for GPS: under load GNSS-SDR's acquisition falls behind its file source and reaches the
+  // satellites later in the samples (a fresh-clone CI run beside a soak test tracked the first ones
+  // at 47 s and never fixed). A run without a fix is repeated once on the same samples.
+  const auto run_complete = [&] {
+    const auto [fixes, worst_m] = fixes_against_antenna(read_text(dir / "gnss-sdr.log"));
+    return file_ending(dir / "gnss-sdr-B1", 'N') && file_ending(dir / "gnss-sdr-B1", 'O') && fixes >= 5 && worst_m <= 5.0;
+  };
+  if (!run_complete()) {
+    std::cout << "GNSS-SDR's first run missed a fix or a limit: run again on the same samples\n";
+    run_receiver(dir, "B1");
+  }
+  std::filesystem::remove(dir / "iq_B1.sc8");
   const std::string log = read_text(dir / "gnss-sdr.log");
   auto sim = io::read_rinex_obs(dir / "obs.rnx");
   auto sim_nav = orbits::read_rinex_nav(dir / "nav.rnx");
