@@ -9,14 +9,17 @@
 namespace skytrace::baseband {
 namespace {
 
-// A word's bits filled field after field, MSB first (two's complement for signed fields).
+// A word's bits filled field after field, MSB first (two's complement for signed fields; a field
+// wider than 64 bits, word 0's 88 spare ones, is the value sign-extended).
 struct WordBits {
   std::array<std::uint8_t, kInavWordBits> bits{};
   int at = 0;
   void put(int n, std::int64_t value) {
     const auto v = static_cast<std::uint64_t>(value);
-    for (int i = n - 1; i >= 0; --i)
-      bits[static_cast<size_t>(at++)] = static_cast<std::uint8_t>((v >> i) & 1U);
+    for (int i = n - 1; i >= 0; --i) {
+      const std::uint64_t bit = i < 64 ? (v >> i) & 1U : (value < 0 ? 1U : 0U);
+      bits[static_cast<size_t>(at++)] = static_cast<std::uint8_t>(bit);
+    }
   }
 };
 
