@@ -328,7 +328,7 @@ class Node {
       ROS_ERROR_THROTTLE(10.0, "epoch %.3f s after the start time: %s", time_s, problem.c_str());
       return;
     }
-    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    latencies_.add(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
     for (const auto& note : notes) ROS_WARN_THROTTLE(10.0, "%s", note.c_str());
   }
 
@@ -359,8 +359,8 @@ class Node {
   }
 
   void report_latency() {
-    if (latencies_s_.empty()) return;
-    const live::LatencySummary summary = live::summarize_latencies(latencies_s_);
+    if (latencies_.empty()) return;
+    const live::LatencySummary summary = latencies_.summary();
     ROS_INFO("per-epoch latency (step and publish): %zu epochs, p50 %.3f ms, p99 %.3f ms, max %.3f ms", summary.epochs,
              summary.p50_ms, summary.p99_ms, summary.max_ms);
     if (!config_.latency_report.empty()) {
@@ -381,7 +381,7 @@ class Node {
   ros::Subscriber pose_sub_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::vector<double> latencies_s_;
+  live::LatencyRecorder latencies_;  // bounded: the node may run for days
 };
 
 int run(int argc, char** argv) {

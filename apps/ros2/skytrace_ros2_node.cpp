@@ -656,7 +656,7 @@ class Node {
       log_.throttled(LogLevel::kError, 10.0, "step", fmt::format("epoch {:.3f} s after the start time: {}", time_s, problem));
       return;
     }
-    latencies_s_.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    latencies_.add(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
     for (const auto& note : notes) log_.throttled(LogLevel::kWarn, 10.0, "outputs", note);
   }
 
@@ -682,8 +682,8 @@ class Node {
   }
 
   void report_latency() {
-    if (latencies_s_.empty()) return;
-    const live::LatencySummary summary = live::summarize_latencies(latencies_s_);
+    if (latencies_.empty()) return;
+    const live::LatencySummary summary = latencies_.summary();
     log_.info("per-epoch latency (step and publish): {} epochs, p50 {:.3f} ms, p99 {:.3f} ms, max {:.3f} ms", summary.epochs,
               summary.p50_ms, summary.p99_ms, summary.max_ms);
     if (!config_.latency_report.empty()) {
@@ -702,7 +702,7 @@ class Node {
   std::int64_t sim_now_ns_ = 0;  // the last /clock
   std::optional<std::int64_t> last_k_;
   TfBuffer tf_buffer_;
-  std::vector<double> latencies_s_;
+  live::LatencyRecorder latencies_;  // bounded: the node may run for days
   std::unique_ptr<sim::Ros2EpochBuilder> builder_;
   sim::Ros2Epoch messages_;           // reused from epoch to epoch (storage kept)
   std::vector<std::uint8_t> cdr_;     // one sample's bytes, reused
