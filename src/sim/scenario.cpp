@@ -36,6 +36,7 @@ const IqBand* find_iq_band(const std::string& name) {
   }
   return nullptr;
 }
+
 namespace {
 
 // Scenario keys with their path and line in every message (core/yaml_field.hpp).
