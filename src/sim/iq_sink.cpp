@@ -11,6 +11,26 @@
 namespace skytrace::sim {
 namespace {
 
+// A navigation message's UTC terms: the header's correction of `type` (GPUT, GAUT), its reference
+// time as GPS week and seconds rounded down to `tot_unit_s`; the start's week and time without one.
+struct UtcTerms {
+  double a0_s = 0.0, a1_s_per_s = 0.0;
+  int week = 0, tot_s = 0;
+};
+UtcTerms utc_terms(const orbits::NavigationData& nav, const std::string& type, const GnssTime& start, int tot_unit_s) {
+  UtcTerms u;
+  WeekTow ref = start.to_week_tow(TimeScale::kGpst);
+  for (const auto& correction : nav.time_corrections) {
+    if (correction.type != type) continue;
+    u.a0_s = correction.a0_s;
+    u.a1_s_per_s = correction.a1_s_per_s;
+    ref = correction.reference_time.to_week_tow(TimeScale::kGpst);
+  }
+  u.week = ref.week;
+  u.tot_s = static_cast<int>(std::floor(ref.tow_s / tot_unit_s)) * tot_unit_s;
+  return u;
+}
+
 baseband::LnavCommon lnav_common(const orbits::BroadcastEphemerides& ephemerides, const GnssTime& start) {
   baseband::LnavCommon c;
   const orbits::NavigationData& nav = ephemerides.data();
@@ -20,16 +40,11 @@ baseband::LnavCommon lnav_common(const orbits::BroadcastEphemerides& ephemerides
   c.leap_seconds_future = c.leap_seconds;
   c.leap_week = at.week;
   c.leap_day = 1;
-  c.utc_week = at.week;
-  c.utc_tot_s = static_cast<int>(std::floor(at.tow_s / 4096.0)) * 4096;
-  for (const auto& correction : nav.time_corrections) {
-    if (correction.type != "GPUT") continue;
-    c.utc_a0_s = correction.a0_s;
-    c.utc_a1_s_per_s = correction.a1_s_per_s;
-    const WeekTow ref = correction.reference_time.to_week_tow(TimeScale::kGpst);
-    c.utc_week = ref.week;
-    c.utc_tot_s = static_cast<int>(std::floor(ref.tow_s / 4096.0)) * 4096;
-  }
+  const UtcTerms utc = utc_terms(nav, "GPUT", start, 4096);
+  c.utc_a0_s = utc.a0_s;
+  c.utc_a1_s_per_s = utc.a1_s_per_s;
+  c.utc_week = utc.week;
+  c.utc_tot_s = utc.tot_s;
   c.almanac_week = at.week;
   c.almanac_toa_s = static_cast<int>(std::floor(at.tow_s / 4096.0)) * 4096;
   for (int prn = 1; prn <= 32; ++prn) {
@@ -57,16 +72,11 @@ baseband::InavCommon inav_common(const orbits::BroadcastEphemerides& ephemerides
   c.leap_seconds = nav.leap_seconds.value_or(gps_minus_utc_s(start));
   c.leap_seconds_future = c.leap_seconds;
   c.leap_week = at.week - 1024;
-  c.utc_week = at.week - 1024;
-  c.utc_tot_s = static_cast<int>(std::floor(at.tow_s / 3600.0)) * 3600;
-  for (const auto& correction : nav.time_corrections) {
-    if (correction.type != "GAUT") continue;
-    c.utc_a0_s = correction.a0_s;
-    c.utc_a1_s_per_s = correction.a1_s_per_s;
-    const WeekTow ref = correction.reference_time.to_week_tow(TimeScale::kGpst);
-    c.utc_week = ref.week - 1024;
-    c.utc_tot_s = static_cast<int>(std::floor(ref.tow_s / 3600.0)) * 3600;
-  }
+  const UtcTerms utc = utc_terms(nav, "GAUT", start, 3600);
+  c.utc_a0_s = utc.a0_s;
+  c.utc_a1_s_per_s = utc.a1_s_per_s;
+  c.utc_week = utc.week - 1024;  // GST weeks
+  c.utc_tot_s = utc.tot_s;
   return c;
 }
 
@@ -97,6 +107,10 @@ class IqSink final : public EpochSink {
     for (const std::string& name : iq.bands) {
       IqBand band;
       band.name = name;
+      // The observations the band takes: the signal scenario parsing checked the receiver lists.
+      auto signal = Signal::parse(sim::find_iq_band(name)->signal);
+      if (!signal) return signal.error();
+      band.signal = *signal;
       band.file_name = "iq_" + name + "." + iq.format;
       auto file = StagedFile::create(c.staging_dir / band.file_name);
       if (!file) return file.error();
@@ -109,14 +123,12 @@ class IqSink final : public EpochSink {
       s.noise = true;
       std::unique_ptr<baseband::BandSignals> signals;
       if (name == "L1") {
-        band.signal = Signal{GnssSystem::kGps, '1', 'C'};
         signals = baseband::make_gps_l1ca_signals(
             lnav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
               return ephemerides->find_kepler(SatelliteId{GnssSystem::kGps, static_cast<std::uint8_t>(prn)}, t,
                                               orbits::NavMessage::kGpsLnav);
             });
       } else if (name == "E1") {
-        band.signal = Signal{GnssSystem::kGalileo, '1', 'C'};
         band.power_beyond_signal_db = 10.0 * std::log10(2.0);
         signals = baseband::make_galileo_e1_signals(
             inav_common(*ephemerides, c.scenario->time.start), first_week, [ephemerides](int prn, const GnssTime& t) {
@@ -124,7 +136,6 @@ class IqSink final : public EpochSink {
                                               orbits::NavMessage::kGalileoInav);
             });
       } else if (name == "B1") {
-        band.signal = Signal{GnssSystem::kBeiDou, '2', 'I'};
         signals = baseband::make_beidou_b1i_signals(
             ephemerides->data().ionosphere, first_week, [ephemerides](int prn, const GnssTime& t) {
               // GEO satellites broadcast D2, the others D1: the record a receiver decodes from each.
@@ -133,7 +144,6 @@ class IqSink final : public EpochSink {
                                                                                  : orbits::NavMessage::kBeiDouD1);
             });
       } else {
-        band.signal = Signal{GnssSystem::kGlonass, '1', 'C'};
         signals = baseband::make_glonass_l1of_signals(
             gnav_common(*ephemerides), first_week, [ephemerides](int slot, const GnssTime& t) {
               return ephemerides->find_glonass(SatelliteId{GnssSystem::kGlonass, static_cast<std::uint8_t>(slot)}, t);
