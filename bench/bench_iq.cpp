@@ -101,24 +101,29 @@ void BM_GlonassSamples(benchmark::State& state) {
 }
 BENCHMARK(BM_GlonassSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 
+// `satellites` satellites of ids first_id.. on one carrier, one path each: Dopplers -3 to +3 kHz,
+// ranges from `range_m` 300 km apart, C/N0 45 dB-Hz.
+std::vector<Arrival> one_path_arrivals(double t, int satellites, int first_id, double carrier_hz, double range_m) {
+  const double wavelength_m = constants::kSpeedOfLight_mps / carrier_hz;
+  std::vector<Arrival> out;
+  for (int k = 0; k < satellites; ++k) {
+    Arrival a;
+    a.id = first_id + k;
+    a.carrier_hz = carrier_hz;
+    a.doppler_hz = -3000.0 + 600.0 * k;
+    a.pseudorange_m = range_m + 3.0e5 * k - a.doppler_hz * wavelength_m * t;
+    a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
+    a.antenna_cn0_dbhz = 45.0;
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
 // BeiDou B1I: `satellites` MEO satellites (PRN 19..) at 5 MS/s, one path each, D1 without records.
 void BM_BeidouB1iSamples(benchmark::State& state) {
   const int satellites = static_cast<int>(state.range(0));
-  const double wavelength_m = constants::kSpeedOfLight_mps / 1561.098e6;
-  run_seconds(state, 5e6, make_beidou_b1i_signals({}, 2111, nullptr), [&](double t) {
-    std::vector<Arrival> out;
-    for (int k = 0; k < satellites; ++k) {
-      Arrival a;
-      a.id = 19 + k;
-      a.carrier_hz = 1561.098e6;
-      a.doppler_hz = -3000.0 + 600.0 * k;
-      a.pseudorange_m = 21.5e6 + 3.0e5 * k - a.doppler_hz * wavelength_m * t;
-      a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
-      a.antenna_cn0_dbhz = 45.0;
-      out.push_back(std::move(a));
-    }
-    return out;
-  });
+  run_seconds(state, 5e6, make_beidou_b1i_signals({}, 2111, nullptr),
+              [&](double t) { return one_path_arrivals(t, satellites, 19, 1561.098e6, 21.5e6); });
 }
 BENCHMARK(BM_BeidouB1iSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 
@@ -126,20 +131,8 @@ BENCHMARK(BM_BeidouB1iSamples)->Arg(10)->Unit(benchmark::kMillisecond)->Iteratio
 // one path each.
 void BM_GalileoE1Samples(benchmark::State& state) {
   const int satellites = static_cast<int>(state.range(0));
-  const double wavelength_m = constants::kSpeedOfLight_mps / 1575.42e6;
-  run_seconds(state, 5e6, make_galileo_e1_signals({}, 2111, nullptr), [&](double t) {
-    std::vector<Arrival> out;
-    for (int k = 0; k < satellites; ++k) {
-      Arrival a;
-      a.id = 1 + k;
-      a.doppler_hz = -3000.0 + 600.0 * k;
-      a.pseudorange_m = 23.5e6 + 3.0e5 * k - a.doppler_hz * wavelength_m * t;
-      a.carrier_phase_cycles = a.pseudorange_m / wavelength_m;
-      a.antenna_cn0_dbhz = 45.0;
-      out.push_back(std::move(a));
-    }
-    return out;
-  });
+  run_seconds(state, 5e6, make_galileo_e1_signals({}, 2111, nullptr),
+              [&](double t) { return one_path_arrivals(t, satellites, 1, 1575.42e6, 23.5e6); });
 }
 BENCHMARK(BM_GalileoE1Samples)->Arg(10)->Unit(benchmark::kMillisecond)->Iterations(3);
 
