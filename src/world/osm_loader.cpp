@@ -25,6 +25,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -790,14 +791,14 @@ bool plausible_coordinate_text(std::string_view value) {
   return true;  // anything else malformed is libosmium's to report
 }
 
-Status check_osm_xml_coordinates(const std::filesystem::path& path) {
+// XML extracts (plain or gzip) are read into memory once: checked here, then parsed by libosmium
+// from the buffer in both of its passes. PBF and O5M carry integers; bz2 XML is left to libosmium.
+bool read_as_xml_text(const std::filesystem::path& path) {
   const std::string name = path.filename().string();
-  if (!(name.ends_with(".osm") || name.ends_with(".osm.gz") || name.ends_with(".xml"))) {
-    return Ok{};  // PBF and O5M carry integers; bz2 XML is left to libosmium
-  }
-  auto text = read_text_file(path);
-  if (!text) return text.error();
-  const std::string& t = *text;
+  return name.ends_with(".osm") || name.ends_with(".osm.gz") || name.ends_with(".xml");
+}
+
+Status check_osm_xml_coordinates(const std::filesystem::path& path, const std::string& t) {
   for (const char* attribute : {"lat=", "lon="}) {
     for (size_t at = t.find(attribute); at != std::string::npos; at = t.find(attribute, at + 4)) {
       const bool quoted = at + 4 < t.size() && (t[at + 4] == '"' || t[at + 4] == '\'');
@@ -835,14 +836,22 @@ Result<WorldModel> load_osm_world(const std::filesystem::path& path,
             ": OSM options: heights and diameters must be positive, crown base fraction in [0, 1)");
   }
 
-  if (auto st = check_osm_xml_coordinates(path); !st) return st.error();
+  std::optional<std::string> xml_text;
+  if (read_as_xml_text(path)) {
+    auto text = read_text_file(path);
+    if (!text) return text.error();
+    if (auto st = check_osm_xml_coordinates(path, *text); !st) return st.error();
+    xml_text = std::move(*text);
+  }
   Collector collector;
   collector.load_woods = options.load_woods;
   collector.load_trees = options.load_trees;
   ProblemCollector problems;
   osmium::Box header_box;
   try {
-    const osmium::io::File input{path.string()};
+    // From memory, libosmium neither reads the file again nor zeroes a fresh read buffer per block.
+    const osmium::io::File input = xml_text ? osmium::io::File{xml_text->data(), xml_text->size(), "osm"}
+                                            : osmium::io::File{path.string()};
     osmium::TagsFilter filter{false};
     filter.add_rule(false, osmium::TagMatcher{"building", "no"});
     filter.add_rule(true, osmium::TagMatcher{"building"});
