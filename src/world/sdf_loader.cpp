@@ -1228,6 +1228,17 @@ class SdfWalker {
   std::optional<std::string> unreadable_mesh_;
 };
 
+// sdformat's description of every element (sdf::init), built once per process on first use.
+// Read-only afterwards: loads clone what they read from it.
+const sdf::SDFPtr& sdf_description() {
+  static const sdf::SDFPtr description = [] {
+    auto built = std::make_shared<sdf::SDF>();
+    sdf::init(built);
+    return built;
+  }();
+  return description;
+}
+
 }  // namespace
 
 namespace backend {
@@ -1281,18 +1292,14 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
     }
   }
 
-  // sdf::init builds the SDF description from sdformat's embedded spec files (tens of ms); the world
-  // and every model file share one. Parsing fills the root element in place, so each file gets a
-  // root of its own, but the descriptions of the elements below it are shared: sdformat clones a
-  // description for every element it reads and never changes the description itself. (A deep
-  // copy of the whole description per file was a quarter of citysim's load time.)
-  sdf::SDFPtr description;
-  const auto fresh_sdf = [&description]() {
-    if (!description) {
-      description = std::make_shared<sdf::SDF>();
-      sdf::init(description);
-    }
-    const sdf::ElementPtr& template_root = description->Root();
+  // sdf::init builds the SDF description from sdformat's embedded spec files (tens of ms, 150 ms
+  // under the sanitizers); every load of the process shares one (sdf_description()). Parsing
+  // fills the root element in place, so each file gets a root of its own, but the descriptions of
+  // the elements below it are shared: sdformat clones a description for every element it reads
+  // and never changes the description itself. (A deep copy of the whole description per file was
+  // a quarter of citysim's load time.)
+  const auto fresh_sdf = []() {
+    const sdf::ElementPtr& template_root = sdf_description()->Root();
     auto root = std::make_shared<sdf::Element>();
     root->SetName(template_root->GetName());
     root->SetRequired(template_root->GetRequired());
@@ -1315,7 +1322,8 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   sdf::Errors errors;
   sdf::SDFPtr parsed;
   if (own_includes.empty()) {
-    parsed = sdf::readFile(path.string(), config, errors);
+    parsed = fresh_sdf();
+    if (!sdf::readFile(path.string(), config, parsed, errors)) parsed.reset();
   } else {
     parsed = fresh_sdf();
     if (!sdf::readString(text, config, parsed, errors)) parsed.reset();

@@ -779,6 +779,37 @@ TEST(WorldSdf, MalformedFilesAreErrorsNamingTheFile) {
   EXPECT_EQ(result.error().code, ErrorCode::kIo);
 }
 
+// sdformat's element description is built once per process and shared by every load: a load after
+// others (an error among them, another SDF version) gives the same world as the first.
+TEST(WorldSdf, LoadsShareOneDescriptionWithoutCarryingAnythingOver) {
+  const auto dir = test::make_temp_dir("world_sdf_shared_description");
+  const auto first = write_file(
+      dir / "first.sdf",
+      world_sdf(static_model("a", "1 2 0 0 0 0.5", "<box><size>4 6 10</size></box>") +
+                static_model("b", "-5 0 0 0 0 0", "<cylinder><radius>1</radius><length>3</length></cylinder>")));
+  const auto broken = write_file(dir / "broken.sdf",
+                                 "<?xml version=\"1.0\"?>\n<sdf version=\"1.6\">\n<world name=\"w\">\n"
+                                 "<model name=\"a\"><link name=\"l\"></model>\n</world></sdf>\n");
+  const auto older = write_file(
+      dir / "older.sdf", world_sdf(static_model("c", "0 0 0 0 0 0", "<sphere><radius>2</radius></sphere>"), "1.6"));
+  const auto before = load_sdf_world(first, isolated_options()).value();
+  ASSERT_FALSE(load_sdf_world(broken, isolated_options()).ok());
+  ASSERT_EQ(load_sdf_world(older, isolated_options()).value().objects.size(), 1U);
+  const auto after = load_sdf_world(first, isolated_options()).value();
+  ASSERT_EQ(after.objects.size(), before.objects.size());
+  ASSERT_EQ(before.objects.size(), 2U);
+  for (size_t i = 0; i < before.objects.size(); ++i) {
+    const WorldObject& x = before.objects[i];
+    const WorldObject& y = after.objects[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_TRUE(x.pose.matrix() == y.pose.matrix()) << x.name;
+    ASSERT_EQ(x.mesh.vertices_m.size(), y.mesh.vertices_m.size()) << x.name;
+    for (size_t v = 0; v < x.mesh.vertices_m.size(); ++v) EXPECT_TRUE(x.mesh.vertices_m[v] == y.mesh.vertices_m[v]);
+    EXPECT_EQ(x.mesh.triangles, y.mesh.triangles) << x.name;
+  }
+  EXPECT_EQ(before.warnings, after.warnings);
+}
+
 TEST(WorldSdf, SphericalCoordinatesFollowGazebo) {
   const auto dir = test::make_temp_dir("world_sdf_geo");
   const auto path = write_file(
