@@ -234,13 +234,16 @@ Result<WorldModel> read_citygml(const std::filesystem::path& path, const CityMod
     auto* p = static_cast<Parser*>(data);
     if (p->reading_text) p->text.append(s, static_cast<std::size_t>(length));
   });
-  std::vector<char> buffer(1 << 20);
+  // Read straight into expat's own buffer (XML_Parse would copy a buffer of ours into it).
+  constexpr int kChunkBytes = 1 << 16;
   bool last = false;
   while (!last) {
-    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    void* chunk = XML_GetBuffer(xml.get(), kChunkBytes);
+    if (chunk == nullptr) return make_error(ErrorCode::kParse, where + ": out of memory for the XML parser");
+    in.read(static_cast<char*>(chunk), kChunkBytes);
     const auto got = static_cast<int>(in.gcount());
-    last = got < static_cast<int>(buffer.size());
-    if (XML_Parse(xml.get(), buffer.data(), got, last ? XML_TRUE : XML_FALSE) == XML_STATUS_ERROR) {
+    last = got < kChunkBytes;
+    if (XML_ParseBuffer(xml.get(), got, last ? XML_TRUE : XML_FALSE) == XML_STATUS_ERROR) {
       if (!parser.error.empty()) return make_error(ErrorCode::kParse, parser.error);
       return make_error(ErrorCode::kParse, fmt::format("{}:{}:{}: malformed XML: {}", where, XML_GetCurrentLineNumber(xml.get()),
                                                        XML_GetCurrentColumnNumber(xml.get()),
