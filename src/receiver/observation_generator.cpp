@@ -48,14 +48,17 @@ ObservationGenerator::ObservationGenerator(GeneratorSettings settings, const orb
                                            const orbits::SatelliteStateSource* truth_orbits)
     : settings_(std::move(settings)),
       ephemerides_(ephemerides),
-      truth_source_(truth_orbits),
+      truth_orbits_(truth_orbits),
       kinematics_(std::move(kinematics)),
       clock_(settings_.profile.oscillator, settings_.ideal_clock,
              stream_key(settings_.seed, {hash_name("receiver-clock"), static_cast<std::uint64_t>(settings_.receiver_index)})),
       tracking_(settings_.seed, settings_.receiver_index, settings_.noise),
       loop_noise_(settings_.seed, settings_.receiver_index),
       foliage_fading_(settings_.seed, settings_.receiver_index, settings_.foliage) {
-  set_geometry_shares(1);
+  if (truth_orbits_ != nullptr) {
+    truth_view_ = truth_orbits_->sequential_view();
+    if (truth_view_ != nullptr) truth_orbits_ = truth_view_.get();
+  }
   // The scenario's signals the receiver can track; the others are left out (run: a warning).
   std::vector<std::pair<Signal, ListedSignal>> trackable;
   for (const Signal& signal : settings_.signals) {
@@ -91,210 +94,119 @@ void ObservationGenerator::set_world(const PathQuery* world, const LocalFrame& f
   world_frame_ = frame;
 }
 
+namespace {
+
+// The satellite's slot `used` of the epoch, as a default-constructed observation that keeps the
+// storage of the slot's vectors and strings from an earlier epoch: copy-assigning an empty vector
+// or string keeps the target's capacity.
+SatelliteObservation& reused_slot(std::vector<SatelliteObservation>& satellites, size_t used) {
+  if (used == satellites.size()) return satellites.emplace_back();
+  static const SatelliteObservation kBlank;
+  SatelliteObservation& obs = satellites[used];
+  obs = kBlank;
+  return obs;
+}
+
+}  // namespace
+
 Result<EpochObservations> ObservationGenerator::observe(const GnssTime& tag) {
   EpochObservations epoch;
   if (auto st = observe(tag, epoch); !st) return st.error();
   return epoch;
 }
 
-Status ObservationGenerator::begin_epoch(const GnssTime& tag, std::optional<GnssTime>& previous_tag,
-                                         EpochObservations& epoch, EpochGeometry& geometry) {
-  if (previous_tag) {
-    if (tag <= *previous_tag) {
+Status ObservationGenerator::observe(const GnssTime& tag, EpochObservations& epoch) {
+  if (last_tag_) {
+    if (tag <= *last_tag_) {
       return make_error(ErrorCode::kInvalidArgument, "epochs must increase: " + tag.to_iso8601(TimeScale::kGpst) +
-                                                         " after " + previous_tag->to_iso8601(TimeScale::kGpst));
+                                                         " after " + last_tag_->to_iso8601(TimeScale::kGpst));
     }
-    clock_.advance(tag - *previous_tag);
+    clock_.advance(tag - *last_tag_);
   }
+  size_t used = 0;  // satellites written into epoch.satellites so far
   epoch.receiver_time = tag;
   epoch.receiver_clock = clock_.state();
   epoch.true_time = tag - epoch.receiver_clock.bias_s;
   auto kinematics = kinematics_->at(epoch.true_time);
   if (!kinematics) return kinematics.error();
   epoch.receiver = *kinematics;
-  geometry.rx_geodetic = ecef_to_geodetic(epoch.receiver.position_m);
-  geometry.rx_to_enu = ecef_to_enu_rotation(geometry.rx_geodetic);
-  previous_tag = tag;
-  // Every satellite has its slot (the earlier epoch's storage reused), filled by stage 1.
-  if (epoch.satellites.size() > satellites_.size()) epoch.satellites.resize(satellites_.size());
-  epoch.satellites.reserve(satellites_.size());
-  while (epoch.satellites.size() < satellites_.size()) epoch.satellites.emplace_back();
-  return Ok{};
-}
-
-// Stage 1, geometry and light time, and the atmosphere along the line of sight (stage 5) of one
-// satellite; those above the mask wait for the world's verdict before their signals are measured.
-// It reads and writes only this satellite's state (its flight time guess, its entries in
-// `caches`), so the satellites of an epoch may go through it on several threads.
-Result<bool> ObservationGenerator::satellite_geometry(size_t satellite_index, const EpochObservations& epoch,
-                                                     const EpochGeometry& geometry, GeometryCaches& caches,
-                                                     SatelliteObservation& obs, Pending& pending) {
-  // A default-constructed observation that keeps the storage of the slot's vectors and strings
-  // from an earlier epoch: copy-assigning an empty vector or string keeps the target's capacity.
-  static const SatelliteObservation kBlank;
-  obs = kBlank;
-  const SatelliteId& sat = satellites_[satellite_index];
-  const GnssTime& tag = epoch.receiver_time;
   const Eigen::Vector3d& rx_m = epoch.receiver.position_m;
-  std::optional<double>& flight_time_guess_s = flight_time_guess_s_[satellite_index];
-  obs.satellite = sat;
-  std::optional<stages::RecordState> record = stages::select_default_record(ephemerides_, sat, tag, settings_.signals);
-  if (!record) {
-    obs.status = SatelliteStatus::kNoEphemeris;
-    obs.detail = "no valid broadcast ephemeris";
-    flight_time_guess_s.reset();
-    return false;
-  }
-  // The truth: one orbit and clock per satellite, from its reference record (or the precise
-  // products below), whatever record each signal's receiver-side message has. It is evaluated
-  // once, at a guess of the transmission time (the last epoch's flight time).
-  stages::RecordState truth = stages::reference_record(ephemerides_, sat, tag, *record, settings_.signals);
-  const double guess_s = flight_time_guess_s.value_or(stages::kFirstFlightTimeGuess_s);
-  const GnssTime evaluation_time = epoch.true_time - guess_s;
-  const bool from_precise_products = caches.truth != nullptr && settings_.broadcast_truth.count(sat) == 0;
-  if (!from_precise_products) stages::evaluate_record(truth, evaluation_time, caches.glonass);
-  bool precise_truth = false;
-  if (from_precise_products) {
-    // Precise products as the truth: the signals come from the precise orbit and clock, while
-    // the broadcast record stays the one a receiver decodes (nav.rnx, group delays). Satellites
-    // the products lack or cannot serve over the run (a G/R/E product has no BeiDou) were put in
-    // broadcast_truth before the run; for the others a time without products is an error (a live
-    // session stepped beyond them), never a switch to the broadcast truth.
-    auto precise = caches.truth->state(sat, evaluation_time);
-    if (!precise) {
-      return make_error(ErrorCode::kOutOfRange,
-                        "precise truth at epoch " + tag.to_iso8601(TimeScale::kGpst, 0) + " GPST: " +
-                            precise.error().message);
-    }
-    truth.state = *precise;
-    precise_truth = true;
-  }
-  const stages::LightTime light_time =
-      stages::solve_light_time(truth.state, guess_s, rx_m, epoch.receiver.velocity_mps);
-  flight_time_guess_s = light_time.flight_time_s;
-  truth.state = light_time.state;
-  obs.direction = stages::local_direction(geometry.rx_to_enu * (light_time.position_m - rx_m));
-  obs.range_m = light_time.range_m;
-  obs.range_rate_mps = light_time.range_rate_mps;
-  obs.satellite_position_m = light_time.position_m;
-  obs.satellite_clock_m = kC * truth.state.clock_bias_s;
-  obs.relativistic_m = kC * truth.state.relativistic_s;
-  if (record->glonass != nullptr) obs.glonass_channel = record->glonass->frequency_channel;
-  if (obs.direction.elevation_deg < elevation_mask_deg_) {
-    obs.status = SatelliteStatus::kBelowMask;
-    return false;
-  }
-  auto atmosphere = stages::atmosphere_terms(settings_.troposphere, settings_.ionosphere.get(), epoch.true_time,
-                                             geometry.rx_geodetic, obs.direction, settings_.troposphere_residual.get());
-  if (!atmosphere) return atmosphere.error().with_context(sat.to_string());
-  obs.troposphere_m = atmosphere->troposphere_m;
-  obs.ionosphere_l1_m = atmosphere->ionosphere_l1_m;
-  pending = Pending{satellite_index, *record, truth, precise_truth, light_time};
-  return true;
-}
+  const Geodetic rx_geodetic = ecef_to_geodetic(rx_m);
+  const Eigen::Matrix3d rx_to_enu = ecef_to_enu_rotation(rx_geodetic);
 
-Status ObservationGenerator::observe(const GnssTime& tag, EpochObservations& epoch) {
-  std::optional<GnssTime> previous_tag = last_tag_;
-  EpochGeometry geometry;
-  if (auto st = begin_epoch(tag, previous_tag, epoch, geometry); !st) return st;
+  // Stage 1, geometry and light time, and the atmosphere along the line of sight (stage 5) of every
+  // satellite; those above the mask wait for the world's verdict before their signals are measured.
   pending_.clear();
-  flight_time_guess_s_.resize(satellites_.size());
-  Pending pending;
-  for (size_t satellite_index = 0; satellite_index < satellites_.size(); ++satellite_index) {
-    auto above = satellite_geometry(satellite_index, epoch, geometry, geometry_caches_.front(),
-                                    epoch.satellites[satellite_index], pending);
-    if (!above) return above.error();
-    if (*above) pending_.push_back(pending);
-  }
-  finish_epoch(epoch, geometry);
-  return Ok{};
-}
-
-void ObservationGenerator::set_geometry_shares(size_t shares) {
-  shares = std::max<size_t>(1, std::min(shares, std::max<size_t>(1, satellites_.size())));
-  while (geometry_caches_.size() < shares) {
-    GeometryCaches& caches = geometry_caches_.emplace_back();
-    if (truth_source_ != nullptr) {
-      caches.truth_view = truth_source_->sequential_view();
-      caches.truth = caches.truth_view != nullptr ? caches.truth_view.get() : truth_source_;
-    }
-  }
-  geometry_caches_.resize(shares);
-}
-
-Status ObservationGenerator::observe_batch(const std::vector<GnssTime>& tags, const std::vector<EpochObservations*>& epochs,
-                                           const ShareRunner& run_shares) {
-  const size_t n_epochs = std::min(tags.size(), epochs.size());
-  const size_t n_sat = satellites_.size();
-  const size_t shares = geometry_caches_.size();
-  flight_time_guess_s_.resize(n_sat);
-  // The epochs' receiver state in order (the clock is a random walk from epoch to epoch); an error
-  // ends the batch at its epoch, after the epochs before it.
-  batch_geometry_.resize(n_epochs);
-  std::optional<GnssTime> previous_tag = last_tag_;
-  std::optional<Error> begin_error;
-  size_t begun = 0;
-  for (; begun < n_epochs; ++begun) {
-    if (auto st = begin_epoch(tags[begun], previous_tag, *epochs[begun], batch_geometry_[begun]); !st) {
-      begin_error = st.error();
-      break;
-    }
-  }
-  // Stage 1 of every satellite of those epochs, the satellites split into `shares` contiguous
-  // blocks: each block keeps its caches, each satellite its epochs in order (the same state as one
-  // thread gives it). Every share remembers its earliest error (epoch, then satellite).
-  batch_pending_.resize(begun * n_sat);
-  batch_above_.assign(begun * n_sat, 0);
-  std::vector<std::optional<std::pair<std::pair<size_t, size_t>, Error>>> errors(shares);
-  const std::function<void(size_t)> geometry_share = [&](size_t share) {
-    const size_t first = share * n_sat / shares, last = (share + 1) * n_sat / shares;
-    for (size_t i = first; i < last; ++i) {
-      for (size_t j = 0; j < begun; ++j) {
-        const size_t at = j * n_sat + i;
-        auto above = satellite_geometry(i, *epochs[j], batch_geometry_[j], geometry_caches_[share],
-                                        epochs[j]->satellites[i], batch_pending_[at]);
-        if (!above) {
-          auto& earliest = errors[share];
-          if (!earliest || std::pair{j, i} < earliest->first) earliest.emplace(std::pair{j, i}, above.error());
-          break;  // this satellite's later epochs need this one's flight time
-        }
-        batch_above_[at] = *above ? 1 : 0;
-      }
-    }
-  };
-  if (shares > 1) {
-    run_shares(geometry_share);
-  } else {
-    geometry_share(0);
-  }
-  const std::pair<std::pair<size_t, size_t>, Error>* earliest = nullptr;
-  for (const auto& e : errors) {
-    if (e && (earliest == nullptr || e->first < earliest->first)) earliest = &*e;
-  }
-  // Stages 2 to 6, epoch by epoch, up to the first error.
-  const size_t complete = earliest != nullptr ? earliest->first.first : begun;
-  for (size_t j = 0; j < complete; ++j) {
-    pending_.clear();
-    for (size_t i = 0; i < n_sat; ++i) {
-      if (batch_above_[j * n_sat + i] != 0) pending_.push_back(batch_pending_[j * n_sat + i]);
-    }
-    finish_epoch(*epochs[j], batch_geometry_[j]);
-  }
-  if (earliest != nullptr) return earliest->second;
-  if (begin_error) return *begin_error;
-  return Ok{};
-}
-
-void ObservationGenerator::finish_epoch(EpochObservations& epoch, const EpochGeometry& geometry) {
-  const GnssTime& tag = epoch.receiver_time;
   lines_of_sight_.clear();
-  for (const Pending& p : pending_) lines_of_sight_.push_back(p.light_time.line_of_sight);
+  epoch.satellites.reserve(satellites_.size());
+  flight_time_guess_s_.resize(satellites_.size());
+  for (size_t satellite_index = 0; satellite_index < satellites_.size(); ++satellite_index) {
+    const SatelliteId& sat = satellites_[satellite_index];
+    std::optional<double>& flight_time_guess_s = flight_time_guess_s_[satellite_index];
+    SatelliteObservation& obs = reused_slot(epoch.satellites, used++);
+    obs.satellite = sat;
+    std::optional<stages::RecordState> record = stages::select_default_record(ephemerides_, sat, tag, settings_.signals);
+    if (!record) {
+      obs.status = SatelliteStatus::kNoEphemeris;
+      obs.detail = "no valid broadcast ephemeris";
+      flight_time_guess_s.reset();
+      continue;
+    }
+    // The truth: one orbit and clock per satellite, from its reference record (or the precise
+    // products below), whatever record each signal's receiver-side message has. It is evaluated
+    // once, at a guess of the transmission time (the last epoch's flight time).
+    stages::RecordState truth = stages::reference_record(ephemerides_, sat, tag, *record, settings_.signals);
+    const double guess_s = flight_time_guess_s.value_or(stages::kFirstFlightTimeGuess_s);
+    const GnssTime evaluation_time = epoch.true_time - guess_s;
+    const bool from_precise_products = truth_orbits_ != nullptr && settings_.broadcast_truth.count(sat) == 0;
+    if (!from_precise_products) stages::evaluate_record(truth, evaluation_time, glonass_orbits_);
+    bool precise_truth = false;
+    if (from_precise_products) {
+      // Precise products as the truth: the signals come from the precise orbit and clock, while
+      // the broadcast record stays the one a receiver decodes (nav.rnx, group delays). Satellites
+      // the products lack or cannot serve over the run (a G/R/E product has no BeiDou) were put in
+      // broadcast_truth before the run; for the others a time without products is an error (a live
+      // session stepped beyond them), never a switch to the broadcast truth.
+      auto precise = truth_orbits_->state(sat, evaluation_time);
+      if (!precise) {
+        return make_error(ErrorCode::kOutOfRange,
+                          "precise truth at epoch " + tag.to_iso8601(TimeScale::kGpst, 0) + " GPST: " +
+                              precise.error().message);
+      }
+      truth.state = *precise;
+      precise_truth = true;
+    }
+    const stages::LightTime light_time =
+        stages::solve_light_time(truth.state, guess_s, rx_m, epoch.receiver.velocity_mps);
+    flight_time_guess_s = light_time.flight_time_s;
+    truth.state = light_time.state;
+    obs.direction = stages::local_direction(rx_to_enu * (light_time.position_m - rx_m));
+    obs.range_m = light_time.range_m;
+    obs.range_rate_mps = light_time.range_rate_mps;
+    obs.satellite_position_m = light_time.position_m;
+    obs.satellite_clock_m = kC * truth.state.clock_bias_s;
+    obs.relativistic_m = kC * truth.state.relativistic_s;
+    if (record->glonass != nullptr) obs.glonass_channel = record->glonass->frequency_channel;
+    if (obs.direction.elevation_deg < elevation_mask_deg_) {
+      obs.status = SatelliteStatus::kBelowMask;
+      continue;
+    }
+    auto atmosphere = stages::atmosphere_terms(settings_.troposphere, settings_.ionosphere.get(), epoch.true_time,
+                                               rx_geodetic, obs.direction, settings_.troposphere_residual.get());
+    if (!atmosphere) return atmosphere.error().with_context(sat.to_string());
+    obs.troposphere_m = atmosphere->troposphere_m;
+    obs.ionosphere_l1_m = atmosphere->ionosphere_l1_m;
+
+    pending_.push_back(Pending{used - 1, *record, truth, precise_truth, light_time});
+    lines_of_sight_.push_back(light_time.line_of_sight);
+  }
+  epoch.satellites.resize(used);
 
   // Stage 2: what the world does to each signal on its way to the antenna, all satellites in one batch.
   world_outcomes_.clear();
   if (world_ != nullptr) {
-    stages::query_world(*world_, world_frame_, settings_.multipath, settings_.path_search, epoch.receiver.position_m,
-                        lines_of_sight_, world_directions_, world_outcomes_);
+    stages::query_world(*world_, world_frame_, settings_.multipath, settings_.path_search, rx_m, lines_of_sight_,
+                        world_directions_, world_outcomes_);
   }
 
   // Stages 2 to 6 per satellite; channels go to the highest satellites first.
@@ -305,9 +217,10 @@ void ObservationGenerator::finish_epoch(EpochObservations& epoch, const EpochGeo
            epoch.satellites[pending_[b].index].direction.elevation_deg;
   });
   int channels_used = 0;
-  for (const size_t pending_index : order_) observe_satellite(epoch, pending_index, geometry.rx_to_enu, channels_used);
+  for (const size_t pending_index : order_) observe_satellite(epoch, pending_index, rx_to_enu, channels_used);
   if (settings_.profile.output_requires_ephemeris) ephemeris_decoding_.end_epoch(tag);
   last_tag_ = tag;
+  return Ok{};
 }
 
 namespace {

@@ -562,16 +562,11 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   // receiver's epochs in order, and the outputs are the same bytes for any split. The computing
   // threads beyond the fix stage's observe; models that move with the epochs (world.moving) keep
   // one thread, as they are placed for one epoch at a time.
-  // A single receiver's satellites are likewise split among the observing threads for stage 1 of
-  // the observations (geometry, light time, atmosphere): each satellite keeps its state from epoch
-  // to epoch in its own share (ObservationGenerator::observe_batch), so the outputs are again the
-  // same bytes for any split.
   const bool models_move = resources->world && !resources->world->moving.empty();
-  const size_t observing_threads =
-      models_move ? 1 : static_cast<size_t>(std::max(1, pipeline && computes_fixes ? threads - 1 : threads));
-  const size_t satellite_shares = receivers.size() == 1 ? observing_threads : 1;
-  const size_t observers = std::max(satellite_shares, std::min(receivers.size(), observing_threads));
-  if (satellite_shares > 1) receivers.front().generator->set_geometry_shares(satellite_shares);
+  const size_t observers =
+      models_move ? 1
+                  : std::min(receivers.size(),
+                             static_cast<size_t>(std::max(1, pipeline && computes_fixes ? threads - 1 : threads)));
   ObserverCrew observer_crew(observers);
   // Observes the instants k0 .. k0 + count - 1 into batch[0 .. count) (every receiver: the
   // observations and what the fix engine reads of them), the receivers dealt in turn to
@@ -581,20 +576,6 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
       batch[j].index = k0 + static_cast<std::int64_t>(j);
       batch[j].receivers.resize(receivers.size());
       batch[j].measurements.resize(receivers.size());
-    }
-    if (satellite_shares > 1) {
-      // One receiver, its satellites split among the crew.
-      std::vector<GnssTime> tags(count);
-      std::vector<receiver::EpochObservations*> epochs(count);
-      for (size_t j = 0; j < count; ++j) {
-        tags[j] = epoch_tag(batch[j].index);
-        epochs[j] = &batch[j].receivers[0];
-      }
-      const Status st = receivers[0].generator->observe_batch(
-          tags, epochs, [&](const std::function<void(size_t)>& work) { observer_crew.run(work); });
-      if (!st) return st;
-      for (size_t j = 0; j < count; ++j) measure(0, batch[j]);
-      return Ok{};
     }
     std::vector<std::optional<std::pair<std::pair<std::int64_t, size_t>, Error>>> errors(observers);
     const std::function<void(size_t)> observe_share = [&](size_t share) {

@@ -142,44 +142,35 @@ TEST_F(RunOutputs, RtklibReadsTheFilesWithoutAWarning) {
 }
 
 // --threads changes who computes and writes, never what: every output of a run with all its sinks
-// (truth, bag, RTCM, NMEA, fix CSV, report) is the same file for 1, 2 and 4 threads; and without
-// truth and fixes, where from 2 threads on the one receiver's satellites are split among the
-// threads (ObservationGenerator::observe_batch). The quick start needs no shared data.
+// (truth, bag, RTCM, NMEA, fix CSV, report) is the same file for 1, 2 and 4 threads. The quick start
+// needs no shared data.
 TEST(RunThreads, OutputsAreTheSameBytesForAnyNumberOfThreads) {
   const auto scenario = test::source_dir() / "examples" / "quickstart.yaml";
   const auto dir = test::make_temp_dir("run_threads");
-  for (const std::string outputs : {" --set output.mcap=true --set output.rtcm3=true --set output.nmea=true",
-                                    " --no-truth --set output.fix=false"}) {
-    std::map<std::string, std::string> first;
-    for (const int threads : {1, 2, 4}) {
-      const auto out = dir / ("t" + std::to_string(threads) + (outputs.find("no-truth") != std::string::npos ? "-lean" : ""));
-      const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
-                                       test::shell_quote(scenario.string()) + " --out " + test::shell_quote(out.string()) +
-                                       " --quiet --threads " + std::to_string(threads) + " --set time.duration_s=600" +
-                                       outputs + " 2>&1");
-      ASSERT_EQ(r.exit_code, 0) << r.output;
-      std::map<std::string, std::string> files;
-      for (const auto& entry : std::filesystem::recursive_directory_iterator(out)) {
-        if (!entry.is_regular_file() || entry.path().filename() == "summary.json") continue;  // it holds the wall time
-        std::ifstream in(entry.path(), std::ios::binary);
-        std::stringstream bytes;
-        bytes << in.rdbuf();
-        files[std::filesystem::relative(entry.path(), out).string()] = bytes.str();
-      }
-      if (outputs.find("no-truth") == std::string::npos) {
-        EXPECT_TRUE(files.count("truth.csv.zst") && files.count("bag/bag_0.mcap") && files.count("obs.rtcm3")) << threads;
-      } else {
-        EXPECT_TRUE(files.count("obs.rnx") && !files.count("truth.csv.zst")) << threads;
-      }
-      if (first.empty()) {
-        first = std::move(files);
-        continue;
-      }
-      ASSERT_EQ(files.size(), first.size()) << threads;
-      for (const auto& [name, bytes] : first) {
-        EXPECT_TRUE(files[name] == bytes) << name << " differs with " << threads << " threads" << outputs;
-      }
+  std::map<std::string, std::string> first;
+  for (const int threads : {1, 2, 4}) {
+    const auto out = dir / ("t" + std::to_string(threads));
+    const auto r = test::run_command(test::shell_quote(test::skytrace_executable().string()) + " run " +
+                                     test::shell_quote(scenario.string()) + " --out " + test::shell_quote(out.string()) +
+                                     " --quiet --threads " + std::to_string(threads) +
+                                     " --set time.duration_s=600 --set output.mcap=true --set output.rtcm3=true"
+                                     " --set output.nmea=true 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::map<std::string, std::string> files;
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(out)) {
+      if (!entry.is_regular_file() || entry.path().filename() == "summary.json") continue;  // it holds the wall time
+      std::ifstream in(entry.path(), std::ios::binary);
+      std::stringstream bytes;
+      bytes << in.rdbuf();
+      files[std::filesystem::relative(entry.path(), out).string()] = bytes.str();
     }
+    EXPECT_TRUE(files.count("truth.csv.zst") && files.count("bag/bag_0.mcap") && files.count("obs.rtcm3")) << threads;
+    if (first.empty()) {
+      first = std::move(files);
+      continue;
+    }
+    ASSERT_EQ(files.size(), first.size()) << threads;
+    for (const auto& [name, bytes] : first) EXPECT_TRUE(files[name] == bytes) << name << " differs with " << threads << " threads";
   }
 }
 

@@ -8,7 +8,6 @@
 #include <Eigen/Core>
 
 #include <cstdint>
-#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -109,19 +108,6 @@ class ObservationGenerator {
   // epochs back saves an allocation per satellite and epoch. Every field is overwritten.
   [[nodiscard]] Status observe(const GnssTime& tag, EpochObservations& epoch);
 
-  // Observations at several increasing tags at once, into *epochs[j] (storage reused as above): the
-  // same as observe() at each tag in turn, for any number of shares. Stage 1 (geometry, light time,
-  // atmosphere) of the epochs' satellites is split into the shares of set_geometry_shares():
-  // run_shares(work) calls work(share) once for every share, on any threads, and returns when all
-  // are done. An error is that of the earliest epoch (then satellite) observe() would have met,
-  // the epochs before it observed.
-  using ShareRunner = std::function<void(const std::function<void(size_t)>&)>;
-  [[nodiscard]] Status observe_batch(const std::vector<GnssTime>& tags, const std::vector<EpochObservations*>& epochs,
-                                     const ShareRunner& run_shares);
-  // How many shares observe_batch() splits the satellites into (1 when constructed; at most one per
-  // satellite). Set before the first epoch.
-  void set_geometry_shares(size_t shares);
-
   // Every ephemeris record used so far (for the navigation file that goes with the observations).
   [[nodiscard]] const std::set<const orbits::KeplerEphemeris*>& used_kepler() const { return used_kepler_; }
   [[nodiscard]] const std::set<const orbits::GlonassEphemeris*>& used_glonass() const { return used_glonass_; }
@@ -142,30 +128,6 @@ class ObservationGenerator {
     stages::LightTime light_time;
   };
 
-  // The receiver's state at an epoch, for stage 1.
-  struct EpochGeometry {
-    Geodetic rx_geodetic;
-    Eigen::Matrix3d rx_to_enu = Eigen::Matrix3d::Identity();
-  };
-  // What stage 1 of a satellite keeps from epoch to epoch besides its flight time: the GLONASS
-  // integration nodes of its records and the truth source's fits (per satellite, so that
-  // satellites in different shares never share an entry).
-  struct GeometryCaches {
-    orbits::GlonassOrbitCache glonass;
-    std::unique_ptr<orbits::SatelliteStateSource> truth_view;  // forward-moving queries (precise fits)
-    const orbits::SatelliteStateSource* truth = nullptr;       // truth_view, or the source itself
-  };
-  // The epoch's tag checked against `previous_tag` (then set to it), the clock advanced, the
-  // receiver placed, and a slot per satellite.
-  [[nodiscard]] Status begin_epoch(const GnssTime& tag, std::optional<GnssTime>& previous_tag, EpochObservations& epoch,
-                                   EpochGeometry& geometry);
-  // Stage 1 of one satellite into its slot `obs`; true (and `pending`) when above the mask.
-  [[nodiscard]] Result<bool> satellite_geometry(size_t satellite_index, const EpochObservations& epoch,
-                                                const EpochGeometry& geometry, GeometryCaches& caches,
-                                                SatelliteObservation& obs, Pending& pending);
-  // Stages 2 to 6 of the satellites in pending_.
-  void finish_epoch(EpochObservations& epoch, const EpochGeometry& geometry);
-
   // Stages 2 to 6 for one satellite above the mask (`pending_index` in this epoch's batch).
   void observe_satellite(EpochObservations& epoch, size_t pending_index, const Eigen::Matrix3d& rx_to_enu,
                          int& channels_used);
@@ -184,9 +146,10 @@ class ObservationGenerator {
   // Per satellite of satellites_: the last epoch's flight time (nullopt: none yet, or lost).
   std::vector<std::optional<double>> flight_time_guess_s_;
   const orbits::BroadcastEphemerides& ephemerides_;
-  const orbits::SatelliteStateSource* truth_source_ = nullptr;  // precise truth, or nullptr
-  // Stage 1's caches per share of the satellites (set_geometry_shares; observe() uses the first).
-  std::vector<GeometryCaches> geometry_caches_;
+  const orbits::SatelliteStateSource* truth_orbits_ = nullptr;
+  // The truth source's view for this generator's forward-moving queries (precise orbits: fits per
+  // SP3 interval), when it has one; truth_orbits_ then points to it.
+  std::unique_ptr<orbits::SatelliteStateSource> truth_view_;
   const PathQuery* world_ = nullptr;
   LocalFrame world_frame_;
   std::shared_ptr<const KinematicsSource> kinematics_;
@@ -199,12 +162,9 @@ class ObservationGenerator {
   stages::LoopNoise loop_noise_;
   stages::FoliageFading foliage_fading_;
   stages::EphemerisDecoding ephemeris_decoding_;
+  orbits::GlonassOrbitCache glonass_orbits_;  // integration nodes per GLONASS record
   // Scratch of one epoch and one satellite, kept to avoid allocations per epoch.
   std::vector<Pending> pending_;
-  // observe_batch(): per epoch, and per epoch and satellite (j * satellites + i).
-  std::vector<EpochGeometry> batch_geometry_;
-  std::vector<Pending> batch_pending_;
-  std::vector<char> batch_above_;
   std::vector<Eigen::Vector3d> lines_of_sight_;
   std::vector<Eigen::Vector3d> world_directions_;
   stages::WorldOutcomes world_outcomes_;
