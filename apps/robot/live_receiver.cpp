@@ -4,6 +4,7 @@
 
 #include <set>
 
+#include "skytrace/core/allocator.hpp"
 #include "skytrace/core/cancellation.hpp"
 #include "skytrace/core/frames.hpp"
 #include "skytrace/io/nmea.hpp"
@@ -59,6 +60,7 @@ Receiver::Receiver(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Receiver::~Receiver() = default;
 
 std::unique_ptr<Receiver> Receiver::create(const ReceiverOptions& options, std::string& error) {
+  tune_allocator_for_epochs();  // the nodes' epochs allocate as a run's do
   auto scenario = sim::load_scenario(options.scenario_path);
   if (!scenario) {
     error = scenario.error().message;

@@ -5,8 +5,9 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "skytrace/core/version.hpp"
+#include "skytrace/core/allocator.hpp"
 #include "skytrace/core/cancellation.hpp"
+#include "skytrace/core/version.hpp"
 
 namespace skytrace::cli {
 
@@ -34,6 +35,7 @@ int exit_code_for(const Error& error) {
 
 int main(int argc, char** argv) {
   using namespace skytrace::cli;
+  skytrace::tune_allocator_for_epochs();
   CLI::App app{"skytrace: simulates what a GNSS receiver records, from real ephemerides and a 3D world"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("skytrace ") + skytrace::version());
