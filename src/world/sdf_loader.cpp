@@ -1320,14 +1320,10 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
 
   // Parse to an element tree first: duplicate model names are made unique before the DOM load.
   sdf::Errors errors;
-  sdf::SDFPtr parsed;
-  if (own_includes.empty()) {
-    parsed = fresh_sdf();
-    if (!sdf::readFile(path.string(), config, parsed, errors)) parsed.reset();
-  } else {
-    parsed = fresh_sdf();
-    if (!sdf::readString(text, config, parsed, errors)) parsed.reset();
-  }
+  sdf::SDFPtr parsed = fresh_sdf();
+  const bool read = own_includes.empty() ? sdf::readFile(path.string(), config, parsed, errors)
+                                         : sdf::readString(text, config, parsed, errors);
+  if (!read) parsed.reset();
   std::map<std::string, std::pair<std::string, int>> missing_models;  // uri -> (first place, count)
   std::vector<std::string> fatal;
   const auto sort_errors = [&](const sdf::Errors& list) {
