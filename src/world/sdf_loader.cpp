@@ -14,7 +14,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <exception>
 #include <map>
+#include <new>
 #include <memory>
 #include <mutex>
 #include <numbers>
@@ -1243,7 +1245,26 @@ const sdf::SDFPtr& sdf_description() {
 
 namespace backend {
 
+namespace {
+Result<WorldModel> load_sdf_world_unguarded(const fs::path& path, const SdfLoadOptions& options);
+}  // namespace
+
+// sdformat throws on some malformed input instead of reporting an error (a version attribute that
+// is no number went to std::stoi unchecked, found by the sdf fuzz target): the world is then
+// malformed, not the program's end.
 Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& options) {
+  try {
+    return load_sdf_world_unguarded(path, options);
+  } catch (const std::bad_alloc&) {
+    throw;  // the program's own "out of memory" report
+  } catch (const std::exception& e) {
+    return make_error(ErrorCode::kParse, path.string() + ": malformed SDF: sdformat stopped reading it (" + e.what() +
+                                             "); check the file and its version attributes (such as version=\"1.9\")");
+  }
+}
+
+namespace {
+Result<WorldModel> load_sdf_world_unguarded(const fs::path& path, const SdfLoadOptions& options) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     return make_error(ErrorCode::kIo, path.string() + ": SDF file not found");
@@ -1537,6 +1558,7 @@ Result<WorldModel> load_sdf_world(const fs::path& path, const SdfLoadOptions& op
   return world;
 }
 
+}  // namespace
 }  // namespace backend
 
 }  // namespace skytrace::world
