@@ -108,7 +108,9 @@ class IqSink final : public EpochSink {
       IqBand band;
       band.name = name;
       // The observations the band takes: the signal scenario parsing checked the receiver lists.
-      auto signal = Signal::parse(sim::find_iq_band(name)->signal);
+      const sim::IqBand* known = sim::find_iq_band(name);
+      if (known == nullptr) return make_error(ErrorCode::kInvalidArgument, "output.iq.bands: unknown band '" + name + "'");
+      auto signal = Signal::parse(known->signal);
       if (!signal) return signal.error();
       band.signal = *signal;
       band.file_name = "iq_" + name + "." + iq.format;
