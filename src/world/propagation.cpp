@@ -624,22 +624,39 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     double area_m2 = 0.0, distance_m = 0.0, cos_receiver = 0.0, vegetation_db = 0.0;
   };
   // The patches within the radius on the receiver's side of each facet that could matter to a
-  // blocked satellite: lit by it, and strong enough with the scattering lobe at its peak (the exact
-  // power follows for the patches the receiver sees).
+  // blocked satellite that lights the facet: the power each would bring without vegetation and
+  // lit everywhere, an upper bound of what the sums below give it (a hair high). A patch below
+  // 1/kMaxPatchesPerFacet of the threshold for every such satellite is left out, as the sums leave
+  // it out; a facet whose patches cannot add up to the threshold for any satellite is left out
+  // whole, as no path can come of it: the receiver traces no ray to it.
   // A static antenna's view of the patches is kept (traced once): the visible ones go straight on.
   const std::shared_ptr<const PatchSight> sight = patch_sight(r, candidates, near_facets, settings.scattering_radius_m);
+  const auto lobe_power = [&](double x) {  // x^n by multiplication; within a few ulp of std::pow
+    double y = 1.0;
+    for (int e = 0; e < settings.scattering_lobe_exponent; ++e) y *= x;
+    return y;
+  };
+  constexpr double kBoundMargin = 1.0 + 1e-9;
   std::vector<Patch> patches, visible;
   std::vector<Eigen::Vector3d> towards;
+  std::vector<std::size_t> lit_by;              // blocked satellites lighting the facet (j)
+  std::vector<Eigen::Vector3d> specular_of;     // their specular directions off it
+  std::vector<double> facet_bound;              // their summed patch bounds
   for (std::size_t k = 0; k < near_facets.size(); ++k) {
     const NearFacet& nf = near_facets[k];
     const Facet& f = facets_[nf.index];
     if (nf.patches == nullptr || (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm() > settings.scattering_radius_m) continue;
-    double peak_factor = 0.0;  // largest factor x peak pattern over the blocked satellites
+    lit_by.clear();
+    specular_of.clear();
     for (std::size_t j = 0; j < n_blocked; ++j) {
-      const Lighting& light = lighting[j * near_facets.size() + k];
-      peak_factor = std::max(peak_factor, light.factor / light.lobe_integral);
+      if (lighting[j * near_facets.size() + k].factor <= 0.0) continue;
+      const Eigen::Vector3d& s = directions[blocked[j]];
+      lit_by.push_back(j);
+      specular_of.push_back(-s + 2.0 * nf.normal.dot(s) * nf.normal);
     }
-    if (peak_factor <= 0.0) continue;
+    if (lit_by.empty()) continue;
+    facet_bound.assign(lit_by.size(), 0.0);
+    const std::size_t first_patch = patches.size(), first_visible = visible.size();
     for (std::size_t p_index = 0; p_index < nf.patches->size(); ++p_index) {
       const FacetPatch& facet_patch = (*nf.patches)[p_index];
       const Eigen::Vector3d to_point = facet_patch.point_m - r;
@@ -647,9 +664,17 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       if (d < 0.5 || d > settings.scattering_radius_m) continue;
       const double cos_receiver = -nf.normal.dot(to_point) / d;
       if (cos_receiver <= 1e-3) continue;
-      const double peak_pattern = lobe != nullptr ? 1.001 : cos_receiver / std::numbers::pi;  // a hair high
-      const double peak_power = peak_factor * facet_patch.area_m2 * peak_pattern / (d * d);
-      if (peak_power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
+      bool matters = false;
+      for (std::size_t m = 0; m < lit_by.size(); ++m) {
+        const Lighting& light = lighting[lit_by[m] * near_facets.size() + k];
+        const double pattern = lobe != nullptr ? lobe_power(0.5 * (1.0 - specular_of[m].dot(to_point) / d)) / light.lobe_integral
+                                               : cos_receiver / std::numbers::pi;
+        const double bound = kBoundMargin * light.factor * facet_patch.area_m2 * pattern / (d * d);
+        if (bound * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
+        facet_bound[m] += bound;
+        matters = true;
+      }
+      if (!matters) continue;
       if (sight) {
         const double vegetation_db = sight->vegetation_db[sight->first[k] + p_index];
         if (!std::isnan(vegetation_db)) visible.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, vegetation_db});
@@ -657,6 +682,11 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       }
       patches.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, 0.0});
       towards.push_back(to_point / d);
+    }
+    if (*std::max_element(facet_bound.begin(), facet_bound.end()) * kBoundMargin < min_power) {
+      patches.resize(first_patch);
+      towards.resize(first_patch);
+      visible.resize(first_visible);
     }
   }
   if (patches.empty() && visible.empty()) return;

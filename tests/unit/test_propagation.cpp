@@ -601,5 +601,40 @@ TEST(Propagation, DiffuseScatteringOffALitWallMatchesTheLambertianIntegral) {
   EXPECT_EQ(find_path(open, PathType::kScattered), nullptr);
 }
 
+// The receiver traces no ray to the patches of a facet whose scattered power cannot reach the
+// threshold: a bound on each patch's power, summed over the facet. A 4 x 2 m wall (two patches of
+// 2 m) lit over a block keeps its path with the threshold just below its power, with and without the
+// directive lobe, and the path the same to the bit; just above, none.
+TEST(Propagation, ScatteringKeepsAFacetWhosePowerJustReachesTheThreshold) {
+  WorldModel w;
+  w.objects.push_back(placed("wall", make_box({4, 1, 2}), {0, 10.5, 9}, MaterialClass::kConcrete));
+  w.objects.push_back(placed("block", make_box({40, 1, 10}), {0, -5, 5}, MaterialClass::kConcrete));
+  const auto scene = propagation(w);
+  const Eigen::Vector3d rx(0.3, 0.0, 1.5);
+  const Eigen::Vector3d s = enu_direction(180.0, 30.0);
+  PathSearchSettings settings;
+  settings.diffraction = false;
+  settings.max_reflection_order = 1;
+  settings.min_relative_power_db = -90.0;
+  settings.scattering_coefficient = 0.4;
+  for (const int exponent : {0, 4}) {
+    settings.scattering_lobe_exponent = exponent;
+    settings.min_relative_power_db = -90.0;
+    const PathSet reference = scene->paths(rx, {s}, settings)[0];
+    ASSERT_TRUE(reference.direct.blocked);
+    const SignalPath* full = find_path(reference, PathType::kScattered);
+    ASSERT_NE(full, nullptr) << "exponent " << exponent;
+    EXPECT_EQ(full->object, "wall");
+    settings.min_relative_power_db = 10.0 * std::log10(full->power_linear()) - 0.001;
+    const PathSet below = scene->paths(rx, {s}, settings)[0];
+    const SignalPath* kept = find_path(below, PathType::kScattered);
+    ASSERT_NE(kept, nullptr) << "exponent " << exponent;
+    EXPECT_EQ(kept->power_linear(), full->power_linear());
+    EXPECT_EQ(kept->excess_delay_m, full->excess_delay_m);
+    settings.min_relative_power_db += 0.002;
+    EXPECT_EQ(find_path(scene->paths(rx, {s}, settings)[0], PathType::kScattered), nullptr) << "exponent " << exponent;
+  }
+}
+
 }  // namespace
 }  // namespace skytrace::world
