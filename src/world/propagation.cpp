@@ -106,6 +106,66 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) int mark_within_cone
   return count;
 }
 
+// The second-order facets as arrays (normal, plane offset, bounding sphere), for screen_facet_pairs.
+struct FacetArrays {
+  std::vector<double> nx, ny, nz, offset, cx, cy, cz, radius;
+};
+
+// Facet A's pairs with every facet B, screened before make_facet_pair forms them (docs/performance.md):
+// per B, whether the pair may exist (make_facet_pair's conditions, a hair loose: it decides) and its
+// two cones, the first when it certainly has one (a cosine of -2 otherwise: every direction), for
+// a test against the satellites in single precision. image_a: the antenna's image in A; (na, ca):
+// A's plane towards the antenna; centre_a, radius_a: A's sphere; (axis_a, cos_a): the cone from
+// image_a through that sphere (cos_a -2: none). One loop the compiler vectorises.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pairs(
+    const FacetArrays& f, std::size_t n, std::size_t a, const Eigen::Vector3d& image_a, const Eigen::Vector3d& na, double ca,
+    const Eigen::Vector3d& centre_a, double radius_a, const Eigen::Vector3d& axis_a, double cos_a,
+    double* __restrict keep, double* __restrict axis1_x, double* __restrict axis1_y, double* __restrict axis1_z,
+    double* __restrict cos1, double* __restrict axis2_x, double* __restrict axis2_y, double* __restrict axis2_z) {
+  constexpr double kLoose_m = 1e-9;
+  const double iax = image_a.x(), iay = image_a.y(), iaz = image_a.z();
+  const double nax = na.x(), nay = na.y(), naz = na.z();
+  const double cax = centre_a.x(), cay = centre_a.y(), caz = centre_a.z();
+  const double uax = axis_a.x(), uay = axis_a.y(), uaz = axis_a.z();
+  const double* __restrict nx = f.nx.data();
+  const double* __restrict ny = f.ny.data();
+  const double* __restrict nz = f.nz.data();
+  const double* __restrict off = f.offset.data();
+  const double* __restrict cx = f.cx.data();
+  const double* __restrict cy = f.cy.data();
+  const double* __restrict cz = f.cz.data();
+  const double* __restrict rb = f.radius.data();
+  for (std::size_t b = 0; b < n; ++b) {
+    const double hb = nx[b] * iax + ny[b] * iay + nz[b] * iaz - off[b];
+    const double side = hb >= 0.0 ? 1.0 : -1.0;
+    const bool reaches_a = nax * cx[b] + nay * cy[b] + naz * cz[b] + rb[b] > ca - kLoose_m;
+    const bool reaches_b = side * (nx[b] * cax + ny[b] * cay + nz[b] * caz - off[b]) + radius_a > -kLoose_m;
+    // Bitwise: no branch in the loop.
+    keep[b] = static_cast<int>(b != a) & static_cast<int>(std::abs(hb) >= 1e-6 - kLoose_m) & static_cast<int>(reaches_a) &
+                      static_cast<int>(reaches_b)
+                  ? 1.0
+                  : 0.0;
+    // image_ab = image_a - 2 |hb| nb = image_a - 2 hb n.
+    const double tx = cx[b] - (iax - 2.0 * hb * nx[b]);
+    const double ty = cy[b] - (iay - 2.0 * hb * ny[b]);
+    const double tz = cz[b] - (iaz - 2.0 * hb * nz[b]);
+    const double distance = std::sqrt(tx * tx + ty * ty + tz * tz);
+    const bool cone = distance > rb[b] * (1.0 + 1e-9) + 1e-9 + kLoose_m;
+    const double inverse_all = 1.0 / std::max(distance, 1e-300);
+    const double inverse = cone ? inverse_all : 0.0;
+    const double sin_half = rb[b] * inverse;
+    axis1_x[b] = tx * inverse;
+    axis1_y[b] = ty * inverse;
+    axis1_z[b] = tz * inverse;
+    const double cos_half = std::sqrt(std::max(1.0 - sin_half * sin_half, 0.0)) - 1e-9;
+    cos1[b] = cone ? cos_half : -2.0;
+    const double along = nx[b] * uax + ny[b] * uay + nz[b] * uaz;
+    axis2_x[b] = cos_a <= -2.0 ? 0.0 : uax - 2.0 * along * nx[b];
+    axis2_y[b] = cos_a <= -2.0 ? 0.0 : uay - 2.0 * along * ny[b];
+    axis2_z[b] = cos_a <= -2.0 ? 0.0 : uaz - 2.0 * along * nz[b];
+  }
+}
+
 // Whether any point within radius_m of centre_m can lie on a path from `origin` over it towards
 // direction s with at most excess_max_m more length than the straight line: the excess over a
 // point at distance h from the line and D from the origin is at least h^2 / (2 D).
@@ -757,8 +817,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
 struct PropagationScene::FacetPair {
   std::size_t a = 0, b = 0;  // indices into the second-order facets
   double hb = 0.0;           // the first image's height above B
-  Eigen::Vector3d nb;        // B's normal on the side of the first image
-  Eigen::Vector3d image_ab;  // the first image mirrored in B
+  Eigen::Vector3d nb = Eigen::Vector3d::Zero();        // B's normal on the side of the first image
+  Eigen::Vector3d image_ab = Eigen::Vector3d::Zero();  // the first image mirrored in B
   // The point on B lies on the ray from image_ab towards the satellite and within B's bounding
   // sphere: only satellites within this cone around the sphere's direction can use the pair.
   Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();
@@ -863,43 +923,54 @@ struct PropagationScene::DoubleBounceIndex {
 void PropagationScene::append_facet_pairs(std::size_t a_index, const std::vector<NearFacet>& facets,
                                           const std::vector<double>& plane_a, const std::vector<Eigen::Vector3d>& image_of,
                                           std::vector<FacetPair>& out) const {
+  FacetPair pair;
+  for (std::size_t b_index = 0; b_index < facets.size(); ++b_index) {
+    if (make_facet_pair(a_index, b_index, facets, plane_a, image_of, pair)) out.push_back(pair);
+  }
+}
+
+bool PropagationScene::make_facet_pair(std::size_t a_index, std::size_t b_index, const std::vector<NearFacet>& facets,
+                                       const std::vector<double>& plane_a, const std::vector<Eigen::Vector3d>& image_of,
+                                       FacetPair& pair) const {
   const NearFacet& a = facets[a_index];
   const Facet& fa = facets_[a.index];
   const Eigen::Vector3d& na = a.normal;
   const double ca = plane_a[a_index];
   const Eigen::Vector3d& image_a = image_of[a_index];
-  for (std::size_t b_index = 0; b_index < facets.size(); ++b_index) {
-    const NearFacet& b = facets[b_index];
-    if (b.index == a.index) continue;
-    const Facet& fb = facets_[b.index];
-    const double hb = fb.normal.dot(image_a) - fb.offset_m;
-    if (std::abs(hb) < 1e-6) continue;
-    // Necessary for any satellite (the point on B lies within B's bounding sphere, the point
-    // on A within A's): B reaches A's receiver side, A reaches B's side of the first image.
-    if (na.dot(fb.centre_m) + fb.radius_m <= ca) continue;
-    const double side = hb >= 0.0 ? 1.0 : -1.0;
-    if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) continue;
-    FacetPair pair{a_index, b_index, hb, hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal), {}, Eigen::Vector3d::Zero(), -2.0};
-    pair.image_ab = image_a - 2.0 * std::abs(hb) * pair.nb;
-    const Eigen::Vector3d to_b = fb.centre_m - pair.image_ab;
-    const double distance_m = to_b.norm();
-    if (distance_m > fb.radius_m * (1.0 + 1e-9) + 1e-9) {
-      pair.cone_axis = to_b / distance_m;
-      const double sin_half = fb.radius_m / distance_m;
-      pair.cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-9;  // a hair wide
-    }
-    const Eigen::Vector3d to_a = fa.centre_m - image_a;
-    const double distance_a_m = to_a.norm();
-    if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
-      // Householder reflection in B's plane: the direction from the first image to A becomes a
-      // satellite direction.
-      const Eigen::Vector3d axis = to_a / distance_a_m;
-      pair.mirrored_cone_axis = axis - 2.0 * pair.nb.dot(axis) * pair.nb;
-      const double sin_half = fa.radius_m / distance_a_m;
-      pair.mirrored_cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-7;  // wider: the axis was reflected
-    }
-    out.push_back(pair);
+  const NearFacet& b = facets[b_index];
+  if (b.index == a.index) return false;
+  const Facet& fb = facets_[b.index];
+  const double hb = fb.normal.dot(image_a) - fb.offset_m;
+  if (std::abs(hb) < 1e-6) return false;
+  // Necessary for any satellite (the point on B lies within B's bounding sphere, the point
+  // on A within A's): B reaches A's receiver side, A reaches B's side of the first image.
+  if (na.dot(fb.centre_m) + fb.radius_m <= ca) return false;
+  const double side = hb >= 0.0 ? 1.0 : -1.0;
+  if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) return false;
+  pair = FacetPair{};
+  pair.a = a_index;
+  pair.b = b_index;
+  pair.hb = hb;
+  pair.nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);
+  pair.image_ab = image_a - 2.0 * std::abs(hb) * pair.nb;
+  const Eigen::Vector3d to_b = fb.centre_m - pair.image_ab;
+  const double distance_m = to_b.norm();
+  if (distance_m > fb.radius_m * (1.0 + 1e-9) + 1e-9) {
+    pair.cone_axis = to_b / distance_m;
+    const double sin_half = fb.radius_m / distance_m;
+    pair.cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-9;  // a hair wide
   }
+  const Eigen::Vector3d to_a = fa.centre_m - image_a;
+  const double distance_a_m = to_a.norm();
+  if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
+    // Householder reflection in B's plane: the direction from the first image to A becomes a
+    // satellite direction.
+    const Eigen::Vector3d axis = to_a / distance_a_m;
+    pair.mirrored_cone_axis = axis - 2.0 * pair.nb.dot(axis) * pair.nb;
+    const double sin_half = fa.radius_m / distance_a_m;
+    pair.mirrored_cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-7;  // wider: the axis was reflected
+  }
+  return true;
 }
 
 std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::double_bounce_index(
@@ -1299,8 +1370,9 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         index->for_each_candidate(directions[i], [&](std::size_t k) { bounce(index->pairs[k], i); });
       }
     } else {
-      // A moving antenna: the pairs of each facet A in turn; a pair's two cones are first tested
-      // against all satellites at once in single precision, a little wider than the exact test.
+      // A moving antenna: the pairs of each facet A in turn, screened all at once (the arrays below);
+      // a pair's two cones are tested against all satellites at once in single precision, a little
+      // wider than the exact test, and only a pair some satellite may use is formed.
       std::vector<FacetPair> pairs;
       std::array<std::vector<float>, 3> sky;
       for (std::size_t c = 0; c < 3; ++c) {
@@ -1309,18 +1381,52 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       }
       std::vector<std::int32_t> within(n_sat);
       std::vector<std::vector<std::uint32_t>> candidates(n_sat);  // per satellite, in pair order
-      for (std::size_t a = 0; a < second_order_facets.size(); ++a) {
+      const std::size_t n_facets = second_order_facets.size();
+      FacetArrays arrays;
+      for (auto* v : {&arrays.nx, &arrays.ny, &arrays.nz, &arrays.offset, &arrays.cx, &arrays.cy, &arrays.cz, &arrays.radius}) v->resize(n_facets);
+      for (std::size_t k = 0; k < n_facets; ++k) {
+        const Facet& f = facets_[second_order_facets[k].index];
+        arrays.nx[k] = f.normal.x();
+        arrays.ny[k] = f.normal.y();
+        arrays.nz[k] = f.normal.z();
+        arrays.offset[k] = f.offset_m;
+        arrays.cx[k] = f.centre_m.x();
+        arrays.cy[k] = f.centre_m.y();
+        arrays.cz[k] = f.centre_m.z();
+        arrays.radius[k] = f.radius_m;
+      }
+      std::vector<double> keep(n_facets);
+      std::vector<double> axis1_x(n_facets), axis1_y(n_facets), axis1_z(n_facets), cos1(n_facets);
+      std::vector<double> axis2_x(n_facets), axis2_y(n_facets), axis2_z(n_facets);
+      FacetPair pair;
+      for (std::size_t a = 0; a < n_facets; ++a) {
+        const Facet& fa = facets_[second_order_facets[a].index];
+        // A's mirrored cone before the mirror, as make_facet_pair forms it.
+        const Eigen::Vector3d to_a = fa.centre_m - image_of[a];
+        const double distance_a_m = to_a.norm();
+        Eigen::Vector3d axis_a = Eigen::Vector3d::Zero();
+        double cos_a = -2.0;
+        if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
+          axis_a = to_a / distance_a_m;
+          const double sin_half = fa.radius_m / distance_a_m;
+          cos_a = std::sqrt(1.0 - sin_half * sin_half) - 1e-7;
+        }
+        screen_facet_pairs(arrays, n_facets, a, image_of[a], second_order_facets[a].normal, plane_a[a], fa.centre_m, fa.radius_m,
+                           axis_a, cos_a, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
+                           axis2_x.data(), axis2_y.data(), axis2_z.data());
         pairs.clear();
-        append_facet_pairs(a, second_order_facets, plane_a, image_of, pairs);
         for (auto& list : candidates) list.clear();
-        for (std::size_t k = 0; k < pairs.size(); ++k) {
-          const FacetPair& pair = pairs[k];
-          if (mark_within_cones(sky[0].data(), sky[1].data(), sky[2].data(), n_sat, pair.cone_axis, pair.cone_cos,
-                                pair.mirrored_cone_axis, pair.mirrored_cone_cos, within.data()) == 0) {
+        for (std::size_t b = 0; b < n_facets; ++b) {
+          if (keep[b] == 0.0) continue;
+          if (mark_within_cones(sky[0].data(), sky[1].data(), sky[2].data(), n_sat, Eigen::Vector3d(axis1_x[b], axis1_y[b], axis1_z[b]),
+                                cos1[b], Eigen::Vector3d(axis2_x[b], axis2_y[b], axis2_z[b]), cos_a, within.data()) == 0) {
             continue;
           }
+          if (!make_facet_pair(a, b, second_order_facets, plane_a, image_of, pair)) continue;
+          const auto k = static_cast<std::uint32_t>(pairs.size());
+          pairs.push_back(pair);
           for (std::size_t i = 0; i < n_sat; ++i) {
-            if (within[i] != 0) candidates[i].push_back(static_cast<std::uint32_t>(k));
+            if (within[i] != 0) candidates[i].push_back(k);
           }
         }
         for (std::size_t i = 0; i < n_sat; ++i) {

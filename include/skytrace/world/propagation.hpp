@@ -169,6 +169,9 @@ class PropagationScene final : public PathQuery {
   // satellite's signal on to it; plane_a and image_of: each facet's plane constant and the antenna's image in it.
   void append_facet_pairs(std::size_t a, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
                           const std::vector<Eigen::Vector3d>& image_of, std::vector<FacetPair>& out) const;
+  // The pair of facets a and b as append_facet_pairs forms it; false when b cannot pass a signal on to a.
+  bool make_facet_pair(std::size_t a, std::size_t b, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
+                       const std::vector<Eigen::Vector3d>& image_of, FacetPair& pair) const;
   // The index for an antenna found at the same point in an earlier call (built on the second
   // call there), else none.
   std::shared_ptr<const DoubleBounceIndex> double_bounce_index(const Eigen::Vector3d& origin_m,
