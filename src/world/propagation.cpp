@@ -530,6 +530,22 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
     });
     if (cached) return cached;
   }
+  // The patches the sets kept so far made with this patch size, by facet.
+  std::unordered_map<std::size_t, std::shared_ptr<const std::vector<FacetPatch>>> made_patches;
+  if (scattering) {
+    std::vector<std::shared_ptr<const Candidates>> kept;
+    {
+      const std::lock_guard lock(cache_mutex_);
+      for (const auto& set : candidate_sets_.kept) {
+        if (set && set->scattering_patch_m == scattering_patch_m) kept.push_back(set);
+      }
+    }
+    for (const auto& set : kept) {
+      for (std::size_t k = 0; k < set->facets.size(); ++k) {
+        if (set->patches[k]) made_patches.emplace(set->facets[k].index, set->patches[k]);
+      }
+    }
+  }
   auto c = std::make_shared<Candidates>();
   c->origin_m = origin_m;
   c->radius_m = settings.radius_m;
@@ -570,6 +586,11 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   for (std::size_t k = 0; scattering && k < c->facets.size(); ++k) {
     const Facet& f = facets_[c->facets[k].index];
     if ((origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m) - origin_m).norm() > scattering_radius_m + kCandidateMargin_m) continue;
+    if (const auto made = made_patches.find(c->facets[k].index); made != made_patches.end()) {
+      c->patches[k] = made->second;
+      continue;
+    }
+    auto patches = std::make_shared<std::vector<FacetPatch>>();
     const Eigen::Vector2d span = f.max_uv - f.min_uv;
     const double step = std::max(scattering_patch_m,
                                  std::sqrt(std::max(span.x() * span.y(), 1e-6) / static_cast<double>(kMaxPatchesPerFacet)));
@@ -580,11 +601,12 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
       for (int b = 0; b < nv; ++b) {
         const Eigen::Vector2d uv = f.min_uv + Eigen::Vector2d((a + 0.5) * du, (b + 0.5) * dv);
         const Eigen::Vector3d point = f.origin_m + uv.x() * f.axis_u + uv.y() * f.axis_v;
-        if (f.contains(point)) c->patches[k].push_back(FacetPatch{point, du * dv});
+        if (f.contains(point)) patches->push_back(FacetPatch{point, du * dv});
       }
     }
+    c->patches[k] = std::move(patches);
   }
-  for (std::size_t k = 0; k < c->facets.size(); ++k) c->facets[k].patches = &c->patches[k];
+  for (std::size_t k = 0; k < c->facets.size(); ++k) c->facets[k].patches = c->patches[k].get();
   const std::lock_guard lock(cache_mutex_);
   candidate_sets_.keep(c);
   return c;

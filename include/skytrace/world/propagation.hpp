@@ -136,7 +136,9 @@ class PropagationScene final : public PathQuery {
     double radius_m = 0.0, min_area_m2 = 0.0, frequency_hz = 0.0;
     double scattering_radius_m = 0.0, scattering_patch_m = 0.0;  // 0: no patches made
     std::vector<NearFacet> facets;
-    std::vector<std::vector<FacetPatch>> patches;  // per facet, those within scattering reach
+    // Per facet, those within scattering reach (none: beyond it); shared with the candidate sets
+    // kept before, as a facet's patches depend on it and the patch size alone.
+    std::vector<std::shared_ptr<const std::vector<FacetPatch>>> patches;
   };
   // Facets near a point (a uniform grid in x, y): those within the radius plus a margin, so that the
   // last answer serves an antenna moving less than the margin. Normal and height as seen from the
