@@ -194,9 +194,8 @@ bool may_reach_cone(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, 
 // The point of the edge where the ray from `origin` and the direction s towards the satellite make
 // equal angles with it (Keller's cone: the stationary path over the edge), if it lies inside the edge.
 std::optional<Eigen::Vector3d> keller_point(const DiffractionEdge& edge, const Eigen::Vector3d& origin, const Eigen::Vector3d& s) {
-  Eigen::Vector3d axis = edge.end_m - edge.start_m;
-  const double length = axis.norm();
-  axis /= length;
+  const Eigen::Vector3d& axis = edge.axis;
+  const double length = edge.length_m;
   const double c = s.dot(axis);
   if (1.0 - c * c < 1e-9) return std::nullopt;
   const Eigen::Vector3d w = edge.start_m - origin;
@@ -406,6 +405,9 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       edge.material = object.material.material_class;
       edge.midpoint_m = 0.5 * (p0 + p1);
       edge.half_length_m = 0.5 * (p1 - p0).norm();
+      edge.axis = p1 - p0;
+      edge.length_m = edge.axis.norm();
+      edge.axis /= edge.length_m;
       if (use.count == 1) {
         // Boundary of an open surface: outward in the triangle's plane, away from its third vertex.
         const Eigen::Vector3d n = triangle_normals[use.triangle[0]];
@@ -473,6 +475,27 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       cluster.centre_m = 0.5 * (clo + chi);
       cluster.radius_m = 0.5 * (chi - clo).norm();
       out->object_clusters_[o].push_back(cluster);
+    }
+  }
+  // The spheres around each object's clusters and groups of them.
+  const auto bounding = [](auto begin, auto end) {
+    Sphere sphere;
+    for (auto it = begin; it != end; ++it) sphere.centre_m += it->centre_m;
+    sphere.centre_m /= static_cast<double>(std::max<std::ptrdiff_t>(end - begin, 1));
+    for (auto it = begin; it != end; ++it) {
+      sphere.radius_m = std::max(sphere.radius_m, (it->centre_m - sphere.centre_m).norm() + it->radius_m);
+    }
+    sphere.radius_m = sphere.radius_m * (1.0 + 1e-9) + 1e-9;
+    return sphere;
+  };
+  out->object_spheres_.resize(out->object_clusters_.size());
+  out->group_spheres_.resize(out->object_clusters_.size());
+  for (std::size_t o = 0; o < out->object_clusters_.size(); ++o) {
+    const auto& clusters = out->object_clusters_[o];
+    out->object_spheres_[o] = bounding(clusters.begin(), clusters.end());
+    for (std::size_t g = 0; g < clusters.size(); g += kClustersPerGroup) {
+      const auto first = clusters.begin() + static_cast<std::ptrdiff_t>(g);
+      out->group_spheres_[o].push_back(bounding(first, first + static_cast<std::ptrdiff_t>(std::min(kClustersPerGroup, clusters.size() - g))));
     }
   }
 
@@ -1059,10 +1082,9 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
 std::optional<PropagationScene::FacetEdge> PropagationScene::facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
                                                           double plane, const DiffractionEdge& edge,
                                                           const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
-  Eigen::Vector3d axis = edge.end_m - edge.start_m;
-  const double length = axis.norm();
+  const Eigen::Vector3d& axis = edge.axis;
+  const double length = edge.length_m;
   if (!(length > 0.0)) return std::nullopt;
-  axis /= length;
   // Where the edge lies above the plane: above(u) = above0 + u rate.
   const double above0 = nf.normal.dot(edge.start_m) - plane;
   const double rate = nf.normal.dot(axis);
@@ -1134,10 +1156,9 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::band_of(const Eigen
 std::optional<PropagationScene::FacetEdge> PropagationScene::edge_band(const DiffractionEdge& edge, const Eigen::Vector3d& origin,
                                                                       double radius_m, const Eigen::Vector3d& cell_axis,
                                                                       double cell_reach_rad) {
-  Eigen::Vector3d axis = edge.end_m - edge.start_m;
-  const double length = axis.norm();
+  const Eigen::Vector3d& axis = edge.axis;
+  const double length = edge.length_m;
   if (!(length > 0.0)) return std::nullopt;
-  axis /= length;
   const Eigen::Vector3d w = edge.start_m - origin;
   const double along = w.dot(axis);
   // |w + u axis| <= radius_m, a little wide.
@@ -1624,34 +1645,12 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         double from_image_m = 0.0, v = 0.0, loss_db = 0.0;
       };
       std::vector<ReflectedEdgeHit> reflected_hits;
-      // The objects' edge clusters in groups of 16 neighbours (they are in Morton order), each
-      // group and object with a bounding sphere: a facet tests an object, then a group, then a
-      // cluster, then an edge (a city mesh holds thousands of clusters).
-      constexpr std::size_t kClustersPerGroup = 16;
-      struct Sphere {
-        Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
-        double radius_m = 0.0;
-      };
-      const auto bounding = [](auto begin, auto end) {
-        Sphere sphere;
-        for (auto it = begin; it != end; ++it) sphere.centre_m += it->centre_m;
-        sphere.centre_m /= static_cast<double>(std::max<std::ptrdiff_t>(end - begin, 1));
-        for (auto it = begin; it != end; ++it) {
-          sphere.radius_m = std::max(sphere.radius_m, (it->centre_m - sphere.centre_m).norm() + it->radius_m);
-        }
-        sphere.radius_m = sphere.radius_m * (1.0 + 1e-9) + 1e-9;
-        return sphere;
-      };
+      // The blocking objects' spheres (made with the scene).
       std::vector<Sphere> object_spheres;
-      std::vector<std::vector<Sphere>> group_spheres;
+      std::vector<const std::vector<Sphere>*> group_spheres;
       for (const std::size_t object : objects) {
-        const auto& clusters = object_clusters_[object];
-        object_spheres.push_back(bounding(clusters.begin(), clusters.end()));
-        group_spheres.emplace_back();
-        for (std::size_t g = 0; g < clusters.size(); g += kClustersPerGroup) {
-          const auto first = clusters.begin() + static_cast<std::ptrdiff_t>(g);
-          group_spheres.back().push_back(bounding(first, first + static_cast<std::ptrdiff_t>(std::min(kClustersPerGroup, clusters.size() - g))));
-        }
+        object_spheres.push_back(object_spheres_[object]);
+        group_spheres.push_back(&group_spheres_[object]);
       }
       double farthest_edge_m = 0.0;  // from the receiver
       for (const Sphere& sphere : object_spheres) farthest_edge_m = std::max(farthest_edge_m, (sphere.centre_m - r).norm() + sphere.radius_m);
@@ -1762,8 +1761,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
             const NearFacet& nf = second_order_facets[f_index];
             const FacetSight v = facet_sight(f_index);
             if (!may_hold(nf, v, object_spheres[0].centre_m, object_spheres[0].radius_m, reach_cell)) continue;
-            for (std::size_t g = 0; g < group_spheres[0].size(); ++g) {
-              if (!may_hold(nf, v, group_spheres[0][g].centre_m, group_spheres[0][g].radius_m, reach_cell)) continue;
+            for (std::size_t g = 0; g < group_spheres[0]->size(); ++g) {
+              if (!may_hold(nf, v, (*group_spheres[0])[g].centre_m, (*group_spheres[0])[g].radius_m, reach_cell)) continue;
               for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
                 const EdgeCluster& cluster = clusters[c_index];
                 if (!may_hold(nf, v, cluster.centre_m, cluster.radius_m, reach_cell)) continue;
@@ -1811,8 +1810,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
             if (!hold(object_spheres[rank].centre_m, object_spheres[rank].radius_m)) continue;
             const std::size_t object = objects[rank];
             const auto& clusters = object_clusters_[object];
-            for (std::size_t g = 0; g < group_spheres[rank].size(); ++g) {
-              if (!hold(group_spheres[rank][g].centre_m, group_spheres[rank][g].radius_m)) continue;
+            for (std::size_t g = 0; g < group_spheres[rank]->size(); ++g) {
+              if (!hold((*group_spheres[rank])[g].centre_m, (*group_spheres[rank])[g].radius_m)) continue;
               for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
                 const EdgeCluster& cluster = clusters[c_index];
                 if (!hold(cluster.centre_m, cluster.radius_m)) continue;

@@ -88,6 +88,9 @@ struct DiffractionEdge {
   Eigen::Vector3d face_normal_a = Eigen::Vector3d::UnitZ(), face_normal_b = -Eigen::Vector3d::UnitZ();
   Eigen::Vector3d midpoint_m = Eigen::Vector3d::Zero();
   double half_length_m = 0.0;
+  // Unit direction from start to end, and the length (m).
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
+  double length_m = 0.0;
   std::size_t object = 0;
   MaterialClass material = MaterialClass::kConcrete;
 };
@@ -238,6 +241,16 @@ class PropagationScene final : public PathQuery {
   };
   std::vector<std::vector<std::size_t>> object_edges_;
   std::vector<std::vector<EdgeCluster>> object_clusters_;
+  // Per object, a sphere around its edge clusters, and one around each group of
+  // kClustersPerGroup neighbouring clusters (they are in Morton order): a search tests an object,
+  // then a group, then a cluster, then an edge (a city mesh holds thousands of clusters).
+  static constexpr std::size_t kClustersPerGroup = 16;
+  struct Sphere {
+    Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();
+    double radius_m = 0.0;
+  };
+  std::vector<Sphere> object_spheres_;
+  std::vector<std::vector<Sphere>> group_spheres_;
   std::unordered_map<std::string, std::size_t> object_index_;
   // Kept per antenna point: one per band or settings in use (a GPS and a GLONASS signal search
   // with different permittivities).
