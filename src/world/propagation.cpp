@@ -1723,9 +1723,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         const NearFacet& nf = second_order_facets[f_index];
         const Facet& f = facets_[nf.index];
         const DiffractionEdge& edge = edges_[e];
-        if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_line)) return;
+        // Keller's point first: it lies outside most edges near the facet.
         const std::optional<Eigen::Vector3d> keller = keller_point(edge, v.image, s);
         if (!keller) return;
+        if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_line)) return;
         const Eigen::Vector3d& q = *keller;
         const Eigen::Vector3d from_image = q - v.image;
         const double d_image = from_image.norm();
