@@ -116,10 +116,12 @@ struct FacetArrays {
 // two cones, the first when it certainly has one (a cosine of -2 otherwise: every direction), for
 // a test against the satellites in single precision. image_a: the antenna's image in A; (na, ca):
 // A's plane towards the antenna; centre_a, radius_a: A's sphere; (axis_a, cos_a): the cone from
-// image_a through that sphere (cos_a -2: none). One loop the compiler vectorises.
+// image_a through that sphere (cos_a -2: none), sin_a its sine. Also necessary: the reflection
+// points lie on one ray from image_a (the one on A between image_a and the one on B), so the
+// cones from image_a through both spheres must meet. One loop the compiler vectorises.
 __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pairs(
     const FacetArrays& f, std::size_t n, std::size_t a, const Eigen::Vector3d& image_a, const Eigen::Vector3d& na, double ca,
-    const Eigen::Vector3d& centre_a, double radius_a, const Eigen::Vector3d& axis_a, double cos_a,
+    const Eigen::Vector3d& centre_a, double radius_a, const Eigen::Vector3d& axis_a, double cos_a, double sin_a,
     double* __restrict keep, double* __restrict axis1_x, double* __restrict axis1_y, double* __restrict axis1_z,
     double* __restrict cos1, double* __restrict axis2_x, double* __restrict axis2_y, double* __restrict axis2_z) {
   constexpr double kLoose_m = 1e-9;
@@ -141,8 +143,15 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pa
     const bool reaches_a = nax * cx[b] + nay * cy[b] + naz * cz[b] + rb[b] > ca - kLoose_m;
     const bool reaches_b = side * (nx[b] * cax + ny[b] * cay + nz[b] * caz - off[b]) + radius_a > -kLoose_m;
     // Bitwise: no branch in the loop.
+    // The cones from image_a through A's sphere and B's meet (cos_a is a hair wide already).
+    const double vx = cx[b] - iax, vy = cy[b] - iay, vz = cz[b] - iaz;
+    const double dv = std::sqrt(vx * vx + vy * vy + vz * vz);
+    const double sin_b = std::min(rb[b] / std::max(dv, 1e-300), 1.0);
+    const double cos_sum = cos_a * std::sqrt(1.0 - sin_b * sin_b) - sin_a * sin_b;
+    const int meet = static_cast<int>(cos_a <= -2.0) | static_cast<int>(dv <= rb[b]) |
+                     static_cast<int>(vx * uax + vy * uay + vz * uaz >= dv * cos_sum - 1e-6 * (dv + 1.0));
     keep[b] = static_cast<int>(b != a) & static_cast<int>(std::abs(hb) >= 1e-6 - kLoose_m) & static_cast<int>(reaches_a) &
-                      static_cast<int>(reaches_b)
+                      static_cast<int>(reaches_b) & meet
                   ? 1.0
                   : 0.0;
     // image_ab = image_a - 2 |hb| nb = image_a - 2 hb n.
@@ -1509,14 +1518,14 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         const Eigen::Vector3d to_a = fa.centre_m - image_of[a];
         const double distance_a_m = to_a.norm();
         Eigen::Vector3d axis_a = Eigen::Vector3d::Zero();
-        double cos_a = -2.0;
+        double cos_a = -2.0, sin_a = 1.0;
         if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
           axis_a = to_a / distance_a_m;
-          const double sin_half = fa.radius_m / distance_a_m;
-          cos_a = std::sqrt(1.0 - sin_half * sin_half) - 1e-7;
+          sin_a = fa.radius_m / distance_a_m;
+          cos_a = std::sqrt(1.0 - sin_a * sin_a) - 1e-7;
         }
         screen_facet_pairs(arrays, n_facets, a, image_of[a], second_order_facets[a].normal, plane_a[a], fa.centre_m, fa.radius_m,
-                           axis_a, cos_a, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
+                           axis_a, cos_a, sin_a, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
                            axis2_x.data(), axis2_y.data(), axis2_z.data());
         pairs.clear();
         for (auto& list : candidates) list.clear();
