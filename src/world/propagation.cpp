@@ -212,6 +212,32 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_reflecti
   }
 }
 
+// Keller's points (keller_point) of edges [begin, end) of one object seen from `origin` towards s:
+// 1 where the point may lie inside the edge (a hair loose: keller_point decides), 0 where it
+// cannot; inside[k - begin]. One loop the compiler vectorises.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_keller_points(
+    const double* __restrict sx, const double* __restrict sy, const double* __restrict sz, const double* __restrict ax,
+    const double* __restrict ay, const double* __restrict az, const double* __restrict length, std::size_t begin,
+    std::size_t end, const Eigen::Vector3d& origin, const Eigen::Vector3d& s, double* __restrict inside) {
+  const double ox = origin.x(), oy = origin.y(), oz = origin.z();
+  const double dx = s.x(), dy = s.y(), dz = s.z();
+  for (std::size_t k = begin; k < end; ++k) {
+    const double c = dx * ax[k] + dy * ay[k] + dz * az[k];
+    const double wx = sx[k] - ox, wy = sy[k] - oy, wz = sz[k] - oz;
+    const double along = wx * ax[k] + wy * ay[k] + wz * az[k];
+    const double px = wx - along * ax[k], py = wy - along * ay[k], pz = wz - along * az[k];
+    const double rho = std::sqrt(px * px + py * py + pz * pz);
+    const double sin2 = 1.0 - c * c;
+    const double u = c * rho / std::sqrt(std::max(sin2, 1e-300)) - along;
+    // u's rounding grows as sin2 shrinks (to 1e-7 relative at sin2 = 1e-9).
+    const double margin = 1e-6 * (std::abs(u) + 1.0);
+    inside[k - begin] = static_cast<int>(sin2 >= 1e-9 - 1e-15) & static_cast<int>(u > 1e-3 - margin) &
+                                static_cast<int>(u < length[k] - 1e-3 + margin)
+                            ? 1.0
+                            : 0.0;
+  }
+}
+
 // Whether any point within radius_m of centre_m can lie on a path from `origin` over it towards
 // direction s with at most excess_max_m more length than the straight line: the excess over a
 // point at distance h from the line and D from the origin is at least h^2 / (2 D).
@@ -521,6 +547,21 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       cluster.centre_m = 0.5 * (clo + chi);
       cluster.radius_m = 0.5 * (chi - clo).norm();
       out->object_clusters_[o].push_back(cluster);
+    }
+  }
+  // Each object's edges as arrays.
+  out->object_edge_arrays_.resize(out->object_edges_.size());
+  for (std::size_t o = 0; o < out->object_edges_.size(); ++o) {
+    EdgeArrays& arrays = out->object_edge_arrays_[o];
+    for (const std::size_t e : out->object_edges_[o]) {
+      const DiffractionEdge& edge = out->edges_[e];
+      arrays.sx.push_back(edge.start_m.x());
+      arrays.sy.push_back(edge.start_m.y());
+      arrays.sz.push_back(edge.start_m.z());
+      arrays.ax.push_back(edge.axis.x());
+      arrays.ay.push_back(edge.axis.y());
+      arrays.az.push_back(edge.axis.z());
+      arrays.length.push_back(edge.length_m);
     }
   }
   // The spheres around each object's clusters and groups of them.
@@ -1870,11 +1911,8 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (v && outline(e)) try_edge(current, *v, e);
         }
       } else {
-        std::vector<std::vector<char>> on_outline;
-        for (const std::size_t object : objects) {
-          on_outline.emplace_back();
-          for (const std::size_t e : object_edges_[object]) on_outline.back().push_back(outline(e) ? 1 : 0);
-        }
+        // The edges of a cluster whose Keller point may lie inside them, tested at once.
+        std::array<double, 64> inside{};
         for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
           const NearFacet& nf = second_order_facets[f_index];
           const std::optional<FacetSight> v = facet_for_satellite(f_index);
@@ -1889,8 +1927,15 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
               for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
                 const EdgeCluster& cluster = clusters[c_index];
                 if (!hold(cluster.centre_m, cluster.radius_m)) continue;
-                for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
-                  if (on_outline[rank][k] != 0) try_edge(f_index, *v, object_edges_[object][k]);
+                const EdgeArrays& arrays = object_edge_arrays_[object];
+                for (std::size_t begin = cluster.begin; begin < cluster.end; begin += inside.size()) {
+                  const std::size_t end = std::min(cluster.end, begin + inside.size());
+                  screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(),
+                                       arrays.az.data(), arrays.length.data(), begin, end, v->image, s, inside.data());
+                  for (std::size_t k = begin; k < end; ++k) {
+                    const std::size_t e = object_edges_[object][k];
+                    if (inside[k - begin] != 0.0 && outline(e)) try_edge(f_index, *v, e);
+                  }
                 }
               }
             }

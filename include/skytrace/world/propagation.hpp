@@ -251,6 +251,12 @@ class PropagationScene final : public PathQuery {
   };
   std::vector<Sphere> object_spheres_;
   std::vector<std::vector<Sphere>> group_spheres_;
+  // Per object, its edges in object_edges_ order as arrays (start, unit direction, length), for a
+  // first test of many Keller points at once.
+  struct EdgeArrays {
+    std::vector<double> sx, sy, sz, ax, ay, az, length;
+  };
+  std::vector<EdgeArrays> object_edge_arrays_;
   std::unordered_map<std::string, std::size_t> object_index_;
   // Kept per antenna point: one per band or settings in use (a GPS and a GLONASS signal search
   // with different permittivities).
