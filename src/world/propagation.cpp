@@ -837,11 +837,23 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   for (std::size_t k = 0; k < near_facets.size(); ++k) {
     const NearFacet& nf = near_facets[k];
     const Facet& f = facets_[nf.index];
-    if (nf.patches == nullptr || (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm() > settings.scattering_radius_m) continue;
+    const double nearest_m = (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm();
+    if (nf.patches == nullptr || nf.patches->empty() || nearest_m > settings.scattering_radius_m) continue;
+    // No patch is nearer than the facet's box nor brighter than the lobe's peak (every patch of a
+    // facet has the same area, candidates()): a facet none of whose patches can matter, or whose
+    // patches together cannot reach the threshold, is passed over before its patches are.
+    const double patch_bound = kBoundMargin * (*nf.patches).front().area_m2 * (lobe != nullptr ? 1.0 : 1.0 / std::numbers::pi) /
+                               std::pow(std::max(nearest_m, 0.5) * (1.0 - 1e-9), 2);
+    const auto patches_can_matter = [&](const Lighting& light) {
+      const double bound = kBoundMargin * light.factor * patch_bound / (lobe != nullptr ? light.lobe_integral : 1.0);
+      return bound * static_cast<double>(kMaxPatchesPerFacet) >= min_power &&
+             bound * static_cast<double>(nf.patches->size()) * kBoundMargin >= min_power;
+    };
     lit_by.clear();
     specular_of.clear();
     for (std::size_t j = 0; j < n_blocked; ++j) {
-      if (lighting[j * near_facets.size() + k].factor <= 0.0) continue;
+      const Lighting& light = lighting[j * near_facets.size() + k];
+      if (light.factor <= 0.0 || !patches_can_matter(light)) continue;
       const Eigen::Vector3d& s = directions[blocked[j]];
       lit_by.push_back(j);
       specular_of.push_back(-s + 2.0 * nf.normal.dot(s) * nf.normal);
