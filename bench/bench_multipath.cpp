@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "skytrace/core/allocator.hpp"
 #include "skytrace/core/random.hpp"
 #include "skytrace/receiver/multipath.hpp"
 #include "skytrace/world/loaders.hpp"
@@ -197,4 +198,12 @@ BENCHMARK(BM_CitysimObservableErrors)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+// As skytrace and the live nodes run the path search: with the allocator set for per-epoch buffers.
+int main(int argc, char** argv) {
+  skytrace::tune_allocator_for_epochs();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

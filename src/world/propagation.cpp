@@ -794,12 +794,12 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     double factor = 0.0, lobe_integral = 1.0;
   };
   const std::size_t n_blocked = blocked.size();
+  // Worked out for the facets within the scattering radius only (the others have no patch to use).
   std::vector<Lighting> lighting(n_blocked * near_facets.size());  // [satellite][facet]
-  for (std::size_t j = 0; j < n_blocked; ++j) {
-    const Eigen::Vector3d& s = directions[blocked[j]];
-    for (std::size_t k = 0; k < near_facets.size(); ++k) {
-      const NearFacet& nf = near_facets[k];
-      const double cos_incidence = nf.normal.dot(s);
+  const auto light_facet = [&](std::size_t k) {
+    const NearFacet& nf = near_facets[k];
+    for (std::size_t j = 0; j < n_blocked; ++j) {
+      const double cos_incidence = nf.normal.dot(directions[blocked[j]]);
       if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
       Lighting& light = lighting[j * near_facets.size() + k];
       const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
@@ -809,7 +809,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
         light.lobe_integral = (*lobe)[static_cast<std::size_t>(std::lround(incidence_deg))];
       }
     }
-  }
+  };
   struct Patch {
     std::size_t facet = 0;  // index in near_facets
     Eigen::Vector3d point_m;
@@ -839,6 +839,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     const Facet& f = facets_[nf.index];
     const double nearest_m = (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm();
     if (nf.patches == nullptr || nf.patches->empty() || nearest_m > settings.scattering_radius_m) continue;
+    light_facet(k);
     // No patch is nearer than the facet's box nor brighter than the lobe's peak (every patch of a
     // facet has the same area, candidates()): a facet none of whose patches can matter, or whose
     // patches together cannot reach the threshold, is passed over before its patches are.
