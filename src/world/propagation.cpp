@@ -118,11 +118,12 @@ struct FacetArrays {
 // A's plane towards the antenna; centre_a, radius_a: A's sphere; (axis_a, cos_a): the cone from
 // image_a through that sphere (cos_a -2: none), sin_a its sine. Also necessary: the reflection
 // points lie on one ray from image_a (the one on A between image_a and the one on B), so the
-// cones from image_a through both spheres must meet. One loop the compiler vectorises.
+// cones from image_a through both spheres must meet; and both must reach up to lowest_z, the
+// lowest satellite's z (up). One loop the compiler vectorises.
 __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pairs(
     const FacetArrays& f, std::size_t n, std::size_t a, const Eigen::Vector3d& image_a, const Eigen::Vector3d& na, double ca,
     const Eigen::Vector3d& centre_a, double radius_a, const Eigen::Vector3d& axis_a, double cos_a, double sin_a,
-    double* __restrict keep, double* __restrict axis1_x, double* __restrict axis1_y, double* __restrict axis1_z,
+    double lowest_z, double* __restrict keep, double* __restrict axis1_x, double* __restrict axis1_y, double* __restrict axis1_z,
     double* __restrict cos1, double* __restrict axis2_x, double* __restrict axis2_y, double* __restrict axis2_z) {
   constexpr double kLoose_m = 1e-9;
   const double iax = image_a.x(), iay = image_a.y(), iaz = image_a.z();
@@ -166,12 +167,20 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pa
     axis1_x[b] = tx * inverse;
     axis1_y[b] = ty * inverse;
     axis1_z[b] = tz * inverse;
-    const double cos_half = std::sqrt(std::max(1.0 - sin_half * sin_half, 0.0)) - 1e-9;
-    cos1[b] = cone ? cos_half : -2.0;
+    const double cos_half = std::sqrt(std::max(1.0 - sin_half * sin_half, 0.0));
+    cos1[b] = cone ? cos_half - 1e-9 : -2.0;
     const double along = nx[b] * uax + ny[b] * uay + nz[b] * uaz;
     axis2_x[b] = cos_a <= -2.0 ? 0.0 : uax - 2.0 * along * nx[b];
     axis2_y[b] = cos_a <= -2.0 ? 0.0 : uay - 2.0 * along * ny[b];
     axis2_z[b] = cos_a <= -2.0 ? 0.0 : uaz - 2.0 * along * nz[b];
+    // Both cones reach up to the lowest satellite: a cone's highest point lies at
+    // cos(zenith angle of its axis - half angle) = z cos h + sqrt(1 - z^2) sin h, or the zenith.
+    const double z1 = axis1_z[b], z2 = axis2_z[b];
+    const double top1 = z1 >= cos_half ? 1.0 : z1 * cos_half + std::sqrt(std::max(1.0 - z1 * z1, 0.0)) * sin_half;
+    const double top2 = z2 >= cos_a ? 1.0 : z2 * cos_a + std::sqrt(std::max(1.0 - z2 * z2, 0.0)) * sin_a;
+    const int reach_sky = (static_cast<int>(!cone) | static_cast<int>(top1 >= lowest_z - 1e-6)) &
+                          (static_cast<int>(cos_a <= -2.0) | static_cast<int>(top2 >= lowest_z - 1e-6));
+    keep[b] = keep[b] != 0.0 && reach_sky != 0 ? 1.0 : 0.0;
   }
 }
 
@@ -1547,6 +1556,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         for (std::size_t i = 0; i < n_sat; ++i) sky[c][i] = static_cast<float>(directions[i][static_cast<Eigen::Index>(c)]);
       }
       std::vector<std::int32_t> within(n_sat);
+      std::vector<std::uint32_t> marked(n_sat);
       std::vector<std::vector<std::uint32_t>> candidates(n_sat);  // per satellite, in pair order
       const std::size_t n_facets = second_order_facets.size();
       FacetArrays arrays;
@@ -1563,9 +1573,12 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         arrays.radius[k] = f.radius_m;
       }
       std::vector<double> keep(n_facets);
+      std::vector<std::uint32_t> kept(n_facets);
       std::vector<double> axis1_x(n_facets), axis1_y(n_facets), axis1_z(n_facets), cos1(n_facets);
       std::vector<double> axis2_x(n_facets), axis2_y(n_facets), axis2_z(n_facets);
       FacetPair pair;
+      double lowest_z = 1.0;
+      for (const Eigen::Vector3d& s : directions) lowest_z = std::min(lowest_z, s.z());
       for (std::size_t a = 0; a < n_facets; ++a) {
         const Facet& fa = facets_[second_order_facets[a].index];
         // A's mirrored cone before the mirror, as make_facet_pair forms it.
@@ -1579,12 +1592,18 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           cos_a = std::sqrt(1.0 - sin_a * sin_a) - 1e-7;
         }
         screen_facet_pairs(arrays, n_facets, a, image_of[a], second_order_facets[a].normal, plane_a[a], fa.centre_m, fa.radius_m,
-                           axis_a, cos_a, sin_a, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
+                           axis_a, cos_a, sin_a, lowest_z, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
                            axis2_x.data(), axis2_y.data(), axis2_z.data());
         pairs.clear();
         for (auto& list : candidates) list.clear();
+        // The facets kept, without a branch per facet.
+        std::size_t n_kept = 0;
         for (std::size_t b = 0; b < n_facets; ++b) {
-          if (keep[b] == 0.0) continue;
+          kept[n_kept] = static_cast<std::uint32_t>(b);
+          n_kept += keep[b] != 0.0 ? 1 : 0;
+        }
+        for (std::size_t kept_index = 0; kept_index < n_kept; ++kept_index) {
+          const std::size_t b = kept[kept_index];
           if (mark_within_cones(sky[0].data(), sky[1].data(), sky[2].data(), n_sat, Eigen::Vector3d(axis1_x[b], axis1_y[b], axis1_z[b]),
                                 cos1[b], Eigen::Vector3d(axis2_x[b], axis2_y[b], axis2_z[b]), cos_a, within.data()) == 0) {
             continue;
@@ -1592,9 +1611,13 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (!make_facet_pair(a, b, second_order_facets, plane_a, image_of, pair)) continue;
           const auto k = static_cast<std::uint32_t>(pairs.size());
           pairs.push_back(pair);
+          // The satellites marked, without a branch per satellite.
+          std::size_t n_marked = 0;
           for (std::size_t i = 0; i < n_sat; ++i) {
-            if (within[i] != 0) candidates[i].push_back(k);
+            marked[n_marked] = static_cast<std::uint32_t>(i);
+            n_marked += static_cast<std::size_t>(within[i]);
           }
+          for (std::size_t m = 0; m < n_marked; ++m) candidates[marked[m]].push_back(k);
         }
         for (std::size_t i = 0; i < n_sat; ++i) {
           for (const std::uint32_t k : candidates[i]) bounce(pairs[k], i);
