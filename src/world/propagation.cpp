@@ -918,11 +918,19 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   };
   std::vector<Sum> sums(near_facets.size());
   std::vector<Eigen::Vector3d> one(1);
+  // Per satellite: each visible patch's power before its lit test (negative: it cannot matter), and
+  // per facet the sum of those powers through the vegetation towards the receiver, an upper bound
+  // of the facet's path power: a facet that cannot reach the threshold traces no lit test.
+  std::vector<double> unlit_power(visible.size());
+  std::vector<double> facet_potential(near_facets.size());
   for (std::size_t j = 0; j < n_blocked; ++j) {
     const std::size_t i = blocked[j];
     const Eigen::Vector3d& s = directions[i];
     std::fill(sums.begin(), sums.end(), Sum{});
-    for (const Patch& patch : visible) {
+    std::fill(facet_potential.begin(), facet_potential.end(), 0.0);
+    for (std::size_t v = 0; v < visible.size(); ++v) {
+      const Patch& patch = visible[v];
+      unlit_power[v] = -1.0;
       const NearFacet& nf = near_facets[patch.facet];
       const Lighting& light = lighting[j * near_facets.size() + patch.facet];
       if (light.factor <= 0.0) continue;
@@ -933,8 +941,16 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
         const Eigen::Vector3d to_receiver = (r - patch.point_m) / patch.distance_m;
         pattern = std::pow(0.5 * (1.0 + specular.dot(to_receiver)), settings.scattering_lobe_exponent) / light.lobe_integral;
       }
-      double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
+      const double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
+      unlit_power[v] = power;
+      facet_potential[patch.facet] += power * std::pow(10.0, -patch.vegetation_db / 10.0);
+    }
+    for (std::size_t v = 0; v < visible.size(); ++v) {
+      const Patch& patch = visible[v];
+      if (unlit_power[v] < 0.0 || facet_potential[patch.facet] * kBoundMargin < min_power) continue;
+      const NearFacet& nf = near_facets[patch.facet];
+      double power = unlit_power[v];
       one[0] = s;
       // Lit or not: the occlusion test alone (free rays carry the vegetation they cross).
       const RayOutcome lit = scene_->trace_line_of_sight(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();
