@@ -1036,7 +1036,8 @@ struct PropagationScene::DoubleBounceIndex {
     return ((c % kColumns) + kColumns) % kColumns;
   }
   // Every cell both cones of the pair may reach: the cells of the narrower one's bounding box
-  // (rows and columns) whose centre lies within the half angles plus a cell's reach of both axes.
+  // (rows and columns) whose centre lies within the half angles plus a cell's reach of both axes,
+  // and that reach the side of B that the first image faces (the satellite must light it).
   template <class Visit>
   static void for_each_cell(const FacetPair& pair, Visit&& visit) {
     const auto [axis, cone_cos] = pair.narrower_cone();
@@ -1046,11 +1047,14 @@ struct PropagationScene::DoubleBounceIndex {
       return cos_half <= -2.0 ? -2.0 : std::cos(std::min(std::acos(std::clamp(cos_half, -1.0, 1.0)) + kCell_rad + kMargin_rad, std::numbers::pi));
     };
     const double reach1 = reach(pair.cone_cos), reach2 = reach(pair.mirrored_cone_cos);
+    const double lit_reach = -std::sin(kCell_rad + kMargin_rad);
     for_each_box_cell(*axis, cone_cos, [&](int cell) {
       const double elevation = (cell / kColumns + 0.5) * kCell_rad - std::numbers::pi / 2.0;
       const double azimuth = (cell % kColumns + 0.5) * kCell_rad - std::numbers::pi;
       const Eigen::Vector3d centre(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
-      if (pair.cone_axis.dot(centre) >= reach1 && pair.mirrored_cone_axis.dot(centre) >= reach2) visit(cell);
+      if (pair.cone_axis.dot(centre) >= reach1 && pair.mirrored_cone_axis.dot(centre) >= reach2 && pair.nb.dot(centre) >= lit_reach) {
+        visit(cell);
+      }
     });
   }
   // Every cell of the bounding box (rows and columns) of the cone (unit axis, cosine of the half angle).
@@ -1143,6 +1147,41 @@ bool PropagationScene::make_facet_pair(std::size_t a_index, std::size_t b_index,
   return true;
 }
 
+void PropagationScene::narrow_cones(FacetPair& pair, const Eigen::Vector3d& image_a, const std::vector<NearFacet>& facets) const {
+  // The cone from `apex` around a facet's bounding rectangle (in its plane): it holds every
+  // point of the facet. Its cosine, or -2 when it opens 90 deg or more (no longer convex).
+  const auto rectangle_cone = [](const Facet& f, const Eigen::Vector3d& apex, Eigen::Vector3d& axis) {
+    std::array<Eigen::Vector3d, 4> towards;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) {
+      const double u = (k & 1) != 0 ? f.max_uv.x() : f.min_uv.x(), v = (k & 2) != 0 ? f.max_uv.y() : f.min_uv.y();
+      const Eigen::Vector3d to_corner = f.origin_m + u * f.axis_u + v * f.axis_v - apex;
+      const double distance_m = to_corner.norm();
+      if (!(distance_m > 1e-9)) return -2.0;
+      towards[static_cast<std::size_t>(k)] = to_corner / distance_m;
+      sum += towards[static_cast<std::size_t>(k)];
+    }
+    if (!(sum.norm() > 1e-9)) return -2.0;
+    axis = sum.normalized();
+    double cos_half = 1.0;
+    for (const Eigen::Vector3d& t : towards) cos_half = std::min(cos_half, axis.dot(t));
+    return cos_half > 1e-3 ? cos_half : -2.0;
+  };
+  const Facet& fa = facets_[facets[pair.a].index];
+  const Facet& fb = facets_[facets[pair.b].index];
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  // The point on B seen from the first image mirrored in B, along the satellite's direction.
+  if (const double c = rectangle_cone(fb, pair.image_ab, axis) - 1e-9; c > pair.cone_cos) {
+    pair.cone_axis = axis;
+    pair.cone_cos = c;
+  }
+  // The point on A seen from the first image, along the satellite's direction mirrored in B.
+  if (const double c = rectangle_cone(fa, image_a, axis) - 1e-7; c > pair.mirrored_cone_cos) {
+    pair.mirrored_cone_axis = axis - 2.0 * pair.nb.dot(axis) * pair.nb;
+    pair.mirrored_cone_cos = c;
+  }
+}
+
 std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::double_bounce_index(
     const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
     const std::vector<Eigen::Vector3d>& image_of) const {
@@ -1164,6 +1203,11 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
   for (const NearFacet& f : facets) index->facets.push_back(f.index);
   for (std::size_t a = 0; a < facets.size() && index->pairs.size() <= DoubleBounceIndex::kMaxPairs; ++a) {
     append_facet_pairs(a, facets, plane_a, image_of, index->pairs);
+  }
+  // The index is built once and serves every epoch at the point: each pair's cones are narrowed
+  // to the facets' rectangles where that is tighter than their spheres.
+  if (index->pairs.size() <= DoubleBounceIndex::kMaxPairs) {
+    for (FacetPair& pair : index->pairs) narrow_cones(pair, image_of[pair.a], facets);
   }
   constexpr std::size_t kCells = static_cast<std::size_t>(DoubleBounceIndex::kRows * DoubleBounceIndex::kColumns);
   index->cell_start.assign(kCells + 1, 0);

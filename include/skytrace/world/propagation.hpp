@@ -177,6 +177,9 @@ class PropagationScene final : public PathQuery {
   // The pair of facets a and b as append_facet_pairs forms it; false when b cannot pass a signal on to a.
   bool make_facet_pair(std::size_t a, std::size_t b, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
                        const std::vector<Eigen::Vector3d>& image_of, FacetPair& pair) const;
+  // A pair's two cones narrowed to the facets' bounding rectangles where that is tighter than
+  // their spheres (image_a: the antenna's image in facet a).
+  void narrow_cones(FacetPair& pair, const Eigen::Vector3d& image_a, const std::vector<NearFacet>& facets) const;
   // The index for an antenna found at the same point in an earlier call (built on the second
   // call there), else none.
   std::shared_ptr<const DoubleBounceIndex> double_bounce_index(const Eigen::Vector3d& origin_m,
