@@ -2156,9 +2156,17 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     const Eigen::Vector3d mirrored = s - 2.0 * ns * nf.normal;
     const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane (the receiver's side lit)
     std::vector<EdgeHit> found;
+    const EdgeArrays& arrays = object_edge_arrays_[hidden.object];
+    std::array<double, 64> inside{};  // the edges whose Keller point may lie inside them
     for (const EdgeCluster& cluster : object_clusters_[hidden.object]) {
       if (!may_reach_line(r, mirrored, blocked_excess_max_m, cluster.centre_m, cluster.radius_m)) continue;
       for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
+        if ((k - cluster.begin) % inside.size() == 0) {
+          screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(),
+                               arrays.az.data(), arrays.length.data(), k, std::min(cluster.end, k + inside.size()), r, mirrored,
+                               inside.data());
+        }
+        if (inside[(k - cluster.begin) % inside.size()] == 0.0) continue;
         const std::size_t e = object_edges_[hidden.object][k];
         const DiffractionEdge& edge = edges_[e];
         // On the object's outline as the reflected wave sees it.
