@@ -1798,10 +1798,19 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (c >= entry.cos_min && c <= entry.cos_max) try_knife_edge(object_edges_[object][entry.edge]);
         }
       } else {
+        std::array<double, 64> inside{};  // the edges whose Keller point may lie inside them
         for (const std::size_t object : objects) {
+          const EdgeArrays& arrays = object_edge_arrays_[object];
           for (const EdgeCluster& cluster : object_clusters_[object]) {
             if (!may_reach(cluster.centre_m, cluster.radius_m)) continue;
-            for (std::size_t k = cluster.begin; k < cluster.end; ++k) try_knife_edge(object_edges_[object][k]);
+            for (std::size_t begin = cluster.begin; begin < cluster.end; begin += inside.size()) {
+              const std::size_t end = std::min(cluster.end, begin + inside.size());
+              screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(),
+                                   arrays.az.data(), arrays.length.data(), begin, end, r, s, inside.data());
+              for (std::size_t k = begin; k < end; ++k) {
+                if (inside[k - begin] != 0.0) try_knife_edge(object_edges_[object][k]);
+              }
+            }
           }
         }
       }
