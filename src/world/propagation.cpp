@@ -89,12 +89,10 @@ const std::array<double, 91>& directive_lobe_integrals(int exponent) {
 // of -2: no cone) with 1, the others 0, and returns how many are marked. In single precision, the
 // cones a little wider than given: a pass before the exact test. One loop the compiler vectorises.
 __attribute__((target_clones("arch=x86-64-v3", "default"))) int mark_within_cones(
-    const float* __restrict x, const float* __restrict y, const float* __restrict z, std::size_t n,
-    const Eigen::Vector3d& axis1, double cos1, const Eigen::Vector3d& axis2, double cos2, std::int32_t* __restrict within) {
+    const float* __restrict x, const float* __restrict y, const float* __restrict z, std::size_t n, float ax, float ay, float az,
+    float cos1, float bx, float by, float bz, float cos2, std::int32_t* __restrict within) {
   constexpr float kWider = 1e-5F;
-  const auto ax = static_cast<float>(axis1.x()), ay = static_cast<float>(axis1.y()), az = static_cast<float>(axis1.z());
-  const auto bx = static_cast<float>(axis2.x()), by = static_cast<float>(axis2.y()), bz = static_cast<float>(axis2.z());
-  const float min1 = static_cast<float>(cos1) - kWider, min2 = static_cast<float>(cos2) - kWider;
+  const float min1 = cos1 - kWider, min2 = cos2 - kWider;
   int count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const bool in1 = ax * x[i] + ay * y[i] + az * z[i] >= min1;
@@ -119,17 +117,24 @@ struct FacetArrays {
 // image_a through that sphere (cos_a -2: none), sin_a its sine. Also necessary: the reflection
 // points lie on one ray from image_a (the one on A between image_a and the one on B), so the
 // cones from image_a through both spheres must meet; and both must reach up to lowest_z, the
-// lowest satellite's z (up). One loop the compiler vectorises.
+// lowest satellite's z (up). The planes in double precision; the cones, from differences taken in
+// double, in single precision and wider by far more than its rounding (1e-4 in cosine, 1e-4 m).
+// One loop the compiler vectorises.
 __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pairs(
     const FacetArrays& f, std::size_t n, std::size_t a, const Eigen::Vector3d& image_a, const Eigen::Vector3d& na, double ca,
     const Eigen::Vector3d& centre_a, double radius_a, const Eigen::Vector3d& axis_a, double cos_a, double sin_a,
-    double lowest_z, double* __restrict keep, double* __restrict axis1_x, double* __restrict axis1_y, double* __restrict axis1_z,
-    double* __restrict cos1, double* __restrict axis2_x, double* __restrict axis2_y, double* __restrict axis2_z) {
+    double lowest_z, float* __restrict keep, float* __restrict axis1_x, float* __restrict axis1_y, float* __restrict axis1_z,
+    float* __restrict cos1, float* __restrict axis2_x, float* __restrict axis2_y, float* __restrict axis2_z) {
   constexpr double kLoose_m = 1e-9;
+  constexpr float kWiderCos = 1e-4F;
   const double iax = image_a.x(), iay = image_a.y(), iaz = image_a.z();
   const double nax = na.x(), nay = na.y(), naz = na.z();
   const double cax = centre_a.x(), cay = centre_a.y(), caz = centre_a.z();
   const double uax = axis_a.x(), uay = axis_a.y(), uaz = axis_a.z();
+  const bool cone_a = cos_a > -2.0;
+  const auto cos_af = static_cast<float>(cos_a), sin_af = static_cast<float>(sin_a);
+  const auto uaxf = static_cast<float>(uax), uayf = static_cast<float>(uay), uazf = static_cast<float>(uaz);
+  const auto lowest_zf = static_cast<float>(lowest_z) - kWiderCos;
   const double* __restrict nx = f.nx.data();
   const double* __restrict ny = f.ny.data();
   const double* __restrict nz = f.nz.data();
@@ -139,48 +144,49 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pa
   const double* __restrict cz = f.cz.data();
   const double* __restrict rb = f.radius.data();
   for (std::size_t b = 0; b < n; ++b) {
+    // The planes (bitwise: no branch in the loop).
     const double hb = nx[b] * iax + ny[b] * iay + nz[b] * iaz - off[b];
     const double side = hb >= 0.0 ? 1.0 : -1.0;
-    const bool reaches_a = nax * cx[b] + nay * cy[b] + naz * cz[b] + rb[b] > ca - kLoose_m;
-    const bool reaches_b = side * (nx[b] * cax + ny[b] * cay + nz[b] * caz - off[b]) + radius_a > -kLoose_m;
-    // Bitwise: no branch in the loop.
-    // The cones from image_a through A's sphere and B's meet (cos_a is a hair wide already).
-    const double vx = cx[b] - iax, vy = cy[b] - iay, vz = cz[b] - iaz;
-    const double dv = std::sqrt(vx * vx + vy * vy + vz * vz);
-    const double sin_b = std::min(rb[b] / std::max(dv, 1e-300), 1.0);
-    const double cos_sum = cos_a * std::sqrt(1.0 - sin_b * sin_b) - sin_a * sin_b;
-    const int meet = static_cast<int>(cos_a <= -2.0) | static_cast<int>(dv <= rb[b]) |
-                     static_cast<int>(vx * uax + vy * uay + vz * uaz >= dv * cos_sum - 1e-6 * (dv + 1.0));
-    keep[b] = static_cast<int>(b != a) & static_cast<int>(std::abs(hb) >= 1e-6 - kLoose_m) & static_cast<int>(reaches_a) &
-                      static_cast<int>(reaches_b) & meet
-                  ? 1.0
-                  : 0.0;
-    // image_ab = image_a - 2 |hb| nb = image_a - 2 hb n.
-    const double tx = cx[b] - (iax - 2.0 * hb * nx[b]);
-    const double ty = cy[b] - (iay - 2.0 * hb * ny[b]);
-    const double tz = cz[b] - (iaz - 2.0 * hb * nz[b]);
-    const double distance = std::sqrt(tx * tx + ty * ty + tz * tz);
-    const bool cone = distance > rb[b] * (1.0 + 1e-9) + 1e-9 + kLoose_m;
-    const double inverse_all = 1.0 / std::max(distance, 1e-300);
-    const double inverse = cone ? inverse_all : 0.0;
-    const double sin_half = rb[b] * inverse;
+    const int planes = static_cast<int>(b != a) & static_cast<int>(std::abs(hb) >= 1e-6 - kLoose_m) &
+                       static_cast<int>(nax * cx[b] + nay * cy[b] + naz * cz[b] + rb[b] > ca - kLoose_m) &
+                       static_cast<int>(side * (nx[b] * cax + ny[b] * cay + nz[b] * caz - off[b]) + radius_a > -kLoose_m);
+    const auto r_b = static_cast<float>(rb[b]);
+    // The cones from image_a through A's sphere and B's meet: the angle between v and A's axis is
+    // within both half angles, v . axis_a >= cos_a sqrt(|v|^2 - r_b^2) - sin_a r_b.
+    const auto vx = static_cast<float>(cx[b] - iax), vy = static_cast<float>(cy[b] - iay), vz = static_cast<float>(cz[b] - iaz);
+    const float v2 = vx * vx + vy * vy + vz * vz;
+    const float bound = cos_af * std::sqrt(std::max(v2 - r_b * r_b, 0.0F)) - sin_af * r_b;
+    const int meet = static_cast<int>(!cone_a) | static_cast<int>(v2 <= r_b * r_b) |
+                     static_cast<int>(vx * uaxf + vy * uayf + vz * uazf >= bound - 1e-4F * (std::abs(vx) + std::abs(vy) + std::abs(vz) + 1.0F));
+    // The first cone, from image_ab = image_a - 2 |hb| nb = image_a - 2 hb n, only where it is
+    // certainly one (the apex well outside the sphere).
+    const auto tx = static_cast<float>(cx[b] - (iax - 2.0 * hb * nx[b]));
+    const auto ty = static_cast<float>(cy[b] - (iay - 2.0 * hb * ny[b]));
+    const auto tz = static_cast<float>(cz[b] - (iaz - 2.0 * hb * nz[b]));
+    const float d2 = tx * tx + ty * ty + tz * tz;
+    const float cone_limit = r_b * 1.001F + 1e-3F;
+    const bool cone = d2 > cone_limit * cone_limit;
+    const float inverse = cone ? 1.0F / std::sqrt(std::max(d2, 1e-30F)) : 0.0F;
+    const float sin_half = r_b * inverse;
+    const float cos_half = std::sqrt(std::max(1.0F - sin_half * sin_half, 0.0F));
     axis1_x[b] = tx * inverse;
     axis1_y[b] = ty * inverse;
     axis1_z[b] = tz * inverse;
-    const double cos_half = std::sqrt(std::max(1.0 - sin_half * sin_half, 0.0));
-    cos1[b] = cone ? cos_half - 1e-9 : -2.0;
+    cos1[b] = cone ? cos_half - kWiderCos : -2.0F;
+    // The second cone, A's mirrored in B.
     const double along = nx[b] * uax + ny[b] * uay + nz[b] * uaz;
-    axis2_x[b] = cos_a <= -2.0 ? 0.0 : uax - 2.0 * along * nx[b];
-    axis2_y[b] = cos_a <= -2.0 ? 0.0 : uay - 2.0 * along * ny[b];
-    axis2_z[b] = cos_a <= -2.0 ? 0.0 : uaz - 2.0 * along * nz[b];
+    const auto z2 = static_cast<float>(uaz - 2.0 * along * nz[b]);
+    axis2_x[b] = cone_a ? static_cast<float>(uax - 2.0 * along * nx[b]) : 0.0F;
+    axis2_y[b] = cone_a ? static_cast<float>(uay - 2.0 * along * ny[b]) : 0.0F;
+    axis2_z[b] = cone_a ? z2 : 0.0F;
     // Both cones reach up to the lowest satellite: a cone's highest point lies at
     // cos(zenith angle of its axis - half angle) = z cos h + sqrt(1 - z^2) sin h, or the zenith.
-    const double z1 = axis1_z[b], z2 = axis2_z[b];
-    const double top1 = z1 >= cos_half ? 1.0 : z1 * cos_half + std::sqrt(std::max(1.0 - z1 * z1, 0.0)) * sin_half;
-    const double top2 = z2 >= cos_a ? 1.0 : z2 * cos_a + std::sqrt(std::max(1.0 - z2 * z2, 0.0)) * sin_a;
-    const int reach_sky = (static_cast<int>(!cone) | static_cast<int>(top1 >= lowest_z - 1e-6)) &
-                          (static_cast<int>(cos_a <= -2.0) | static_cast<int>(top2 >= lowest_z - 1e-6));
-    keep[b] = keep[b] != 0.0 && reach_sky != 0 ? 1.0 : 0.0;
+    const float z1 = tz * inverse;
+    const float top1 = z1 >= cos_half ? 1.0F : z1 * cos_half + std::sqrt(std::max(1.0F - z1 * z1, 0.0F)) * sin_half;
+    const float top2 = z2 >= cos_af ? 1.0F : z2 * cos_af + std::sqrt(std::max(1.0F - z2 * z2, 0.0F)) * sin_af;
+    const int reach_sky = (static_cast<int>(!cone) | static_cast<int>(top1 >= lowest_zf)) &
+                          (static_cast<int>(!cone_a) | static_cast<int>(top2 >= lowest_zf));
+    keep[b] = (planes & meet & reach_sky) != 0 ? 1.0F : 0.0F;
   }
 }
 
@@ -1632,10 +1638,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         arrays.cz[k] = f.centre_m.z();
         arrays.radius[k] = f.radius_m;
       }
-      std::vector<double> keep(n_facets);
+      std::vector<float> keep(n_facets);
       std::vector<std::uint32_t> kept(n_facets);
-      std::vector<double> axis1_x(n_facets), axis1_y(n_facets), axis1_z(n_facets), cos1(n_facets);
-      std::vector<double> axis2_x(n_facets), axis2_y(n_facets), axis2_z(n_facets);
+      std::vector<float> axis1_x(n_facets), axis1_y(n_facets), axis1_z(n_facets), cos1(n_facets);
+      std::vector<float> axis2_x(n_facets), axis2_y(n_facets), axis2_z(n_facets);
       FacetPair pair;
       double lowest_z = 1.0;
       for (const Eigen::Vector3d& s : directions) lowest_z = std::min(lowest_z, s.z());
@@ -1660,12 +1666,13 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         std::size_t n_kept = 0;
         for (std::size_t b = 0; b < n_facets; ++b) {
           kept[n_kept] = static_cast<std::uint32_t>(b);
-          n_kept += keep[b] != 0.0 ? 1 : 0;
+          n_kept += keep[b] != 0.0F ? 1 : 0;
         }
         for (std::size_t kept_index = 0; kept_index < n_kept; ++kept_index) {
           const std::size_t b = kept[kept_index];
-          if (mark_within_cones(sky[0].data(), sky[1].data(), sky[2].data(), n_sat, Eigen::Vector3d(axis1_x[b], axis1_y[b], axis1_z[b]),
-                                cos1[b], Eigen::Vector3d(axis2_x[b], axis2_y[b], axis2_z[b]), cos_a, within.data()) == 0) {
+          if (mark_within_cones(sky[0].data(), sky[1].data(), sky[2].data(), n_sat, axis1_x[b], axis1_y[b], axis1_z[b], cos1[b],
+                                axis2_x[b], axis2_y[b], axis2_z[b], cos_a <= -2.0 ? -2.0F : static_cast<float>(cos_a) - 1e-4F,
+                                within.data()) == 0) {
             continue;
           }
           if (!make_facet_pair(a, b, second_order_facets, plane_a, image_of, pair)) continue;
