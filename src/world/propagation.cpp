@@ -253,6 +253,39 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_keller_p
   }
 }
 
+// Spheres [begin, end) that may hold an edge point of a path over the edge, then off a facet: on
+// the facet's side towards the receiver (normal . x > plane), within the cone from the receiver's
+// image through the facet's sphere (when `cone`: axis, sine and cosine of its half angle), and near
+// the image's line towards s (may_reach_line). 1 where a sphere may (the tests of the search's
+// may_hold, a hair loose), 0 where none of its points can; may_hold[k - begin]. One loop the
+// compiler vectorises.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_spheres(
+    const double* __restrict cx, const double* __restrict cy, const double* __restrict cz, const double* __restrict radius,
+    std::size_t begin, std::size_t end, const Eigen::Vector3d& normal, double plane, const Eigen::Vector3d& image, bool cone,
+    const Eigen::Vector3d& axis, double cone_sin, double cone_cos, const Eigen::Vector3d& s, double excess_max_m,
+    double* __restrict may_hold) {
+  const double nx = normal.x(), ny = normal.y(), nz = normal.z();
+  const double ix = image.x(), iy = image.y(), iz = image.z();
+  const double ux = axis.x(), uy = axis.y(), uz = axis.z();
+  const double sx = s.x(), sy = s.y(), sz = s.z();
+  for (std::size_t k = begin; k < end; ++k) {
+    const double r = radius[k];
+    const int above = static_cast<int>(nx * cx[k] + ny * cy[k] + nz * cz[k] - plane + r > -1e-9);
+    const double mx = cx[k] - ix, my = cy[k] - iy, mz = cz[k] - iz;
+    const double d2 = mx * mx + my * my + mz * mz;
+    const double d = std::sqrt(d2);
+    const double sin_b = std::min(r / std::max(d, 1e-300), 1.0);
+    const double cos_b = std::sqrt(std::max(1.0 - sin_b * sin_b, 0.0));
+    const int in_cone = static_cast<int>(!cone) | static_cast<int>(d <= r) |
+                        static_cast<int>(mx * ux + my * uy + mz * uz >= d * (cone_cos * cos_b - cone_sin * sin_b - 1e-9) - 1e-9 * (d + 1.0));
+    const double along = mx * sx + my * sy + mz * sz;
+    const double h = std::max(std::sqrt(std::max(d2 - along * along, 0.0)) - r, 0.0);
+    const int near_line = static_cast<int>(along >= -r - 1e-9) &
+                          static_cast<int>(h * h <= 2.0 * excess_max_m * (d + r) * (1.0 + 1e-9) + 1e-9);
+    may_hold[k - begin] = (above & in_cone & near_line) != 0 ? 1.0 : 0.0;
+  }
+}
+
 // Whether any point within radius_m of centre_m can lie on a path from `origin` over it towards
 // direction s with at most excess_max_m more length than the straight line: the excess over a
 // point at distance h from the line and D from the origin is at least h^2 / (2 D).
@@ -577,6 +610,17 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       arrays.ay.push_back(edge.axis.y());
       arrays.az.push_back(edge.axis.z());
       arrays.length.push_back(edge.length_m);
+    }
+  }
+  // Each object's clusters as arrays.
+  out->object_cluster_arrays_.resize(out->object_clusters_.size());
+  for (std::size_t o = 0; o < out->object_clusters_.size(); ++o) {
+    SphereArrays& arrays = out->object_cluster_arrays_[o];
+    for (const EdgeCluster& cluster : out->object_clusters_[o]) {
+      arrays.cx.push_back(cluster.centre_m.x());
+      arrays.cy.push_back(cluster.centre_m.y());
+      arrays.cz.push_back(cluster.centre_m.z());
+      arrays.radius.push_back(cluster.radius_m);
     }
   }
   // The spheres around each object's clusters and groups of them.
@@ -2023,8 +2067,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (v && outline(e)) try_edge(current, *v, e);
         }
       } else {
-        // The edges of a cluster whose Keller point may lie inside them, tested at once.
+        // The edges of a cluster whose Keller point may lie inside them, tested at once; likewise
+        // the clusters of a group that may hold an edge point.
         std::array<double, 64> inside{};
+        std::array<double, kClustersPerGroup> cluster_holds{};
         for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
           const NearFacet& nf = second_order_facets[f_index];
           const std::optional<FacetSight> v = facet_for_satellite(f_index);
@@ -2034,11 +2080,16 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
             if (!hold(object_spheres[rank].centre_m, object_spheres[rank].radius_m)) continue;
             const std::size_t object = objects[rank];
             const auto& clusters = object_clusters_[object];
+            const SphereArrays& spheres = object_cluster_arrays_[object];
             for (std::size_t g = 0; g < group_spheres[rank]->size(); ++g) {
               if (!hold((*group_spheres[rank])[g].centre_m, (*group_spheres[rank])[g].radius_m)) continue;
-              for (std::size_t c_index = g * kClustersPerGroup; c_index < std::min(clusters.size(), (g + 1) * kClustersPerGroup); ++c_index) {
+              // The group's clusters at once.
+              const std::size_t first = g * kClustersPerGroup, last = std::min(clusters.size(), (g + 1) * kClustersPerGroup);
+              screen_spheres(spheres.cx.data(), spheres.cy.data(), spheres.cz.data(), spheres.radius.data(), first, last, nf.normal,
+                             v->plane, v->image, v->cone, v->axis, v->sin, v->cos, s, blocked_excess_max_m, cluster_holds.data());
+              for (std::size_t c_index = first; c_index < last; ++c_index) {
                 const EdgeCluster& cluster = clusters[c_index];
-                if (!hold(cluster.centre_m, cluster.radius_m)) continue;
+                if (cluster_holds[c_index - first] == 0.0) continue;
                 const EdgeArrays& arrays = object_edge_arrays_[object];
                 for (std::size_t begin = cluster.begin; begin < cluster.end; begin += inside.size()) {
                   const std::size_t end = std::min(cluster.end, begin + inside.size());

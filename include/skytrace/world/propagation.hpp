@@ -260,6 +260,11 @@ class PropagationScene final : public PathQuery {
     std::vector<double> sx, sy, sz, ax, ay, az, length;
   };
   std::vector<EdgeArrays> object_edge_arrays_;
+  // Per object, its edge clusters' spheres as arrays (centre, radius), to test many at once.
+  struct SphereArrays {
+    std::vector<double> cx, cy, cz, radius;
+  };
+  std::vector<SphereArrays> object_cluster_arrays_;
   std::unordered_map<std::string, std::size_t> object_index_;
   // Kept per antenna point: one per band or settings in use (a GPS and a GLONASS signal search
   // with different permittivities).
