@@ -286,6 +286,43 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_spheres(
   }
 }
 
+// visit(k) for each edge k in [begin, end) of an object's edge arrays whose Keller point from
+// `origin` towards s may lie inside it (screen_keller_points, in chunks), in order.
+template <class EdgeArrays, class Visit>
+void for_each_edge_keller_may_hit(const EdgeArrays& arrays, std::size_t begin, std::size_t end, const Eigen::Vector3d& origin,
+                                  const Eigen::Vector3d& s, Visit&& visit) {
+  std::array<double, 64> inside;
+  for (std::size_t first = begin; first < end; first += inside.size()) {
+    const std::size_t last = std::min(end, first + inside.size());
+    screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(), arrays.az.data(),
+                         arrays.length.data(), first, last, origin, s, inside.data());
+    for (std::size_t k = first; k < last; ++k) {
+      if (inside[k - first] != 0.0) visit(k);
+    }
+  }
+}
+
+// A double bounce's second cone is reflected in B's plane: a little wider than the first.
+constexpr double kMirroredConeWider = 1e-7;
+
+// The cone from `apex` through a facet's bounding sphere: unit axis, the cosine of its half angle
+// less `wider`, and the sine; a cosine of -2 when the apex lies within the sphere (no cone).
+struct SphereCone {
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  double cos = -2.0, sin = 1.0;
+};
+SphereCone sphere_cone(const Facet& f, const Eigen::Vector3d& apex, double wider) {
+  SphereCone cone;
+  const Eigen::Vector3d to_centre = f.centre_m - apex;
+  const double distance_m = to_centre.norm();
+  if (distance_m > f.radius_m * (1.0 + 1e-9) + 1e-9) {
+    cone.axis = to_centre / distance_m;
+    cone.sin = f.radius_m / distance_m;
+    cone.cos = std::sqrt(1.0 - cone.sin * cone.sin) - wider;
+  }
+  return cone;
+}
+
 // Whether any point within radius_m of centre_m can lie on a path from `origin` over it towards
 // direction s with at most excess_max_m more length than the straight line: the excess over a
 // point at distance h from the line and D from the origin is at least h^2 / (2 D).
@@ -1177,22 +1214,18 @@ bool PropagationScene::make_facet_pair(std::size_t a_index, std::size_t b_index,
   pair.hb = hb;
   pair.nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);
   pair.image_ab = image_a - 2.0 * std::abs(hb) * pair.nb;
-  const Eigen::Vector3d to_b = fb.centre_m - pair.image_ab;
-  const double distance_m = to_b.norm();
-  if (distance_m > fb.radius_m * (1.0 + 1e-9) + 1e-9) {
-    pair.cone_axis = to_b / distance_m;
-    const double sin_half = fb.radius_m / distance_m;
-    pair.cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-9;  // a hair wide
+  const SphereCone to_b = sphere_cone(fb, pair.image_ab, 1e-9);  // a hair wide
+  if (to_b.cos > -2.0) {
+    pair.cone_axis = to_b.axis;
+    pair.cone_cos = to_b.cos;
   }
-  const Eigen::Vector3d to_a = fa.centre_m - image_a;
-  const double distance_a_m = to_a.norm();
-  if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
+  // Wider: the axis is reflected.
+  const SphereCone to_a = sphere_cone(fa, image_a, kMirroredConeWider);
+  if (to_a.cos > -2.0) {
     // Householder reflection in B's plane: the direction from the first image to A becomes a
     // satellite direction.
-    const Eigen::Vector3d axis = to_a / distance_a_m;
-    pair.mirrored_cone_axis = axis - 2.0 * pair.nb.dot(axis) * pair.nb;
-    const double sin_half = fa.radius_m / distance_a_m;
-    pair.mirrored_cone_cos = std::sqrt(1.0 - sin_half * sin_half) - 1e-7;  // wider: the axis was reflected
+    pair.mirrored_cone_axis = to_a.axis - 2.0 * pair.nb.dot(to_a.axis) * pair.nb;
+    pair.mirrored_cone_cos = to_a.cos;
   }
   return true;
 }
@@ -1692,17 +1725,9 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       for (std::size_t a = 0; a < n_facets; ++a) {
         const Facet& fa = facets_[second_order_facets[a].index];
         // A's mirrored cone before the mirror, as make_facet_pair forms it.
-        const Eigen::Vector3d to_a = fa.centre_m - image_of[a];
-        const double distance_a_m = to_a.norm();
-        Eigen::Vector3d axis_a = Eigen::Vector3d::Zero();
-        double cos_a = -2.0, sin_a = 1.0;
-        if (distance_a_m > fa.radius_m * (1.0 + 1e-9) + 1e-9) {
-          axis_a = to_a / distance_a_m;
-          sin_a = fa.radius_m / distance_a_m;
-          cos_a = std::sqrt(1.0 - sin_a * sin_a) - 1e-7;
-        }
+        const SphereCone cone_a = sphere_cone(fa, image_of[a], kMirroredConeWider);
         screen_facet_pairs(arrays, n_facets, a, image_of[a], second_order_facets[a].normal, plane_a[a], fa.centre_m, fa.radius_m,
-                           axis_a, cos_a, sin_a, lowest_z, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
+                           cone_a.axis, cone_a.cos, cone_a.sin, lowest_z, keep.data(), axis1_x.data(), axis1_y.data(), axis1_z.data(), cos1.data(),
                            axis2_x.data(), axis2_y.data(), axis2_z.data());
         pairs.clear();
         for (auto& list : candidates) list.clear();
@@ -1715,7 +1740,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         for (std::size_t kept_index = 0; kept_index < n_kept; ++kept_index) {
           const std::size_t b = kept[kept_index];
           if (mark_within_cones(sky[0].data(), sky[1].data(), sky[2].data(), n_sat, axis1_x[b], axis1_y[b], axis1_z[b], cos1[b],
-                                axis2_x[b], axis2_y[b], axis2_z[b], cos_a <= -2.0 ? -2.0F : static_cast<float>(cos_a) - 1e-4F,
+                                axis2_x[b], axis2_y[b], axis2_z[b], cone_a.cos <= -2.0 ? -2.0F : static_cast<float>(cone_a.cos) - 1e-4F,
                                 within.data()) == 0) {
             continue;
           }
@@ -1849,19 +1874,11 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (c >= entry.cos_min && c <= entry.cos_max) try_knife_edge(object_edges_[object][entry.edge]);
         }
       } else {
-        std::array<double, 64> inside{};  // the edges whose Keller point may lie inside them
         for (const std::size_t object : objects) {
-          const EdgeArrays& arrays = object_edge_arrays_[object];
           for (const EdgeCluster& cluster : object_clusters_[object]) {
             if (!may_reach(cluster.centre_m, cluster.radius_m)) continue;
-            for (std::size_t begin = cluster.begin; begin < cluster.end; begin += inside.size()) {
-              const std::size_t end = std::min(cluster.end, begin + inside.size());
-              screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(),
-                                   arrays.az.data(), arrays.length.data(), begin, end, r, s, inside.data());
-              for (std::size_t k = begin; k < end; ++k) {
-                if (inside[k - begin] != 0.0) try_knife_edge(object_edges_[object][k]);
-              }
-            }
+            for_each_edge_keller_may_hit(object_edge_arrays_[object], cluster.begin, cluster.end, r, s,
+                                         [&](std::size_t k) { try_knife_edge(object_edges_[object][k]); });
           }
         }
       }
@@ -2067,9 +2084,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
           if (v && outline(e)) try_edge(current, *v, e);
         }
       } else {
-        // The edges of a cluster whose Keller point may lie inside them, tested at once; likewise
-        // the clusters of a group that may hold an edge point.
-        std::array<double, 64> inside{};
+        // The clusters of a group that may hold an edge point, tested at once.
         std::array<double, kClustersPerGroup> cluster_holds{};
         for (std::size_t f_index = 0; f_index < second_order_facets.size(); ++f_index) {
           const NearFacet& nf = second_order_facets[f_index];
@@ -2090,16 +2105,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
               for (std::size_t c_index = first; c_index < last; ++c_index) {
                 const EdgeCluster& cluster = clusters[c_index];
                 if (cluster_holds[c_index - first] == 0.0) continue;
-                const EdgeArrays& arrays = object_edge_arrays_[object];
-                for (std::size_t begin = cluster.begin; begin < cluster.end; begin += inside.size()) {
-                  const std::size_t end = std::min(cluster.end, begin + inside.size());
-                  screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(),
-                                       arrays.az.data(), arrays.length.data(), begin, end, v->image, s, inside.data());
-                  for (std::size_t k = begin; k < end; ++k) {
-                    const std::size_t e = object_edges_[object][k];
-                    if (inside[k - begin] != 0.0 && outline(e)) try_edge(f_index, *v, e);
-                  }
-                }
+                for_each_edge_keller_may_hit(object_edge_arrays_[object], cluster.begin, cluster.end, v->image, s, [&](std::size_t k) {
+                  const std::size_t e = object_edges_[object][k];
+                  if (outline(e)) try_edge(f_index, *v, e);
+                });
               }
             }
           }
@@ -2223,35 +2232,27 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     const Eigen::Vector3d mirrored = s - 2.0 * ns * nf.normal;
     const double plane = nf.normal.dot(r) - nf.height_m;  // nf.normal . x = plane (the receiver's side lit)
     std::vector<EdgeHit> found;
-    const EdgeArrays& arrays = object_edge_arrays_[hidden.object];
-    std::array<double, 64> inside{};  // the edges whose Keller point may lie inside them
     for (const EdgeCluster& cluster : object_clusters_[hidden.object]) {
       if (!may_reach_line(r, mirrored, blocked_excess_max_m, cluster.centre_m, cluster.radius_m)) continue;
-      for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
-        if ((k - cluster.begin) % inside.size() == 0) {
-          screen_keller_points(arrays.sx.data(), arrays.sy.data(), arrays.sz.data(), arrays.ax.data(), arrays.ay.data(),
-                               arrays.az.data(), arrays.length.data(), k, std::min(cluster.end, k + inside.size()), r, mirrored,
-                               inside.data());
-        }
-        if (inside[(k - cluster.begin) % inside.size()] == 0.0) continue;
+      for_each_edge_keller_may_hit(object_edge_arrays_[hidden.object], cluster.begin, cluster.end, r, mirrored, [&](std::size_t k) {
         const std::size_t e = object_edges_[hidden.object][k];
         const DiffractionEdge& edge = edges_[e];
         // On the object's outline as the reflected wave sees it.
-        if (edge.face_normal_a.dot(mirrored) * edge.face_normal_b.dot(mirrored) > 0.0) continue;
-        if (!may_reach_line(r, mirrored, blocked_excess_max_m, edge.midpoint_m, edge.half_length_m)) continue;
+        if (edge.face_normal_a.dot(mirrored) * edge.face_normal_b.dot(mirrored) > 0.0) return;
+        if (!may_reach_line(r, mirrored, blocked_excess_max_m, edge.midpoint_m, edge.half_length_m)) return;
         const std::optional<Eigen::Vector3d> keller = keller_point(edge, r, mirrored);
-        if (!keller) continue;
+        if (!keller) return;
         const Eigen::Vector3d& q = *keller;
         const double d2 = (q - r).norm();
-        if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(mirrored) <= 0.0) continue;
+        if (d2 < 1e-3 || d2 > settings.radius_m || (q - r).dot(mirrored) <= 0.0) return;
         // The receiver in the edge's shadow, the edge on the facet's lit side.
-        if ((r + (q - r).dot(mirrored) * mirrored - q).dot(edge.outward) >= 0.0) continue;
-        if (nf.normal.dot(q) - plane <= 1e-6) continue;
+        if ((r + (q - r).dot(mirrored) * mirrored - q).dot(edge.outward) >= 0.0) return;
+        if (nf.normal.dot(q) - plane <= 1e-6) return;
         const double excess = d2 - mirrored.dot(q - r);
-        if (excess > blocked_excess_max_m) continue;
+        if (excess > blocked_excess_max_m) return;
         const double v = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
         found.push_back(EdgeHit{e, q, excess, v, knife_edge_loss_db(v)});
-      }
+      });
     }
     std::sort(found.begin(), found.end(), [](const EdgeHit& a, const EdgeHit& b) { return a.loss_db < b.loss_db; });
     if (found.size() > 4 * kMaxDiffractedPaths) found.resize(4 * kMaxDiffractedPaths);

@@ -531,22 +531,34 @@ TEST(Propagation, DefaultPathQueryGivesTheDirectPathOnly) {
 namespace skytrace::world {
 namespace {
 
+// A concrete wall of the given size centred at `centre` (its south face at y = 10 m when 1 m thick
+// at y = 10.5), and a 10 m high block 5 m south of the origin that hides satellites low in the south.
+std::unique_ptr<PropagationScene> wall_behind_block(const Eigen::Vector3d& wall_size, const Eigen::Vector3d& centre) {
+  WorldModel w;
+  w.objects.push_back(placed("wall", make_box(wall_size), centre, MaterialClass::kConcrete));
+  w.objects.push_back(placed("block", make_box({40, 1, 10}), {0, -5, 5}, MaterialClass::kConcrete));
+  return propagation(w);
+}
+
+// Diffuse scattering only, as the scattering tests search.
+PathSearchSettings scattering_only() {
+  PathSearchSettings settings;
+  settings.diffraction = false;
+  settings.max_reflection_order = 1;
+  settings.scattering_coefficient = 0.4;
+  return settings;
+}
+
 // Diffuse scattering (effective roughness, Lambertian): a satellite hidden by a low block to the
 // south lights a 40 x 20 m wall 10 m north of the receiver from above the block; the wall's
 // scattered power is the integral of S^2 |Gamma|^2 cos(theta_i) cos(theta_s) / (pi d^2) over its
 // lit part, here summed on a 0.1 m grid independently of the 2 m patches of the model.
 TEST(Propagation, DiffuseScatteringOffALitWallMatchesTheLambertianIntegral) {
-  WorldModel w;
-  w.objects.push_back(placed("wall", make_box({40, 1, 20}), {0, 10.5, 10}, MaterialClass::kConcrete));
-  w.objects.push_back(placed("block", make_box({40, 1, 10}), {0, -5, 5}, MaterialClass::kConcrete));
-  const auto scene = propagation(w);
+  const auto scene = wall_behind_block({40, 1, 20}, {0, 10.5, 10});
   const Eigen::Vector3d rx(0.0, 0.0, 1.5);
   const Eigen::Vector3d s = enu_direction(180.0, 30.0);
-  PathSearchSettings settings;
-  settings.diffraction = false;
-  settings.max_reflection_order = 1;
+  PathSearchSettings settings = scattering_only();
   settings.min_relative_power_db = -60.0;
-  settings.scattering_coefficient = 0.4;
   const PathSet set = scene->paths(rx, {s}, settings)[0];
   ASSERT_TRUE(set.direct.blocked);
   const SignalPath* scattered = find_path(set, PathType::kScattered);
@@ -606,17 +618,10 @@ TEST(Propagation, DiffuseScatteringOffALitWallMatchesTheLambertianIntegral) {
 // 2 m) lit over a block keeps its path with the threshold just below its power, with and without the
 // directive lobe, and the path the same to the bit; just above, none.
 TEST(Propagation, ScatteringKeepsAFacetWhosePowerJustReachesTheThreshold) {
-  WorldModel w;
-  w.objects.push_back(placed("wall", make_box({4, 1, 2}), {0, 10.5, 9}, MaterialClass::kConcrete));
-  w.objects.push_back(placed("block", make_box({40, 1, 10}), {0, -5, 5}, MaterialClass::kConcrete));
-  const auto scene = propagation(w);
+  const auto scene = wall_behind_block({4, 1, 2}, {0, 10.5, 9});
   const Eigen::Vector3d rx(0.3, 0.0, 1.5);
   const Eigen::Vector3d s = enu_direction(180.0, 30.0);
-  PathSearchSettings settings;
-  settings.diffraction = false;
-  settings.max_reflection_order = 1;
-  settings.min_relative_power_db = -90.0;
-  settings.scattering_coefficient = 0.4;
+  PathSearchSettings settings = scattering_only();
   for (const int exponent : {0, 4}) {
     settings.scattering_lobe_exponent = exponent;
     settings.min_relative_power_db = -90.0;
