@@ -631,8 +631,12 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
     // engines keep state from epoch to epoch): the observations, then (when a sink wants them) the
     // fixes, then the writing. The stages share the cores; three of them on two cores measured
     // faster than two (docs/performance.md).
-    constexpr size_t kBatchEpochs = 64;
-    EpochQueue observed(8), solved(8);
+    // Small batches and short queues: the epochs in flight (8 x 16 per queue, about 50 kB each with
+    // truth) stay within the shared cache between the core that makes them and the one that reads
+    // them; 64 x 8 went through memory and cost 8 % more CPU than one thread (docs/performance.md).
+    constexpr size_t kBatchEpochs = 8;
+    constexpr size_t kQueuedBatches = 16;
+    EpochQueue observed(kQueuedBatches), solved(kQueuedBatches);
     const bool fix_stage = computes_fixes;
     EpochQueue& to_writer = fix_stage ? solved : observed;
     std::optional<Error> producer_error, fixer_error;

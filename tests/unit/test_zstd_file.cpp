@@ -57,7 +57,7 @@ TEST(ZstdFile, RoundTripInPieces) {
 // the writes are cut.
 TEST(ZstdFile, BackgroundThreadWritesTheSameBytes) {
   const auto dir = test::make_temp_dir("zstd_file_background");
-  const std::string text = sample_table(300000);  // about 12 MB: a dozen chunks handed over
+  const std::string text = sample_table(300000);  // about 12 MB: some fifty chunks handed over
   std::string reference;
   for (const bool background : {false, true}) {
     for (const size_t piece : {size_t{97}, size_t{4093}, size_t{3} << 20}) {

@@ -18,7 +18,7 @@ struct ZstdWriteOptions {
   // Level 1: the fastest of the standard levels, and on truth.csv also the smallest of 1..3
   // (docs/performance.md, "truth.csv.zst").
   int level = 1;
-  // Compress on a thread of this writer's own, fed in chunks of about 1 MiB: the same bytes as on
+  // Compress on a thread of this writer's own, fed in chunks of about 256 KiB: the same bytes as on
   // the caller's thread (libzstd's single-threaded stream does not depend on how its input is
   // cut), while write() only copies (a run's writer thread formats the next rows meanwhile).
   bool background_thread = false;
@@ -49,7 +49,7 @@ class ZstdFileWriter {
   struct Background;
   ZstdFileWriter(std::filesystem::path path, std::FILE* file, std::unique_ptr<Context> context);
   [[nodiscard]] Status drain(int end_op, std::string_view bytes);
-  // Background thread: hands the pending chunk over (waiting while two are queued).
+  // Background thread: hands the pending chunk over (waiting while four are queued).
   [[nodiscard]] Status hand_over();
   // Background thread: waits until every chunk is compressed, stops the thread; its status.
   [[nodiscard]] Status stop_background();
