@@ -67,17 +67,29 @@ const std::array<double, 91>& directive_lobe_integrals(int exponent) {
   if (!inserted) return it->second;
   constexpr int kSteps = 90;  // polar angle steps over 90 deg
   const double d_theta = 0.5 * std::numbers::pi / kSteps, d_phi = 2.0 * std::numbers::pi / (4 * kSteps);
+  // The grid's sines and cosines once (they were taken at every point of every incidence: half the
+  // table's cost; the same values, so the same table).
+  std::array<double, kSteps> sin_theta{}, cos_theta{};
+  std::array<double, 4 * kSteps> sin_phi{}, cos_phi{};
+  for (int a = 0; a < kSteps; ++a) {
+    const double theta = (a + 0.5) * d_theta;
+    sin_theta[static_cast<std::size_t>(a)] = std::sin(theta);
+    cos_theta[static_cast<std::size_t>(a)] = std::cos(theta);
+  }
+  for (int b = 0; b < 4 * kSteps; ++b) {
+    const double phi = (b + 0.5) * d_phi;
+    sin_phi[static_cast<std::size_t>(b)] = std::sin(phi);
+    cos_phi[static_cast<std::size_t>(b)] = std::cos(phi);
+  }
   for (int incidence = 0; incidence <= 90; ++incidence) {
     const double ti = incidence * std::numbers::pi / 180.0;
     // Normal along z; the specular direction in the x-z plane.
     const Eigen::Vector3d specular(std::sin(ti), 0.0, std::cos(ti));
     double sum = 0.0;
-    for (int a = 0; a < kSteps; ++a) {
-      const double theta = (a + 0.5) * d_theta;
-      for (int b = 0; b < 4 * kSteps; ++b) {
-        const double phi = (b + 0.5) * d_phi;
-        const Eigen::Vector3d w(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
-        sum += std::pow(0.5 * (1.0 + specular.dot(w)), exponent) * std::sin(theta) * d_theta * d_phi;
+    for (std::size_t a = 0; a < sin_theta.size(); ++a) {
+      for (std::size_t b = 0; b < sin_phi.size(); ++b) {
+        const Eigen::Vector3d w(sin_theta[a] * cos_phi[b], sin_theta[a] * sin_phi[b], cos_theta[a]);
+        sum += std::pow(0.5 * (1.0 + specular.dot(w)), exponent) * sin_theta[a] * d_theta * d_phi;
       }
     }
     it->second[static_cast<std::size_t>(incidence)] = sum;
