@@ -28,7 +28,8 @@ ZstdFileWriter::ZstdFileWriter(std::filesystem::path path, std::FILE* file, std:
 
 namespace {
 // Chunks of 256 KiB, four queued at most: read by the compression thread while they are still in
-// the shared cache (1 MiB chunks measured 2-4 % slower in a run with truth: docs/performance.md).
+// the shared cache (with the run's 8-epoch batches, 1 MiB chunks took the 6 h realistic run 2.38 s
+// against 2.35 s on two threads, about the host's noise: docs/performance.md, "Threads").
 constexpr size_t kChunkBytes = size_t{1} << 18;
 constexpr size_t kMaxQueuedChunks = 4;
 }  // namespace
