@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -777,15 +778,21 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
     const int x1 = std::min(grid_nx_ - 1, static_cast<int>(std::floor((origin_m.x() + r - grid_min_.x()) / cell_m_)));
     const int y0 = std::max(0, static_cast<int>(std::floor((origin_m.y() - r - grid_min_.y()) / cell_m_)));
     const int y1 = std::min(grid_ny_ - 1, static_cast<int>(std::floor((origin_m.y() + r - grid_min_.y()) / cell_m_)));
-    std::vector<std::size_t> found;
+    // The facets of those cells, each once, in ascending order: a facet spans several cells, and
+    // marking bits then reading them in order is cheaper than sorting the cells' lists.
+    std::vector<std::uint64_t> marked((facets_.size() + 63) / 64, 0);
     for (int x = x0; x <= x1; ++x) {
       for (int y = y0; y <= y1; ++y) {
         const auto cell = static_cast<std::size_t>(y) * static_cast<std::size_t>(grid_nx_) + static_cast<std::size_t>(x);
-        found.insert(found.end(), facet_cells_[cell].begin(), facet_cells_[cell].end());
+        for (const std::size_t i : facet_cells_[cell]) marked[i / 64] |= std::uint64_t{1} << (i % 64);
       }
     }
-    std::sort(found.begin(), found.end());
-    found.erase(std::unique(found.begin(), found.end()), found.end());
+    std::vector<std::size_t> found;
+    for (std::size_t word = 0; word < marked.size(); ++word) {
+      for (std::uint64_t bits = marked[word]; bits != 0; bits &= bits - 1) {
+        found.push_back(word * 64 + static_cast<std::size_t>(std::countr_zero(bits)));
+      }
+    }
     std::vector<std::complex<double>> eta_of(static_cast<std::size_t>(MaterialClass::kUnknown) + 1);
     for (std::size_t m = 0; m < eta_of.size(); ++m) {
       eta_of[m] = complex_permittivity(static_cast<MaterialClass>(m), settings.frequency_hz);
@@ -1554,22 +1561,23 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   if (settings.max_reflection_order >= 1) {
     for (auto* v : {&reflectors.nx, &reflectors.ny, &reflectors.nz, &reflectors.height, &reflectors.ix, &reflectors.iy,
                     &reflectors.iz, &reflectors.cx, &reflectors.cy, &reflectors.cz, &reflectors.radius2}) {
-      v->reserve(near_facets.size());
+      v->resize(near_facets.size());
     }
-    for (const NearFacet& nf : near_facets) {
+    for (std::size_t k = 0; k < near_facets.size(); ++k) {
+      const NearFacet& nf = near_facets[k];
       const Facet& f = facets_[nf.index];
       const Eigen::Vector3d image = r - 2.0 * nf.height_m * nf.normal;
-      reflectors.nx.push_back(nf.normal.x());
-      reflectors.ny.push_back(nf.normal.y());
-      reflectors.nz.push_back(nf.normal.z());
-      reflectors.height.push_back(nf.height_m);
-      reflectors.ix.push_back(image.x());
-      reflectors.iy.push_back(image.y());
-      reflectors.iz.push_back(image.z());
-      reflectors.cx.push_back(f.centre_m.x());
-      reflectors.cy.push_back(f.centre_m.y());
-      reflectors.cz.push_back(f.centre_m.z());
-      reflectors.radius2.push_back(f.radius_m * f.radius_m);
+      reflectors.nx[k] = nf.normal.x();
+      reflectors.ny[k] = nf.normal.y();
+      reflectors.nz[k] = nf.normal.z();
+      reflectors.height[k] = nf.height_m;
+      reflectors.ix[k] = image.x();
+      reflectors.iy[k] = image.y();
+      reflectors.iz[k] = image.z();
+      reflectors.cx[k] = f.centre_m.x();
+      reflectors.cy[k] = f.centre_m.y();
+      reflectors.cz[k] = f.centre_m.z();
+      reflectors.radius2[k] = f.radius_m * f.radius_m;
     }
   }
   // Double bounces between the facets within second_order_radius_m (their number grows as its square).
