@@ -749,22 +749,26 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
     });
     if (cached) return cached;
   }
-  // The patches the sets kept so far made with this patch size, by facet.
-  std::unordered_map<std::size_t, std::shared_ptr<const std::vector<FacetPatch>>> made_patches;
+  // The sets kept so far with this patch size: their patches are reused (a facet's patches depend
+  // on the facet and the patch size alone). Every set lists its facets in ascending order, as the
+  // new one will, so one cursor per set finds a facet's patches as the new set's facets go by.
+  std::vector<std::shared_ptr<const Candidates>> kept;
   if (scattering) {
-    std::vector<std::shared_ptr<const Candidates>> kept;
-    {
-      const std::lock_guard lock(cache_mutex_);
-      for (const auto& set : candidate_sets_.kept) {
-        if (set && set->scattering_patch_m == scattering_patch_m) kept.push_back(set);
-      }
-    }
-    for (const auto& set : kept) {
-      for (std::size_t k = 0; k < set->facets.size(); ++k) {
-        if (set->patches[k]) made_patches.emplace(set->facets[k].index, set->patches[k]);
-      }
+    const std::lock_guard lock(cache_mutex_);
+    for (const auto& set : candidate_sets_.kept) {
+      if (set && set->scattering_patch_m == scattering_patch_m) kept.push_back(set);
     }
   }
+  std::vector<std::size_t> kept_cursor(kept.size(), 0);
+  const auto made_patches = [&](std::size_t facet) -> std::shared_ptr<const std::vector<FacetPatch>> {
+    for (std::size_t j = 0; j < kept.size(); ++j) {
+      const Candidates& set = *kept[j];
+      std::size_t& at = kept_cursor[j];
+      while (at < set.facets.size() && set.facets[at].index < facet) ++at;
+      if (at < set.facets.size() && set.facets[at].index == facet && set.patches[at]) return set.patches[at];
+    }
+    return nullptr;
+  };
   auto c = std::make_shared<Candidates>();
   c->origin_m = origin_m;
   c->radius_m = settings.radius_m;
@@ -811,8 +815,8 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
   for (std::size_t k = 0; scattering && k < c->facets.size(); ++k) {
     const Facet& f = facets_[c->facets[k].index];
     if ((origin_m.cwiseMax(f.min_m).cwiseMin(f.max_m) - origin_m).norm() > scattering_radius_m + kCandidateMargin_m) continue;
-    if (const auto made = made_patches.find(c->facets[k].index); made != made_patches.end()) {
-      c->patches[k] = made->second;
+    if (auto made = made_patches(c->facets[k].index)) {
+      c->patches[k] = std::move(made);
       continue;
     }
     auto patches = std::make_shared<std::vector<FacetPatch>>();
