@@ -438,19 +438,39 @@ double knife_edge_loss_db(double v) {
   return 6.9 + 20.0 * std::log10(std::sqrt(x * x + 1.0) + x);
 }
 
+namespace {
+
+// Facet::contains in parts, so that a caller testing many points of one facet can try only the
+// triangles near each: the point in the facet's plane coordinates, whether it lies in the facet's
+// box, and whether it lies in the triangle whose first vertex is triangles_uv[i] (boundary included).
+constexpr double kContainsSlack = 1e-9;
+
+Eigen::Vector2d plane_coordinates(const Facet& f, const Eigen::Vector3d& point_m) {
+  const Eigen::Vector3d d = point_m - f.origin_m;
+  return {d.dot(f.axis_u), d.dot(f.axis_v)};
+}
+
+bool within_box(const Facet& f, const Eigen::Vector2d& p) {
+  return !((p.array() < f.min_uv.array() - kContainsSlack).any() || (p.array() > f.max_uv.array() + kContainsSlack).any());
+}
+
+bool within_triangle(const Facet& f, const Eigen::Vector2d& p, std::size_t i) {
+  const Eigen::Vector2d& a = f.triangles_uv[i];
+  const Eigen::Vector2d e1 = f.triangles_uv[i + 1] - a, e2 = f.triangles_uv[i + 2] - a, q = p - a;
+  const double det = e1.x() * e2.y() - e1.y() * e2.x();
+  if (det == 0.0) return false;
+  const double s = (q.x() * e2.y() - q.y() * e2.x()) / det;
+  const double t = (e1.x() * q.y() - e1.y() * q.x()) / det;
+  return s >= -kContainsSlack && t >= -kContainsSlack && s + t <= 1.0 + kContainsSlack;
+}
+
+}  // namespace
+
 bool Facet::contains(const Eigen::Vector3d& point_m) const {
-  const Eigen::Vector3d d = point_m - origin_m;
-  const Eigen::Vector2d p(d.dot(axis_u), d.dot(axis_v));
-  constexpr double kSlack = 1e-9;
-  if ((p.array() < min_uv.array() - kSlack).any() || (p.array() > max_uv.array() + kSlack).any()) return false;
+  const Eigen::Vector2d p = plane_coordinates(*this, point_m);
+  if (!within_box(*this, p)) return false;
   for (std::size_t i = 0; i + 2 < triangles_uv.size(); i += 3) {
-    const Eigen::Vector2d& a = triangles_uv[i];
-    const Eigen::Vector2d e1 = triangles_uv[i + 1] - a, e2 = triangles_uv[i + 2] - a, q = p - a;
-    const double det = e1.x() * e2.y() - e1.y() * e2.x();
-    if (det == 0.0) continue;
-    const double s = (q.x() * e2.y() - q.y() * e2.x()) / det;
-    const double t = (e1.x() * q.y() - e1.y() * q.x()) / det;
-    if (s >= -kSlack && t >= -kSlack && s + t <= 1.0 + kSlack) return true;
+    if (within_triangle(*this, p, i)) return true;
   }
   return false;
 }
@@ -826,11 +846,29 @@ std::shared_ptr<const PropagationScene::Candidates> PropagationScene::candidates
     const int nu = std::max(1, static_cast<int>(std::ceil(span.x() / step)));
     const int nv = std::max(1, static_cast<int>(std::ceil(span.y() / step)));
     const double du = span.x() / nu, dv = span.y() / nv;
+    // Facet::contains for every point of the grid, trying for each row only the triangles whose
+    // v range, widened by far more than the test's slack and rounding, reaches the row: the
+    // others cannot hold its points (a ground facet has hundreds of triangles).
+    std::vector<std::vector<std::size_t>> row_triangles(static_cast<std::size_t>(nv));
+    const double reach_m = 1e-6 * (1.0 + span.norm() + f.min_uv.cwiseAbs().maxCoeff() + f.max_uv.cwiseAbs().maxCoeff());
+    for (std::size_t i = 0; i + 2 < f.triangles_uv.size(); i += 3) {
+      const double low = std::min({f.triangles_uv[i].y(), f.triangles_uv[i + 1].y(), f.triangles_uv[i + 2].y()}) - reach_m;
+      const double high = std::max({f.triangles_uv[i].y(), f.triangles_uv[i + 1].y(), f.triangles_uv[i + 2].y()}) + reach_m;
+      for (int b = 0; b < nv; ++b) {
+        const double v = f.min_uv.y() + (b + 0.5) * dv;
+        if (v >= low && v <= high) row_triangles[static_cast<std::size_t>(b)].push_back(i);
+      }
+    }
     for (int a = 0; a < nu; ++a) {
       for (int b = 0; b < nv; ++b) {
         const Eigen::Vector2d uv = f.min_uv + Eigen::Vector2d((a + 0.5) * du, (b + 0.5) * dv);
         const Eigen::Vector3d point = f.origin_m + uv.x() * f.axis_u + uv.y() * f.axis_v;
-        if (f.contains(point)) patches->push_back(FacetPatch{point, du * dv});
+        const Eigen::Vector2d p = plane_coordinates(f, point);
+        if (!within_box(f, p)) continue;
+        const auto& near = row_triangles[static_cast<std::size_t>(b)];
+        if (std::any_of(near.begin(), near.end(), [&](std::size_t i) { return within_triangle(f, p, i); })) {
+          patches->push_back(FacetPatch{point, du * dv});
+        }
       }
     }
     c->patches[k] = std::move(patches);
