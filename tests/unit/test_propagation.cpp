@@ -7,6 +7,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -525,6 +526,7 @@ TEST(Propagation, DefaultPathQueryGivesTheDirectPathOnly) {
   EXPECT_EQ(sets[1].paths[0].type, PathType::kDirect);
 }
 
+
 }  // namespace
 }  // namespace skytrace::world
 
@@ -639,6 +641,50 @@ TEST(Propagation, ScatteringKeepsAFacetWhosePowerJustReachesTheThreshold) {
     settings.min_relative_power_db += 0.002;
     EXPECT_EQ(find_path(scene->paths(rx, {s}, settings)[0], PathType::kScattered), nullptr) << "exponent " << exponent;
   }
+}
+
+// A facet's scattering patches are the points of its grid that lie in one of its triangles: a
+// wall's face cut into 1,600 triangles scatters what the same face as two triangles does (the
+// search tries, per grid row, only the triangles that reach it; dropping one that holds a point
+// would take that patch's power away).
+TEST(Propagation, ScatteringPatchesOfAFaceOfManyTrianglesAreThoseOfTwo) {
+  // The wall's south face, 40 x 20 m at y = 10 facing the receiver, as cells x cells squares.
+  const auto south_face = [](int columns, int rows) {
+    TriangleMesh mesh;
+    for (int row = 0; row <= rows; ++row) {
+      for (int column = 0; column <= columns; ++column) {
+        mesh.vertices_m.emplace_back(-20.0F + 40.0F * static_cast<float>(column) / static_cast<float>(columns), 10.0F,
+                                     20.0F * static_cast<float>(row) / static_cast<float>(rows));
+      }
+    }
+    const auto at = [&](int column, int row) { return row * (columns + 1) + column; };
+    for (int row = 0; row < rows; ++row) {
+      for (int column = 0; column < columns; ++column) {  // counter-clockwise seen from the south (-y)
+        mesh.triangles.emplace_back(at(column, row), at(column + 1, row), at(column, row + 1));
+        mesh.triangles.emplace_back(at(column + 1, row), at(column + 1, row + 1), at(column, row + 1));
+      }
+    }
+    return mesh;
+  };
+  const auto scattered_off = [&](int columns, int rows) {
+    WorldModel w;
+    w.objects.push_back(placed("wall", south_face(columns, rows), Eigen::Vector3d::Zero(), MaterialClass::kConcrete));
+    w.objects.push_back(placed("block", make_box({40, 1, 10}), {0, -5, 5}, MaterialClass::kConcrete));
+    const auto scene = propagation(w);
+    PathSearchSettings settings = scattering_only();
+    settings.min_relative_power_db = -60.0;
+    const PathSet set = scene->paths(Eigen::Vector3d(0.0, 0.0, 1.5), {enu_direction(180.0, 30.0)}, settings)[0];
+    EXPECT_TRUE(set.direct.blocked);
+    const SignalPath* path = find_path(set, PathType::kScattered);
+    return path != nullptr ? std::optional<SignalPath>(*path) : std::nullopt;
+  };
+  const std::optional<SignalPath> two = scattered_off(1, 1);
+  const std::optional<SignalPath> many = scattered_off(40, 20);
+  ASSERT_TRUE(two.has_value());
+  ASSERT_TRUE(many.has_value());
+  EXPECT_NEAR(many->power_linear() / two->power_linear(), 1.0, 1e-9);
+  EXPECT_NEAR(many->excess_delay_m, two->excess_delay_m, 1e-6);
+  EXPECT_LT((many->point_m - two->point_m).norm(), 1e-6);
 }
 
 }  // namespace
