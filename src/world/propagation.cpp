@@ -440,6 +440,11 @@ double knife_edge_loss_db(double v) {
 
 namespace {
 
+// 10^(-loss/10), a power's factor, and 10^(-loss/20), an amplitude's: exactly 1 without a loss,
+// as std::pow gives it, without the call (most rays cross no vegetation).
+double power_factor(double loss_db) { return loss_db == 0.0 ? 1.0 : std::pow(10.0, -loss_db / 10.0); }
+double amplitude_factor(double loss_db) { return loss_db == 0.0 ? 1.0 : std::pow(10.0, -loss_db / 20.0); }
+
 // Facet::contains in parts, so that a caller testing many points of one facet can try only the
 // triangles near each: the point in the facet's plane coordinates, whether it lies in the facet's
 // box, and whether it lies in the triangle whose first vertex is triangles_uv[i] (boundary included).
@@ -1092,7 +1097,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       const double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
       unlit_power[v] = power;
-      facet_potential[patch.facet] += power * std::pow(10.0, -patch.vegetation_db / 10.0);
+      facet_potential[patch.facet] += power * power_factor(patch.vegetation_db);
     }
     for (std::size_t v = 0; v < visible.size(); ++v) {
       const Patch& patch = visible[v];
@@ -1103,7 +1108,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       // Lit or not: the occlusion test alone (free rays carry the vegetation they cross).
       const RayOutcome lit = scene_->trace_line_of_sight(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();
       if (lit.blocked) continue;
-      power *= std::pow(10.0, -(patch.vegetation_db + lit.vegetation_attenuation_db) / 10.0);
+      power *= power_factor(patch.vegetation_db + lit.vegetation_attenuation_db);
       Sum& sum = sums[patch.facet];
       const Eigen::Vector3d to_point = patch.point_m - r;
       sum.power += power;
@@ -1594,7 +1599,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     out[i].direct = std::move(first_batch[i]);
     if (!out[i].direct.blocked) {
       SignalPath p;
-      p.rhcp_amplitude = std::pow(10.0, -out[i].direct.vegetation_attenuation_db / 20.0);
+      p.rhcp_amplitude = amplitude_factor(out[i].direct.vegetation_attenuation_db);
       p.arrival_direction = directions[i];
       p.vegetation_attenuation_db = out[i].direct.vegetation_attenuation_db;
       out[i].paths.push_back(std::move(p));
@@ -2275,7 +2280,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         vegetation_db += lo.vegetation_attenuation_db;
       }
       if (!clear) continue;
-      const double factor = std::pow(10.0, -vegetation_db / 20.0);
+      const double factor = amplitude_factor(vegetation_db);
       p.path.rhcp_amplitude *= factor;
       p.path.lhcp_amplitude *= factor;
       p.path.vegetation_attenuation_db = vegetation_db;
