@@ -526,7 +526,6 @@ TEST(Propagation, DefaultPathQueryGivesTheDirectPathOnly) {
   EXPECT_EQ(sets[1].paths[0].type, PathType::kDirect);
 }
 
-
 }  // namespace
 }  // namespace skytrace::world
 
@@ -648,7 +647,7 @@ TEST(Propagation, ScatteringKeepsAFacetWhosePowerJustReachesTheThreshold) {
 // search tries, per grid row, only the triangles that reach it; dropping one that holds a point
 // would take that patch's power away).
 TEST(Propagation, ScatteringPatchesOfAFaceOfManyTrianglesAreThoseOfTwo) {
-  // The wall's south face, 40 x 20 m at y = 10 facing the receiver, as cells x cells squares.
+  // The wall's south face, 40 x 20 m at y = 10 facing the receiver, as columns x rows squares.
   const auto south_face = [](int columns, int rows) {
     TriangleMesh mesh;
     for (int row = 0; row <= rows; ++row) {
