@@ -1503,6 +1503,91 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::edge_band(const Dif
   return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach_rad);
 }
 
+struct PropagationScene::ReflectorIndex {
+  using Cells = DoubleBounceIndex;
+  static constexpr std::size_t kCells = static_cast<std::size_t>(Cells::kRows * Cells::kColumns);
+  // Beyond this many facets in all cells' lists (16 MB) they start afresh: the satellites have
+  // moved on from most of the cells they hold.
+  static constexpr std::size_t kMaxEntries = 4'000'000;
+
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  std::vector<std::size_t> facets;  // the near facets (scene indices) it indexes
+  // Per facet: its normal towards the antenna; the unit vector from the antenna's image to the
+  // centre of its bounding sphere; and the cosine of the angle to that vector within which a
+  // cell's centre must lie for a direction of the cell to meet the sphere from the image (the
+  // sphere's half angle plus a cell's reach; -2: every cell, the image lies within the sphere).
+  std::vector<Eigen::Vector3d> normal, axis;
+  std::vector<double> reach_cos;
+  mutable std::mutex mutex;
+  mutable std::vector<std::shared_ptr<const std::vector<std::uint32_t>>> cells = std::vector<std::shared_ptr<const std::vector<std::uint32_t>>>(kCells);
+  mutable std::size_t entries = 0;
+
+  // The facets (indices into the near facets, ascending) on which the line from the antenna's
+  // image towards direction s may meet the plane within the bounding sphere, and s light the
+  // antenna's side: a superset of those where a first-order reflection of s can lie. The list
+  // of s's cell is made when a direction first needs it.
+  std::shared_ptr<const std::vector<std::uint32_t>> facets_towards(const Eigen::Vector3d& s) const {
+    const int cell = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * Cells::kColumns + Cells::column_of(std::atan2(s.y(), s.x()));
+    const std::lock_guard lock(mutex);
+    auto& list = cells[static_cast<std::size_t>(cell)];
+    if (list) return list;
+    if (entries >= kMaxEntries) {
+      for (auto& other : cells) other.reset();
+      entries = 0;
+    }
+    // Every direction of the cell lies within one cell size of its centre.
+    const Eigen::Vector3d& centre = Cells::cell_centres()[static_cast<std::size_t>(cell)];
+    const double lit_reach = -std::sin(Cells::kCell_rad + Cells::kMargin_rad);
+    auto made = std::make_shared<std::vector<std::uint32_t>>();
+    for (std::size_t k = 0; k < facets.size(); ++k) {
+      if (normal[k].dot(centre) >= lit_reach && (reach_cos[k] <= -2.0 || axis[k].dot(centre) >= reach_cos[k])) {
+        made->push_back(static_cast<std::uint32_t>(k));
+      }
+    }
+    entries += made->size();
+    list = std::move(made);
+    return list;
+  }
+};
+
+std::shared_ptr<const PropagationScene::ReflectorIndex> PropagationScene::reflector_index(const Eigen::Vector3d& origin_m,
+                                                                                          const std::vector<NearFacet>& facets) const {
+  {
+    const std::lock_guard lock(cache_mutex_);
+    auto cached = reflector_indexes_.find([&](const ReflectorIndex& index) {
+      return index.origin_m == origin_m && index.facets.size() == facets.size() &&
+             std::equal(facets.begin(), facets.end(), index.facets.begin(),
+                        [](const NearFacet& f, std::size_t i) { return f.index == i; });
+    });
+    if (cached) return cached;
+    // A moving antenna never comes back to the very same point: index only a point met before.
+    if (!reflector_indexes_.met_before(origin_m)) return nullptr;
+  }
+  auto index = std::make_shared<ReflectorIndex>();
+  index->origin_m = origin_m;
+  const double cell_reach_rad = ReflectorIndex::Cells::kCell_rad + ReflectorIndex::Cells::kMargin_rad;
+  for (const NearFacet& nf : facets) {
+    const Facet& f = facets_[nf.index];
+    index->facets.push_back(nf.index);
+    index->normal.push_back(nf.normal);
+    const Eigen::Vector3d to_centre = f.centre_m - (origin_m - 2.0 * nf.height_m * nf.normal);
+    const double distance_m = to_centre.norm();
+    // A hair wide: the reflection test's rounding is far below a micrometre.
+    const double radius_m = f.radius_m * (1.0 + 1e-9) + 1e-6;
+    if (!(distance_m > radius_m)) {
+      index->axis.push_back(Eigen::Vector3d::Zero());
+      index->reach_cos.push_back(-2.0);
+      continue;
+    }
+    const double reach_rad = std::asin(radius_m / distance_m) + cell_reach_rad;
+    index->axis.push_back(to_centre / distance_m);
+    index->reach_cos.push_back(reach_rad >= std::numbers::pi ? -2.0 : std::cos(reach_rad));
+  }
+  const std::lock_guard lock(cache_mutex_);
+  reflector_indexes_.keep(index);
+  return index;
+}
+
 struct PropagationScene::ReflectedEdgeIndex {
   // Beyond this many pairs in all cells (48 MB) the index starts afresh: the satellites have moved
   // on from most of the cells it holds.
@@ -1685,6 +1770,9 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
   while (v_max < 100.0 && knife_edge_loss_db(v_max) < std::min(settings.max_diffraction_loss_db, -settings.min_relative_power_db)) v_max += 0.05;
   const double blocked_excess_max_m = v_max * v_max * wavelength_m / 4.0;
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
+  // A static antenna's first-order reflectors by sky cell.
+  const std::shared_ptr<const ReflectorIndex> first_order_index =
+      settings.max_reflection_order >= 1 ? reflector_index(r, near_facets) : nullptr;
   // A static antenna's facet-edge pairs for diffraction then reflection, by sky cell.
   const std::shared_ptr<const ReflectedEdgeIndex> edge_index =
       settings.diffraction && !edges_.empty() ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m, settings.radius_m)
@@ -1848,17 +1936,15 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     // First order: the image of the receiver in the facet's plane, the line from it towards the
     // satellite meets the plane at the reflection point.
     if (settings.max_reflection_order >= 1) {
-      screen_reflections(reflectors, near_facets.size(), s, settings.radius_m, may_reflect.data());
-      for (std::size_t k = 0; k < near_facets.size(); ++k) {
-        if (may_reflect[k] == 0.0) continue;
+      const auto reflect_off = [&](std::size_t k) {
         const NearFacet& nf = near_facets[k];
         const double ns = nf.normal.dot(s);
-        if (ns <= 1e-6) continue;
+        if (ns <= 1e-6) return;
         const double t = nf.height_m / ns;  // receiver to reflection point
-        if (t > settings.radius_m) continue;
+        if (t > settings.radius_m) return;
         const Facet& f = facets_[nf.index];
         const Eigen::Vector3d point = r - 2.0 * nf.height_m * nf.normal + t * s;
-        if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) continue;
+        if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) return;
         Pending p;
         p.satellite = i;
         p.path.type = PathType::kReflected;
@@ -1869,7 +1955,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         reflect_state(p.path.rhcp_amplitude, p.path.lhcp_amplitude, fresnel_coefficients(nf.eta, ns));
         p.path.rhcp_amplitude *= specular_factor;
         p.path.lhcp_amplitude *= specular_factor;
-        if (p.path.power_linear() < min_power) continue;
+        if (p.path.power_linear() < min_power) return;
         p.path.arrival_direction = (point - r) / t;
         p.path.point_m = point;
         p.path.material = f.material;
@@ -1881,6 +1967,17 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         p.legs.push_back(Leg{point + kSurfaceOffset_m * nf.normal, s, kInf});
         first_legs.push_back(p.path.arrival_direction);
         pending.push_back(std::move(p));
+      };
+      // The facets in ascending order either way: a static antenna's listed for the direction's
+      // sky cell, else those that pass the screen of all at once (both looser than the test above).
+      if (first_order_index) {
+        const std::shared_ptr<const std::vector<std::uint32_t>> listed = first_order_index->facets_towards(s);
+        for (const std::uint32_t k : *listed) reflect_off(k);
+      } else {
+        screen_reflections(reflectors, near_facets.size(), s, settings.radius_m, may_reflect.data());
+        for (std::size_t k = 0; k < near_facets.size(); ++k) {
+          if (may_reflect[k] != 0.0) reflect_off(k);
+        }
       }
     }
     // Second order (found for every satellite before this loop, in the same order).

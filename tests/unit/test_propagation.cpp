@@ -287,7 +287,7 @@ TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
     const double azimuth = std::numbers::pi * (3.0 - std::sqrt(5.0)) * i;
     sky.emplace_back(std::sqrt(1.0 - z * z) * std::cos(azimuth), std::sqrt(1.0 - z * z) * std::sin(azimuth), z);
   }
-  int double_bounces = 0, diffracted_reflections = 0, knife_edges = 0;
+  int reflections = 0, double_bounces = 0, diffracted_reflections = 0, knife_edges = 0;
   for (const Eigen::Vector3d& rx : {Eigen::Vector3d(2.0, 3.0, 1.5), Eigen::Vector3d(-12.0, 1.0, 1.5), Eigen::Vector3d(10.0, -8.0, 20.0)}) {
     const auto full = propagation(w)->paths(rx, sky, settings);
     const auto scene = propagation(w);
@@ -307,13 +307,15 @@ TEST(Propagation, StaticAntennaIndexGivesTheSamePathsAsTheFullSearch) {
         EXPECT_EQ(a.point_m, b.point_m);
         EXPECT_EQ(a.second_point_m, b.second_point_m);
         EXPECT_EQ(a.diffraction_v, b.diffraction_v);
+        reflections += a.type == PathType::kReflected && a.reflections == 1 ? 1 : 0;
         double_bounces += a.type == PathType::kReflected && a.reflections == 2 ? 1 : 0;
         diffracted_reflections += a.type == PathType::kDiffracted && a.reflections == 1 ? 1 : 0;
         knife_edges += a.type == PathType::kDiffracted && a.reflections == 0 ? 1 : 0;
       }
     }
   }
-  EXPECT_GT(double_bounces, 100);  // enough to mean something
+  EXPECT_GT(reflections, 100);  // enough to mean something
+  EXPECT_GT(double_bounces, 100);
   EXPECT_GT(diffracted_reflections, 100);
   EXPECT_GT(knife_edges, 100);
 }

@@ -201,6 +201,11 @@ class PropagationScene final : public PathQuery {
     double cos_min = 0.0, cos_max = 0.0;
   };
   struct ReflectedEdgeIndex;
+  // First-order reflections of an antenna that stays at one point: per sky cell, the facets whose
+  // reflection point may lie on them for a direction of the cell (docs/performance.md).
+  struct ReflectorIndex;
+  // The index for an antenna found at the same point in an earlier call, else none.
+  std::shared_ptr<const ReflectorIndex> reflector_index(const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets) const;
   // The pair of facet nf (the receiver's image in its plane normal . x = plane) and the edge, with
   // its band; none when no direction within cell_reach_rad of cell_axis is in the band.
   static std::optional<FacetEdge> facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
@@ -304,6 +309,7 @@ class PropagationScene final : public PathQuery {
   mutable RecentResults<DoubleBounceIndex> double_bounce_indexes_;
   mutable RecentResults<PatchSight> patch_sights_;
   mutable RecentResults<ReflectedEdgeIndex> reflected_edge_indexes_;
+  mutable RecentResults<ReflectorIndex> reflector_indexes_;
 };
 
 }  // namespace skytrace::world
