@@ -956,13 +956,28 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     double factor = 0.0, lobe_integral = 1.0;
   };
   const std::size_t n_blocked = blocked.size();
-  // Worked out for the facets within the scattering radius only (the others have no patch to use).
+  // Worked out for the facets within the scattering radius only (the others have no patch to use),
+  // and only where the facet's patches can matter (patches_can_matter below): elsewhere the factor
+  // stays 0, which drops what the sums would drop. Whether they can is judged first with bounds
+  // (|Gamma|^2 <= 1 for a passive surface, the lobe's smallest normalisation), before the Fresnel
+  // coefficients and the incidence angle are worked out.
   std::vector<Lighting> lighting(n_blocked * near_facets.size());  // [satellite][facet]
-  const auto light_facet = [&](std::size_t k) {
+  const double least_lobe_integral = lobe != nullptr ? *std::min_element(lobe->begin(), lobe->end()) : 1.0;
+  constexpr double kBoundMargin = 1.0 + 1e-9;
+  // Whether the facet's patches can matter to a satellite lighting it with `light`: each patch brings
+  // at most `patch_bound` times the lighting factor over the lobe's normalisation (a hair high).
+  const auto patches_can_matter = [&](const Lighting& light, double patch_bound, std::size_t n_patches) {
+    const double bound = kBoundMargin * light.factor * patch_bound / (lobe != nullptr ? light.lobe_integral : 1.0);
+    return bound * static_cast<double>(kMaxPatchesPerFacet) >= min_power &&
+           bound * static_cast<double>(n_patches) * kBoundMargin >= min_power;
+  };
+  const auto light_facet = [&](std::size_t k, double patch_bound) {
     const NearFacet& nf = near_facets[k];
     for (std::size_t j = 0; j < n_blocked; ++j) {
       const double cos_incidence = nf.normal.dot(directions[blocked[j]]);
       if (cos_incidence <= 1e-3) continue;  // the satellite lights the other side
+      const Lighting brightest{kBoundMargin * s2 * cos_incidence, least_lobe_integral};
+      if (!patches_can_matter(brightest, patch_bound, nf.patches->size())) continue;
       Lighting& light = lighting[j * near_facets.size() + k];
       const FresnelCoefficients gamma = fresnel_coefficients(nf.eta, cos_incidence);
       light.factor = s2 * 0.5 * (std::norm(gamma.te) + std::norm(gamma.tm)) * cos_incidence;
@@ -990,7 +1005,6 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     for (int e = 0; e < settings.scattering_lobe_exponent; ++e) y *= x;
     return y;
   };
-  constexpr double kBoundMargin = 1.0 + 1e-9;
   std::vector<Patch> patches, visible;
   std::vector<Eigen::Vector3d> towards;
   std::vector<std::size_t> lit_by;              // blocked satellites lighting the facet (j)
@@ -1001,22 +1015,17 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     const Facet& f = facets_[nf.index];
     const double nearest_m = (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm();
     if (nf.patches == nullptr || nf.patches->empty() || nearest_m > settings.scattering_radius_m) continue;
-    light_facet(k);
     // No patch is nearer than the facet's box nor brighter than the lobe's peak (every patch of a
     // facet has the same area, candidates()): a facet none of whose patches can matter, or whose
     // patches together cannot reach the threshold, is passed over before its patches are.
     const double patch_bound = kBoundMargin * (*nf.patches).front().area_m2 * (lobe != nullptr ? 1.0 : 1.0 / std::numbers::pi) /
                                std::pow(std::max(nearest_m, 0.5) * (1.0 - 1e-9), 2);
-    const auto patches_can_matter = [&](const Lighting& light) {
-      const double bound = kBoundMargin * light.factor * patch_bound / (lobe != nullptr ? light.lobe_integral : 1.0);
-      return bound * static_cast<double>(kMaxPatchesPerFacet) >= min_power &&
-             bound * static_cast<double>(nf.patches->size()) * kBoundMargin >= min_power;
-    };
+    light_facet(k, patch_bound);
     lit_by.clear();
     specular_of.clear();
     for (std::size_t j = 0; j < n_blocked; ++j) {
       const Lighting& light = lighting[j * near_facets.size() + k];
-      if (light.factor <= 0.0 || !patches_can_matter(light)) continue;
+      if (light.factor <= 0.0 || !patches_can_matter(light, patch_bound, nf.patches->size())) continue;
       const Eigen::Vector3d& s = directions[blocked[j]];
       lit_by.push_back(j);
       specular_of.push_back(-s + 2.0 * nf.normal.dot(s) * nf.normal);

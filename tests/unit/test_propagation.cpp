@@ -129,6 +129,28 @@ TEST(Fresnel, LimitsOfTheCircularCoefficients) {
   EXPECT_GT(std::abs(fresnel_coefficients(glass, std::cos(brewster)).te), 0.5);
 }
 
+// A passive surface reflects at most the power that reaches it: the diffuse-scattering search
+// bounds a facet's lighting by |Gamma|^2 <= 1 before it works out the coefficients, and would drop
+// paths if a material or the coefficients ever made a reflection gain power.
+TEST(Fresnel, PassiveSurfacesReflectAtMostTheIncidentPower) {
+  for (const MaterialClass m : {MaterialClass::kConcrete, MaterialClass::kBrick, MaterialClass::kGlass, MaterialClass::kMetal,
+                                MaterialClass::kWood, MaterialClass::kGround, MaterialClass::kVegetation, MaterialClass::kUnknown}) {
+    for (const double f_hz : {1176.45e6, 1207.14e6, 1227.60e6, 1246.0e6, 1268.52e6, 1278.75e6, 1561.098e6, 1575.42e6, 1602.0e6}) {
+      const std::complex<double> eta = complex_permittivity(m, f_hz);
+      EXPECT_LE(eta.imag(), 0.0);  // eps' - j eps'': a loss, never a gain
+      for (int k = 1; k <= 1000; ++k) {  // the searches use cos(incidence) > 1e-6
+        const FresnelCoefficients g = fresnel_coefficients(eta, k / 1000.0);
+        EXPECT_LE(std::norm(g.te), 1.0 + 1e-12) << static_cast<int>(m) << " " << f_hz << " " << k;
+        EXPECT_LE(std::norm(g.tm), 1.0 + 1e-12) << static_cast<int>(m) << " " << f_hz << " " << k;
+      }
+    }
+  }
+  // The coefficients the other way up (the receiver's side taken for the material's) would.
+  const auto concrete = complex_permittivity(MaterialClass::kConcrete, 1575.42e6);
+  const std::complex<double> root = std::sqrt(concrete - 0.91);
+  EXPECT_GT(std::norm((0.3 + root) / (0.3 - root)), 1.0);
+}
+
 TEST(Fresnel, MaterialTablesOfP2040) {
   // ITU-R P.2040-1 Table 3 at 1 GHz: concrete 5.31 / 0.0326 S/m, brick 3.75 / 0.038, wood 1.99 / 0.0047,
   // glass 6.27 / 0.0043, medium dry ground 15 / 0.035.
