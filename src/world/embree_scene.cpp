@@ -611,6 +611,12 @@ struct EmbreeScene::Impl {
   template <typename Answer>
   std::vector<RayOutcome> for_each_ray(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                        Answer answer) const;
+  // The recording context of a query, ready for its rays (whatever their origin).
+  void start_query(QueryState& state) const;
+  // The line-of-sight answer for one valid ray (unit direction) from origin_m, state.origin_f and
+  // state.around being that origin's.
+  void answer_line_of_sight(QueryState& state, const Eigen::Vector3d& origin_m, const Eigen::Vector3d& direction,
+                            RayOutcome& outcome) const;
 
   DeviceHandle device_handle;  // first: released after everything else
   RTCDevice device = nullptr;
@@ -1061,12 +1067,7 @@ std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& o
   QueryState state;
   if (answerable) {
     state.origin_f = origin_m.cast<float>();
-    if (!vegetation.empty) state.crossings.reserve(32);
-    if (!static_volumes.object_of_primitive.empty()) state.convex_candidates.reserve(16);
-    rtcInitIntersectContext(&state.context.base);
-    state.context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // every ray of a batch leaves the same point
-    state.context.crossings = &state.crossings;
-    state.context.convex_candidates = &state.convex_candidates;
+    start_query(state);
     state.around = vegetation_around(origin_m);
   }
   for (std::size_t i = 0; i < directions.size(); ++i) {
@@ -1082,6 +1083,15 @@ std::vector<RayOutcome> EmbreeScene::Impl::for_each_ray(const Eigen::Vector3d& o
     answer(state, direction, outcomes[i]);
   }
   return outcomes;
+}
+
+void EmbreeScene::Impl::start_query(QueryState& state) const {
+  if (!vegetation.empty) state.crossings.reserve(32);
+  if (!static_volumes.object_of_primitive.empty()) state.convex_candidates.reserve(16);
+  rtcInitIntersectContext(&state.context.base);
+  state.context.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // the rays of a batch leave one point, or go one way
+  state.context.crossings = &state.crossings;
+  state.context.convex_candidates = &state.convex_candidates;
 }
 
 std::vector<RayOutcome> EmbreeScene::trace(const Eigen::Vector3d& origin_m,
@@ -1103,27 +1113,57 @@ std::vector<RayOutcome> EmbreeScene::trace_line_of_sight(const Eigen::Vector3d& 
   const Impl& impl = *impl_;
   return impl.for_each_ray(origin_m, directions, [&](Impl::QueryState& state, const Eigen::Vector3d& direction,
                                                      RayOutcome& outcome) {
-    // One occlusion query: it stops at the first opaque hit it finds and meets all the vegetation
-    // of a free ray on its way.
-    RTCRayHit ray_hit;
-    init_ray(ray_hit, state.origin_f, direction);
-    state.context.blocker_instance = kInvalidId;
-    state.context.blocker_geometry = kInvalidId;
-    rtcOccluded1(impl.main.top, &state.context.base, &ray_hit.ray);
-    if (ray_hit.ray.tfar < 0.0F) {  // Embree's mark of an occluded ray
-      outcome.blocked = true;
-      // Every opaque triangle geometry has the filter that names it (make_geometry).
-      if (state.context.blocker_geometry != kInvalidId) {
-        const SceneObject& blocker =
-            impl.objects[impl.main.object_index(state.context.blocker_instance, state.context.blocker_geometry)];
-        outcome.blocking_object = blocker.name;
-        outcome.blocking_material = blocker.material.material_class;
-      }
-    } else {
-      impl.add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction, kInfinity,
-                          outcome);
-    }
+    impl.answer_line_of_sight(state, origin_m, direction, outcome);
   });
+}
+
+std::vector<RayOutcome> EmbreeScene::trace_line_of_sight_from(const std::vector<Eigen::Vector3d>& origins_m,
+                                                              const Eigen::Vector3d& direction) const {
+  const Impl& impl = *impl_;
+  // As trace_line_of_sight from each origin alone, with the query's context made once.
+  static const RayOutcome kDefaultOutcome{};
+  std::vector<RayOutcome> outcomes(origins_m.size(), kDefaultOutcome);
+  Eigen::Vector3d unit;
+  const bool valid_direction = unit_direction(direction, unit);
+  Impl::QueryState state;
+  if (!impl.main.empty) impl.start_query(state);
+  for (std::size_t i = 0; i < origins_m.size(); ++i) {
+    const Eigen::Vector3d& origin_m = origins_m[i];
+    if (!origin_m.allFinite() || !valid_direction) {
+      outcomes[i].blocked = true;
+      outcomes[i].blocking_object = kInvalidRayObject;
+      continue;
+    }
+    if (impl.main.empty) continue;  // an empty world: free
+    state.origin_f = origin_m.cast<float>();
+    state.around = impl.vegetation_around(origin_m);
+    state.crossings.clear();
+    state.convex_candidates.clear();
+    impl.answer_line_of_sight(state, origin_m, unit, outcomes[i]);
+  }
+  return outcomes;
+}
+
+void EmbreeScene::Impl::answer_line_of_sight(QueryState& state, const Eigen::Vector3d& origin_m, const Eigen::Vector3d& direction,
+                                             RayOutcome& outcome) const {
+  // One occlusion query: it stops at the first opaque hit it finds and meets all the vegetation
+  // of a free ray on its way.
+  RTCRayHit ray_hit;
+  init_ray(ray_hit, state.origin_f, direction);
+  state.context.blocker_instance = kInvalidId;
+  state.context.blocker_geometry = kInvalidId;
+  rtcOccluded1(main.top, &state.context.base, &ray_hit.ray);
+  if (ray_hit.ray.tfar < 0.0F) {  // Embree's mark of an occluded ray
+    outcome.blocked = true;
+    // Every opaque triangle geometry has the filter that names it (make_geometry).
+    if (state.context.blocker_geometry != kInvalidId) {
+      const SceneObject& blocker = objects[main.object_index(state.context.blocker_instance, state.context.blocker_geometry)];
+      outcome.blocking_object = blocker.name;
+      outcome.blocking_material = blocker.material.material_class;
+    }
+  } else {
+    add_vegetation(state.crossings, state.around, state.convex_candidates, origin_m, direction, kInfinity, outcome);
+  }
 }
 
 }  // namespace skytrace::world

@@ -755,6 +755,11 @@ std::vector<RayOutcome> PropagationScene::trace_line_of_sight(const Eigen::Vecto
   return scene_->trace_line_of_sight(origin_m, directions);
 }
 
+std::vector<RayOutcome> PropagationScene::trace_line_of_sight_from(const std::vector<Eigen::Vector3d>& origins_m,
+                                                                   const Eigen::Vector3d& direction) const {
+  return scene_->trace_line_of_sight_from(origins_m, direction);
+}
+
 std::vector<RayOutcome> PropagationScene::trace(const Eigen::Vector3d& origin_m,
                                                 const std::vector<Eigen::Vector3d>& directions) const {
   return scene_->trace(origin_m, directions);
@@ -1079,7 +1084,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     Eigen::Vector3d point = Eigen::Vector3d::Zero(), arrival = Eigen::Vector3d::Zero();
   };
   std::vector<Sum> sums(near_facets.size());
-  std::vector<Eigen::Vector3d> one(1);
+  std::vector<std::size_t> tested;           // the visible patches whose lit test is traced
+  std::vector<Eigen::Vector3d> lit_from;     // the points those tests start from
   // Per satellite: each visible patch's power before its lit test (negative: it cannot matter), and
   // per facet the sum of those powers through the vegetation towards the receiver, an upper bound
   // of the facet's path power: a facet that cannot reach the threshold traces no lit test.
@@ -1108,14 +1114,22 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       unlit_power[v] = power;
       facet_potential[patch.facet] += power * power_factor(patch.vegetation_db);
     }
+    // Lit or not: the occlusion test alone (free rays carry the vegetation they cross), of all the
+    // patches that may matter at once, summed in patch order.
+    tested.clear();
+    lit_from.clear();
     for (std::size_t v = 0; v < visible.size(); ++v) {
       const Patch& patch = visible[v];
       if (unlit_power[v] < 0.0 || facet_potential[patch.facet] * kBoundMargin < min_power) continue;
-      const NearFacet& nf = near_facets[patch.facet];
+      tested.push_back(v);
+      lit_from.push_back(patch.point_m + kSurfaceOffset_m * near_facets[patch.facet].normal);
+    }
+    const std::vector<RayOutcome> lit_tests = tested.empty() ? std::vector<RayOutcome>{} : scene_->trace_line_of_sight_from(lit_from, s);
+    for (std::size_t t = 0; t < tested.size(); ++t) {
+      const std::size_t v = tested[t];
+      const Patch& patch = visible[v];
       double power = unlit_power[v];
-      one[0] = s;
-      // Lit or not: the occlusion test alone (free rays carry the vegetation they cross).
-      const RayOutcome lit = scene_->trace_line_of_sight(patch.point_m + kSurfaceOffset_m * nf.normal, one).front();
+      const RayOutcome& lit = lit_tests[t];
       if (lit.blocked) continue;
       power *= power_factor(patch.vegetation_db + lit.vegetation_attenuation_db);
       Sum& sum = sums[patch.facet];

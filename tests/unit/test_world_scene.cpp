@@ -402,6 +402,52 @@ TEST(WorldScene, LineOfSightIsAnOcclusionTest) {
   EXPECT_GT(blocked, 200);
 }
 
+// One direction from many origins (the lit tests of scattering patches): each outcome is what
+// trace_line_of_sight gives from that origin alone, vegetation and blocker included, in Embree's
+// batch (vegetation as convex volumes and as triangles) and in the interface's default (the
+// brute-force scene); invalid input as in a single query.
+TEST(WorldScene, LineOfSightFromManyOriginsIsEachOriginAlone) {
+  const RandomWorld random_world = make_random_world(4242);
+  const Scenes scenes(random_world.world);
+  ASSERT_TRUE(scenes.embree && scenes.brute);
+  EmbreeSceneOptions as_triangles;  // vegetation traced as triangles: origins inside it counted too
+  as_triangles.convex_vegetation_volumes = false;
+  auto triangles = EmbreeScene::build(random_world.world, as_triangles);
+  ASSERT_TRUE(triangles.ok());
+  RandomStream random(stream_key(4242, {3}));
+  int compared = 0, blocked = 0, with_vegetation = 0;
+  for (int batch = 0; batch < 60; ++batch) {
+    const Eigen::Vector3d direction = unit_vector(random);
+    std::vector<Eigen::Vector3d> origins;
+    for (int i = 0; i < 40; ++i) origins.push_back(uniform_vector(random, 60.0));
+    if (batch == 0) origins.push_back(Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0));
+    for (const PathQuery* scene : {static_cast<const PathQuery*>(scenes.embree.get()), static_cast<const PathQuery*>(triangles->get()),
+                                   static_cast<const PathQuery*>(&*scenes.brute)}) {
+      const auto batched = scene->trace_line_of_sight_from(origins, direction);
+      ASSERT_EQ(batched.size(), origins.size());
+      for (std::size_t i = 0; i < origins.size(); ++i) {
+        const RayOutcome alone = scene->trace_line_of_sight(origins[i], {direction}).front();
+        EXPECT_EQ(batched[i].blocked, alone.blocked);
+        EXPECT_EQ(batched[i].blocking_object, alone.blocking_object);
+        EXPECT_EQ(batched[i].blocking_material, alone.blocking_material);
+        EXPECT_EQ(batched[i].vegetation_path_m, alone.vegetation_path_m);
+        EXPECT_EQ(batched[i].vegetation_attenuation_db, alone.vegetation_attenuation_db);
+        ++compared;
+        blocked += alone.blocked ? 1 : 0;
+        with_vegetation += alone.vegetation_path_m > 0.0 ? 1 : 0;
+      }
+    }
+  }
+  // Both answers and vegetation are met; an invalid direction blocks every ray.
+  EXPECT_GT(blocked, compared / 10);
+  EXPECT_LT(blocked, compared * 9 / 10);
+  EXPECT_GT(with_vegetation, compared / 50);
+  const auto invalid = scenes.embree->trace_line_of_sight_from({Eigen::Vector3d::Zero()}, Eigen::Vector3d::Zero());
+  ASSERT_EQ(invalid.size(), 1U);
+  EXPECT_TRUE(invalid[0].blocked);
+  EXPECT_EQ(invalid[0].blocking_object, scenes.embree->trace_line_of_sight(Eigen::Vector3d::Zero(), {Eigen::Vector3d::Zero()}).front().blocking_object);
+}
+
 TEST(WorldScene, MovingAnObjectUnblocksAndBlocksAgain) {
   WorldModel world;
   world.objects.push_back(box("truck", {-2, 8, 0}, {2, 12, 4}, Material{MaterialClass::kMetal, 0.0}));

@@ -135,6 +135,17 @@ class PathQuery {
                                                                     const std::vector<Eigen::Vector3d>& directions) const {
     return trace(origin_m, directions);
   }
+  // The line-of-sight question of one direction from many origins (whether each of many points is
+  // lit by a satellite): one outcome per origin, as trace_line_of_sight from that origin alone
+  // gives it. Scenes that answer it faster override it; this default asks origin by origin.
+  [[nodiscard]] virtual std::vector<RayOutcome> trace_line_of_sight_from(const std::vector<Eigen::Vector3d>& origins_m,
+                                                                         const Eigen::Vector3d& direction) const {
+    std::vector<RayOutcome> out;
+    out.reserve(origins_m.size());
+    const std::vector<Eigen::Vector3d> one{direction};
+    for (const Eigen::Vector3d& origin_m : origins_m) out.push_back(trace_line_of_sight(origin_m, one).front());
+    return out;
+  }
 
   // Every path per direction. This default knows only the direct ray; world::PropagationScene
   // adds reflections and diffraction.

@@ -111,6 +111,8 @@ class PropagationScene final : public PathQuery {
                                               const std::vector<Eigen::Vector3d>& directions) const override;
   [[nodiscard]] std::vector<RayOutcome> trace_line_of_sight(const Eigen::Vector3d& origin_m,
                                                             const std::vector<Eigen::Vector3d>& directions) const override;
+  [[nodiscard]] std::vector<RayOutcome> trace_line_of_sight_from(const std::vector<Eigen::Vector3d>& origins_m,
+                                                                 const Eigen::Vector3d& direction) const override;
   [[nodiscard]] std::vector<PathSet> paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                            const PathSearchSettings& settings) const override;
 

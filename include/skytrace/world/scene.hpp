@@ -93,6 +93,8 @@ class EmbreeScene final : public PathQuery {
   // One occlusion test per ray (Embree's cheapest query): see PathQuery::trace_line_of_sight.
   [[nodiscard]] std::vector<RayOutcome> trace_line_of_sight(const Eigen::Vector3d& origin_m,
                                                             const std::vector<Eigen::Vector3d>& directions) const override;
+  [[nodiscard]] std::vector<RayOutcome> trace_line_of_sight_from(const std::vector<Eigen::Vector3d>& origins_m,
+                                                                 const Eigen::Vector3d& direction) const override;
 
   // Moves a movable object (is_static == false in the world model) to a new pose in the world
   // frame. Errors: unknown name, a static object, a non-finite pose.
