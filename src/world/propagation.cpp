@@ -117,6 +117,18 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) int mark_within_cone
   return count;
 }
 
+// Marks the entries whose band [low, high] of s . axis may hold direction s with 1, the others 0.
+// In single precision, the bands given a little wide: a pass before the exact test. One loop the
+// compiler vectorises.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_bands(
+    const float* __restrict ax, const float* __restrict ay, const float* __restrict az, const float* __restrict low,
+    const float* __restrict high, std::size_t n, float sx, float sy, float sz, std::int32_t* __restrict within) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const float c = ax[k] * sx + ay[k] * sy + az[k] * sz;
+    within[k] = static_cast<std::int32_t>(c >= low[k]) & static_cast<std::int32_t>(c <= high[k]);
+  }
+}
+
 // The second-order facets as arrays (normal, plane offset, bounding sphere), for screen_facet_pairs.
 struct FacetArrays {
   std::vector<double> nx, ny, nz, offset, cx, cy, cz, radius;
@@ -1623,7 +1635,7 @@ struct PropagationScene::ReflectedEdgeIndex {
   mutable std::mutex mutex;
   // (cell, object): the pairs for diffraction then reflection; and for knife-edge diffraction
   // over the object alone (`facet` unused).
-  mutable std::map<std::pair<int, std::size_t>, std::shared_ptr<const std::vector<FacetEdge>>> lists, edge_lists;
+  mutable std::map<std::pair<int, std::size_t>, std::shared_ptr<const FacetEdgeList>> lists, edge_lists;
   mutable std::size_t entries = 0;
 };
 
@@ -1648,7 +1660,7 @@ std::shared_ptr<const PropagationScene::ReflectedEdgeIndex> PropagationScene::re
   return index;
 }
 
-std::shared_ptr<const std::vector<PropagationScene::FacetEdge>> PropagationScene::facet_edge_pairs(
+std::shared_ptr<const PropagationScene::FacetEdgeList> PropagationScene::facet_edge_pairs(
     const ReflectedEdgeIndex& index, bool knife_edges, std::size_t object, const Eigen::Vector3d& s,
     const FacetEdgeSearch& search) {
   auto& lists = knife_edges ? index.edge_lists : index.lists;
@@ -1670,10 +1682,21 @@ std::shared_ptr<const std::vector<PropagationScene::FacetEdge>> PropagationScene
   const Eigen::Vector3d centre(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
                                std::sin(elevation));
   // No direction of a cell is farther than one cell size from its centre.
-  auto pairs = std::make_shared<const std::vector<FacetEdge>>(search(centre, Cells::kCell_rad + Cells::kMargin_rad));
+  auto made = std::make_shared<FacetEdgeList>();
+  made->entries = search(centre, Cells::kCell_rad + Cells::kMargin_rad);
+  // Single precision moves s . axis by less than 1e-6 (unit vectors): the bands widened by 1e-5.
+  constexpr float kWider = 1e-5F;
+  for (const FacetEdge& entry : made->entries) {
+    made->axis_x.push_back(static_cast<float>(entry.axis.x()));
+    made->axis_y.push_back(static_cast<float>(entry.axis.y()));
+    made->axis_z.push_back(static_cast<float>(entry.axis.z()));
+    made->cos_low.push_back(static_cast<float>(entry.cos_min) - kWider);
+    made->cos_high.push_back(static_cast<float>(entry.cos_max) + kWider);
+  }
+  const std::shared_ptr<const FacetEdgeList> pairs = std::move(made);
   const std::lock_guard lock(index.mutex);
   auto [it, inserted] = lists.emplace(key, pairs);
-  if (inserted) index.entries += pairs->size();
+  if (inserted) index.entries += pairs->entries.size();
   return it->second;
 }
 
@@ -1724,10 +1747,14 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     if (std::abs(h) < 1e-6) continue;  // in the plane: no reflection
     near_facets.push_back(NearFacet{c.index, h >= 0.0 ? c.normal : Eigen::Vector3d(-c.normal), std::abs(h), c.eta, c.patches});
   }
-  // The same as arrays, for the first test of the first-order reflections of all facets at once.
+  // A static antenna's first-order reflectors by sky cell; else the facets as arrays, for the first
+  // test of the first-order reflections of all facets at once.
+  const std::shared_ptr<const ReflectorIndex> first_order_index =
+      settings.max_reflection_order >= 1 ? reflector_index(r, near_facets) : nullptr;
   ReflectorArrays reflectors;
-  std::vector<double> may_reflect(near_facets.size());
-  if (settings.max_reflection_order >= 1) {
+  std::vector<double> may_reflect;
+  if (settings.max_reflection_order >= 1 && !first_order_index) {
+    may_reflect.resize(near_facets.size());
     for (auto* v : {&reflectors.nx, &reflectors.ny, &reflectors.nz, &reflectors.height, &reflectors.ix, &reflectors.iy,
                     &reflectors.iz, &reflectors.cx, &reflectors.cy, &reflectors.cz, &reflectors.radius2}) {
       v->resize(near_facets.size());
@@ -1787,15 +1814,20 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
     double excess_m = 0.0, v = 0.0, loss_db = 0.0;
   };
   std::vector<EdgeHit> hits;
+  // Which entries of an index list may hold direction s in their band (1), the others 0.
+  std::vector<std::int32_t> within_band;
+  const auto screen_bands_of = [&](const FacetEdgeList& list, const Eigen::Vector3d& s) {
+    within_band.resize(list.entries.size());
+    screen_bands(list.axis_x.data(), list.axis_y.data(), list.axis_z.data(), list.cos_low.data(), list.cos_high.data(),
+                 list.entries.size(), static_cast<float>(s.x()), static_cast<float>(s.y()), static_cast<float>(s.z()),
+                 within_band.data());
+  };
   std::vector<std::size_t> objects;
   // Largest excess over an edge still worth a path (blocked) or a loss (in view), from J(v).
   double v_max = 0.0;
   while (v_max < 100.0 && knife_edge_loss_db(v_max) < std::min(settings.max_diffraction_loss_db, -settings.min_relative_power_db)) v_max += 0.05;
   const double blocked_excess_max_m = v_max * v_max * wavelength_m / 4.0;
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
-  // A static antenna's first-order reflectors by sky cell.
-  const std::shared_ptr<const ReflectorIndex> first_order_index =
-      settings.max_reflection_order >= 1 ? reflector_index(r, near_facets) : nullptr;
   // A static antenna's facet-edge pairs for diffraction then reflection, by sky cell.
   const std::shared_ptr<const ReflectedEdgeIndex> edge_index =
       settings.diffraction && !edges_.empty() ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m, settings.radius_m)
@@ -2046,7 +2078,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       };
       // A static antenna behind an object: its edges that may serve a direction of the satellite's
       // sky cell, each with its band of directions (as for diffraction then reflection below).
-      std::shared_ptr<const std::vector<FacetEdge>> knife_listed;
+      std::shared_ptr<const FacetEdgeList> knife_listed;
       if (edge_index && blocked && objects.size() == 1) {
         const std::size_t object = objects.front();
         knife_listed = facet_edge_pairs(*edge_index, true, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
@@ -2070,7 +2102,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       }
       if (knife_listed) {
         const std::size_t object = objects.front();
-        for (const FacetEdge& entry : *knife_listed) {
+        screen_bands_of(*knife_listed, s);
+        for (std::size_t k = 0; k < knife_listed->entries.size(); ++k) {
+          if (within_band[k] == 0) continue;
+          const FacetEdge& entry = knife_listed->entries[k];
           const double c = s.dot(entry.axis);  // as keller_point works it out
           if (c >= entry.cos_min && c <= entry.cos_max) try_knife_edge(object_edges_[object][entry.edge]);
         }
@@ -2235,7 +2270,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       };
       // A static antenna: the facet-edge pairs that may serve a satellite in its sky cell, found
       // once per cell and object (docs/performance.md); the same hits as the search below.
-      std::shared_ptr<const std::vector<FacetEdge>> listed;
+      std::shared_ptr<const FacetEdgeList> listed;
       if (edge_index && objects.size() == 1) {
         const std::size_t object = objects.front();
         listed = facet_edge_pairs(*edge_index, false, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
@@ -2274,7 +2309,10 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         const std::size_t object = objects.front();
         std::size_t current = std::numeric_limits<std::size_t>::max();
         std::optional<FacetSight> v;
-        for (const FacetEdge& pair : *listed) {
+        screen_bands_of(*listed, s);
+        for (std::size_t k = 0; k < listed->entries.size(); ++k) {
+          if (within_band[k] == 0) continue;
+          const FacetEdge& pair = listed->entries[k];
           const double c = s.dot(pair.axis);  // as keller_point works it out
           if (c < pair.cos_min || c > pair.cos_max) continue;
           if (pair.facet != current) {

@@ -202,6 +202,12 @@ class PropagationScene final : public PathQuery {
     Eigen::Vector3d axis = Eigen::Vector3d::Zero();
     double cos_min = 0.0, cos_max = 0.0;
   };
+  // The entries of one list of the index below, and their bands in single precision, a little
+  // wide, to screen them all against a direction at once before the exact test.
+  struct FacetEdgeList {
+    std::vector<FacetEdge> entries;
+    std::vector<float> axis_x, axis_y, axis_z, cos_low, cos_high;
+  };
   struct ReflectedEdgeIndex;
   // First-order reflections of an antenna that stays at one point: per sky cell, the facets whose
   // reflection point may lie on them for a direction of the cell (docs/performance.md).
@@ -229,7 +235,7 @@ class PropagationScene final : public PathQuery {
   // The pairs (knife_edges: the edges alone) for satellite direction s and the object, `search`
   // finding them for its cell when the index has none yet (a superset of what any direction in the
   // cell can use).
-  static std::shared_ptr<const std::vector<FacetEdge>> facet_edge_pairs(const ReflectedEdgeIndex& index, bool knife_edges,
+  static std::shared_ptr<const FacetEdgeList> facet_edge_pairs(const ReflectedEdgeIndex& index, bool knife_edges,
                                                                         std::size_t object, const Eigen::Vector3d& s,
                                                                         const FacetEdgeSearch& search);
 
