@@ -148,7 +148,7 @@ struct FacetArrays {
 __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pairs(
     const FacetArrays& f, std::size_t n, std::size_t a, const Eigen::Vector3d& image_a, const Eigen::Vector3d& na, double ca,
     const Eigen::Vector3d& centre_a, double radius_a, const Eigen::Vector3d& axis_a, double cos_a, double sin_a,
-    double lowest_z, float* __restrict keep, float* __restrict axis1_x, float* __restrict axis1_y, float* __restrict axis1_z,
+    double lowest_z, std::int32_t* __restrict keep, float* __restrict axis1_x, float* __restrict axis1_y, float* __restrict axis1_z,
     float* __restrict cos1, float* __restrict axis2_x, float* __restrict axis2_y, float* __restrict axis2_z) {
   constexpr double kLoose_m = 1e-9;
   constexpr float kWiderCos = 1e-4F;
@@ -211,7 +211,7 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void screen_facet_pa
     const float top2 = z2 >= cos_af ? 1.0F : z2 * cos_af + std::sqrt(std::max(1.0F - z2 * z2, 0.0F)) * sin_af;
     const int reach_sky = (static_cast<int>(!cone) | static_cast<int>(top1 >= lowest_zf)) &
                           (static_cast<int>(!cone_a) | static_cast<int>(top2 >= lowest_zf));
-    keep[b] = (planes & meet & reach_sky) != 0 ? 1.0F : 0.0F;
+    keep[b] = planes & meet & reach_sky;
   }
 }
 
@@ -1939,7 +1939,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         arrays.cz[k] = f.centre_m.z();
         arrays.radius[k] = f.radius_m;
       }
-      std::vector<float> keep(n_facets);
+      std::vector<std::int32_t> keep(n_facets);
       std::vector<std::uint32_t> kept(n_facets);
       std::vector<float> axis1_x(n_facets), axis1_y(n_facets), axis1_z(n_facets), cos1(n_facets);
       std::vector<float> axis2_x(n_facets), axis2_y(n_facets), axis2_z(n_facets);
@@ -1959,7 +1959,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
         std::size_t n_kept = 0;
         for (std::size_t b = 0; b < n_facets; ++b) {
           kept[n_kept] = static_cast<std::uint32_t>(b);
-          n_kept += keep[b] != 0.0F ? 1 : 0;
+          n_kept += static_cast<std::size_t>(keep[b]);
         }
         for (std::size_t kept_index = 0; kept_index < n_kept; ++kept_index) {
           const std::size_t b = kept[kept_index];
