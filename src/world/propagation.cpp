@@ -1136,7 +1136,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       tested.push_back(v);
       lit_from.push_back(patch.point_m + kSurfaceOffset_m * near_facets[patch.facet].normal);
     }
-    const std::vector<RayOutcome> lit_tests = tested.empty() ? std::vector<RayOutcome>{} : scene_->trace_line_of_sight_from(lit_from, s);
+    const std::vector<RayOutcome> lit_tests =
+        tested.empty() ? std::vector<RayOutcome>{} : scene_->trace_line_of_sight_from(lit_from, s);
     for (std::size_t t = 0; t < tested.size(); ++t) {
       const std::size_t v = tested[t];
       const Patch& patch = visible[v];
@@ -1554,15 +1555,17 @@ struct PropagationScene::ReflectorIndex {
   std::vector<Eigen::Vector3d> normal, axis;
   std::vector<double> reach_cos;
   mutable std::mutex mutex;
-  mutable std::vector<std::shared_ptr<const std::vector<std::uint32_t>>> cells = std::vector<std::shared_ptr<const std::vector<std::uint32_t>>>(kCells);
+  using List = std::vector<std::uint32_t>;
+  mutable std::vector<std::shared_ptr<const List>> cells = std::vector<std::shared_ptr<const List>>(kCells);
   mutable std::size_t entries = 0;
 
   // The facets (indices into the near facets, ascending) on which the line from the antenna's
   // image towards direction s may meet the plane within the bounding sphere, and s light the
   // antenna's side: a superset of those where a first-order reflection of s can lie. The list
   // of s's cell is made when a direction first needs it.
-  std::shared_ptr<const std::vector<std::uint32_t>> facets_towards(const Eigen::Vector3d& s) const {
-    const int cell = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * Cells::kColumns + Cells::column_of(std::atan2(s.y(), s.x()));
+  std::shared_ptr<const List> facets_towards(const Eigen::Vector3d& s) const {
+    const int cell = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * Cells::kColumns +
+                     Cells::column_of(std::atan2(s.y(), s.x()));
     const std::lock_guard lock(mutex);
     auto& list = cells[static_cast<std::size_t>(cell)];
     if (list) return list;
@@ -1573,7 +1576,7 @@ struct PropagationScene::ReflectorIndex {
     // Every direction of the cell lies within one cell size of its centre.
     const Eigen::Vector3d& centre = Cells::cell_centres()[static_cast<std::size_t>(cell)];
     const double lit_reach = -std::sin(Cells::kCell_rad + Cells::kMargin_rad);
-    auto made = std::make_shared<std::vector<std::uint32_t>>();
+    auto made = std::make_shared<List>();
     for (std::size_t k = 0; k < facets.size(); ++k) {
       if (normal[k].dot(centre) >= lit_reach && (reach_cos[k] <= -2.0 || axis[k].dot(centre) >= reach_cos[k])) {
         made->push_back(static_cast<std::uint32_t>(k));
@@ -2026,7 +2029,7 @@ std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, co
       // The facets in ascending order either way: a static antenna's listed for the direction's
       // sky cell, else those that pass the screen of all at once (both looser than the test above).
       if (first_order_index) {
-        const std::shared_ptr<const std::vector<std::uint32_t>> listed = first_order_index->facets_towards(s);
+        const auto listed = first_order_index->facets_towards(s);  // held: the index may start afresh
         for (const std::uint32_t k : *listed) reflect_off(k);
       } else {
         screen_reflections(reflectors, near_facets.size(), s, settings.radius_m, may_reflect.data());

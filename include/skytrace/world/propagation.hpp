@@ -213,7 +213,8 @@ class PropagationScene final : public PathQuery {
   // reflection point may lie on them for a direction of the cell (docs/performance.md).
   struct ReflectorIndex;
   // The index for an antenna found at the same point in an earlier call, else none.
-  std::shared_ptr<const ReflectorIndex> reflector_index(const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets) const;
+  std::shared_ptr<const ReflectorIndex> reflector_index(const Eigen::Vector3d& origin_m,
+                                                        const std::vector<NearFacet>& facets) const;
   // The pair of facet nf (the receiver's image in its plane normal . x = plane) and the edge, with
   // its band; none when no direction within cell_reach_rad of cell_axis is in the band.
   static std::optional<FacetEdge> facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
@@ -236,8 +237,8 @@ class PropagationScene final : public PathQuery {
   // finding them for its cell when the index has none yet (a superset of what any direction in the
   // cell can use).
   static std::shared_ptr<const FacetEdgeList> facet_edge_pairs(const ReflectedEdgeIndex& index, bool knife_edges,
-                                                                        std::size_t object, const Eigen::Vector3d& s,
-                                                                        const FacetEdgeSearch& search);
+                                                               std::size_t object, const Eigen::Vector3d& s,
+                                                               const FacetEdgeSearch& search);
 
   std::shared_ptr<const PathQuery> scene_;
   std::vector<Facet> facets_;
