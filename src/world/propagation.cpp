@@ -1381,18 +1381,25 @@ void PropagationScene::narrow_cones(FacetPair& pair, const Eigen::Vector3d& imag
   }
 }
 
+namespace {
+
+// Whether an antenna point's index was made for these facets: the same scene facets in the same
+// order (`indexed` holds their scene indices).
+template <class NearFacets>
+bool indexes_facets(const std::vector<std::size_t>& indexed, const NearFacets& facets) {
+  return indexed.size() == facets.size() &&
+         std::equal(facets.begin(), facets.end(), indexed.begin(), [](const auto& f, std::size_t i) { return f.index == i; });
+}
+
+}  // namespace
+
 std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::double_bounce_index(
     const Eigen::Vector3d& origin_m, const std::vector<NearFacet>& facets, const std::vector<double>& plane_a,
     const std::vector<Eigen::Vector3d>& image_of) const {
-  const auto same_facets = [&](const DoubleBounceIndex& index) {
-    return index.facets.size() == facets.size() &&
-           std::equal(facets.begin(), facets.end(), index.facets.begin(),
-                      [](const NearFacet& f, std::size_t i) { return f.index == i; });
-  };
   {
     const std::lock_guard lock(cache_mutex_);
     auto cached = double_bounce_indexes_.find(
-        [&](const DoubleBounceIndex& index) { return index.origin_m == origin_m && same_facets(index); });
+        [&](const DoubleBounceIndex& index) { return index.origin_m == origin_m && indexes_facets(index.facets, facets); });
     if (cached) return cached->too_large ? nullptr : cached;
     // A moving antenna never comes back to the very same point: index only a point met before.
     if (!double_bounce_indexes_.met_before(origin_m)) return nullptr;
@@ -1592,11 +1599,8 @@ std::shared_ptr<const PropagationScene::ReflectorIndex> PropagationScene::reflec
                                                                                           const std::vector<NearFacet>& facets) const {
   {
     const std::lock_guard lock(cache_mutex_);
-    auto cached = reflector_indexes_.find([&](const ReflectorIndex& index) {
-      return index.origin_m == origin_m && index.facets.size() == facets.size() &&
-             std::equal(facets.begin(), facets.end(), index.facets.begin(),
-                        [](const NearFacet& f, std::size_t i) { return f.index == i; });
-    });
+    auto cached = reflector_indexes_.find(
+        [&](const ReflectorIndex& index) { return index.origin_m == origin_m && indexes_facets(index.facets, facets); });
     if (cached) return cached;
     // A moving antenna never comes back to the very same point: index only a point met before.
     if (!reflector_indexes_.met_before(origin_m)) return nullptr;
@@ -1647,9 +1651,7 @@ std::shared_ptr<const PropagationScene::ReflectedEdgeIndex> PropagationScene::re
   const std::lock_guard lock(cache_mutex_);
   auto cached = reflected_edge_indexes_.find([&](const ReflectedEdgeIndex& index) {
     return index.origin_m == origin_m && index.excess_max_m == excess_max_m && index.radius_m == radius_m &&
-           index.facets.size() == facets.size() &&
-           std::equal(facets.begin(), facets.end(), index.facets.begin(),
-                      [](const NearFacet& f, std::size_t i) { return f.index == i; });
+           indexes_facets(index.facets, facets);
   });
   if (cached) return cached;
   // A moving antenna never comes back to the very same point: index only a point met before.
