@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -84,7 +85,9 @@ std::vector<Eigen::Vector3d> directions_at(const City& city, long k) {
 
 // nlos_models: also double bounces between facets within 40 m and directive diffuse scattering
 // (S = 0.4, n = 4), as the Berlin validation scenarios take them (docs/validation.md).
-void run_paths(benchmark::State& state, bool moving, int order, bool diffraction, bool nlos_models = false) {
+// sky_cell_deg: PathSearchSettings::static_sky_cell_deg (what the simulator gives a receiver at a fixed position).
+void run_paths(benchmark::State& state, bool moving, int order, bool diffraction, bool nlos_models = false,
+               double sky_cell_deg = 0.0) {
   const City& city = citysim();
   if (!city.scene) return state.SkipWithError("citysim world absent or not loadable (set SKYTRACE_SHARED_DATA)");
   PathSearchSettings settings;
@@ -96,7 +99,11 @@ void run_paths(benchmark::State& state, bool moving, int order, bool diffraction
     settings.scattering_coefficient = 0.4;
     settings.scattering_lobe_exponent = 4;
   }
-  long k = 0;
+  settings.static_sky_cell_deg = sky_cell_deg;
+  // Epochs kept per sky cell would come back from the cache if a repetition started the sky again:
+  // with cells, each repetition goes on where the last one stopped.
+  static std::map<long, long> next_epoch;  // per receiver
+  long k = sky_cell_deg > 0.0 ? next_epoch[state.range(0)] : 0;
   double paths = 0.0, reflected = 0.0, diffracted = 0.0, scattered = 0.0, nlos = 0.0, sets = 0.0;
   for (auto _ : state) {
     // A static antenna stays at one point of a street; a moving one advances 1 m per epoch.
@@ -118,6 +125,7 @@ void run_paths(benchmark::State& state, bool moving, int order, bool diffraction
     benchmark::DoNotOptimize(out);
     ++k;
   }
+  if (sky_cell_deg > 0.0) next_epoch[state.range(0)] = k;
   state.SetItemsProcessed(state.iterations());  // epochs
   state.counters["facets"] = static_cast<double>(city.scene->facets().size());
   {
@@ -166,6 +174,10 @@ void BM_CitysimPathsNlosModelsStatic(benchmark::State& state) { run_paths(state,
 BENCHMARK(BM_CitysimPathsNlosModelsStatic)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1)->Iterations(100);
 void BM_CitysimPathsNlosModelsMoving(benchmark::State& state) { run_paths(state, true, 1, true, true); }
 BENCHMARK(BM_CitysimPathsNlosModelsMoving)->Unit(benchmark::kMicrosecond)->Arg(0)->Iterations(100);
+// A static antenna as the simulator runs one at a fixed position: its paths kept per sky cell of
+// 0.05 deg (models.static_sky_cell_deg), the satellites moving about 0.01 deg per 1 s epoch.
+void BM_CitysimPathsNlosModelsStaticCells(benchmark::State& state) { run_paths(state, false, 1, true, true, 0.05); }
+BENCHMARK(BM_CitysimPathsNlosModelsStaticCells)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1)->Iterations(100);
 
 // Receiver side: 40 satellites x 4 signals (BPSK(1), BOC(1,1), BPSK(2), BPSK(10)) from the paths
 // the static antenna sees.

@@ -369,7 +369,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   if (auto models = root.child("models")) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
                          "multipath_radius_m", "multipath_order", "multipath_order2_radius_m", "diffraction", "scattering_coefficient",
-                         "scattering_lobe_exponent", "scattering_radius_m", "ionosphere_residual_ppm",
+                         "scattering_lobe_exponent", "scattering_radius_m", "static_sky_cell_deg", "ionosphere_residual_ppm",
                          "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km",
                          "foliage_fading", "foliage_diffuse_db", "foliage_wind_spread_hz"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
@@ -396,6 +396,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (auto c = models->child("scattering_coefficient")) s.models.scattering_coefficient = c->as_double_in(0.0, 1.0);
     if (auto c = models->child("scattering_lobe_exponent")) s.models.scattering_lobe_exponent = c->as_int_in(0, 20);
     if (auto c = models->child("scattering_radius_m")) s.models.scattering_radius_m = c->as_double_in(1.0, 1000.0);
+    if (auto c = models->child("static_sky_cell_deg")) s.models.static_sky_cell_deg = c->as_double_in(0.0, 1.0);
     if (auto c = models->child("ionosphere_residual_ppm")) s.models.ionosphere_residual_ppm = c->as_double_in(0.0, 50.0);
     if (auto c = models->child("ionosphere_residual_length_km")) {
       s.models.ionosphere_residual_length_km = c->as_double_in(10.0, 5000.0);
@@ -639,6 +640,7 @@ std::string scenario_to_json(const Scenario& s) {
                  {"scattering_coefficient", s.models.scattering_coefficient},
                  {"scattering_lobe_exponent", s.models.scattering_lobe_exponent},
                  {"scattering_radius_m", s.models.scattering_radius_m},
+                 {"static_sky_cell_deg", s.models.static_sky_cell_deg},
                  {"ionosphere_residual_ppm", s.models.ionosphere_residual_ppm},
                  {"ionosphere_residual_length_km", s.models.ionosphere_residual_length_km},
                  {"troposphere_residual_ppm", s.models.troposphere_residual_ppm},

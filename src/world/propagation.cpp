@@ -405,7 +405,47 @@ void reflect_state(std::complex<double>& rhcp, std::complex<double>& lhcp, const
   lhcp = l;
 }
 
+// A cell of the sky for PathSearchSettings::static_sky_cell_deg: bands of elevation, each cut into
+// whole cells of about the size on the sky in azimuth. Its key and its centre direction (ENU).
+struct SkyCell {
+  std::uint64_t key = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::UnitZ();
+};
+SkyCell sky_cell_of(const Eigen::Vector3d& s, double cell_deg) {
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const double elevation_deg = std::asin(std::clamp(s.z(), -1.0, 1.0)) / kDeg;
+  double azimuth_deg = std::atan2(s.x(), s.y()) / kDeg;
+  if (azimuth_deg < 0.0) azimuth_deg += 360.0;
+  const auto bands = std::max<std::int64_t>(1, std::llround(180.0 / cell_deg));
+  const double band_deg = 180.0 / static_cast<double>(bands);
+  const std::int64_t band = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((elevation_deg + 90.0) / band_deg)), 0, bands - 1);
+  const double centre_elevation_deg = -90.0 + (static_cast<double>(band) + 0.5) * band_deg;
+  const auto cells = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::floor(360.0 * std::cos(centre_elevation_deg * kDeg) / cell_deg)));
+  const double cell_azimuth_deg = 360.0 / static_cast<double>(cells);
+  const std::int64_t cell = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor(azimuth_deg / cell_azimuth_deg)), 0, cells - 1);
+  const double centre_azimuth_deg = (static_cast<double>(cell) + 0.5) * cell_azimuth_deg;
+  SkyCell out;
+  out.key = (static_cast<std::uint64_t>(band) << 32U) | static_cast<std::uint64_t>(cell);
+  out.centre = Eigen::Vector3d(std::sin(centre_azimuth_deg * kDeg) * std::cos(centre_elevation_deg * kDeg),
+                               std::cos(centre_azimuth_deg * kDeg) * std::cos(centre_elevation_deg * kDeg),
+                               std::sin(centre_elevation_deg * kDeg));
+  return out;
+}
+
+bool same_search(const PathSearchSettings& a, const PathSearchSettings& b) {
+  const auto fields = [](const PathSearchSettings& x) {
+    return std::tie(x.radius_m, x.max_reflection_order, x.second_order_radius_m, x.diffraction, x.max_diffraction_loss_db,
+                    x.frequency_hz, x.min_relative_power_db, x.min_facet_area_m2, x.scattering_coefficient,
+                    x.scattering_lobe_exponent, x.scattering_radius_m, x.scattering_patch_m, x.static_sky_cell_deg);
+  };
+  return fields(a) == fields(b);
+}
+
 }  // namespace
+
+Eigen::Vector3d sky_cell_centre(const Eigen::Vector3d& direction, double cell_deg) {
+  return sky_cell_of(direction, cell_deg).centre;
+}
 
 ElectricalProperties electrical_properties(MaterialClass material, double frequency_hz) {
   const double f_ghz = frequency_hz * 1e-9;
@@ -1707,6 +1747,84 @@ std::shared_ptr<const PropagationScene::FacetEdgeList> PropagationScene::facet_e
 
 std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                              const PathSearchSettings& settings) const {
+  return settings.static_sky_cell_deg > 0.0 ? paths_by_sky_cell(origin_m, directions, settings)
+                                            : search_paths(origin_m, directions, settings);
+}
+
+// The paths found at a cell's centre, for one antenna point and settings.
+struct PropagationScene::SkyCellPaths {
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
+  PathSearchSettings settings;
+  std::unordered_map<std::uint64_t, std::shared_ptr<const PathSet>> cells;
+};
+
+std::vector<PathSet> PropagationScene::paths_by_sky_cell(const Eigen::Vector3d& origin_m,
+                                                         const std::vector<Eigen::Vector3d>& directions,
+                                                         const PathSearchSettings& settings) const {
+  // A day at one point passes through about 10^5 cells; the oldest are forgotten (as a cell's paths
+  // depend on the cell alone, searching one again gives the same answer).
+  constexpr std::size_t kMaxCells = 4096;
+  const std::size_t n = directions.size();
+  std::vector<SkyCell> cells(n);
+  for (std::size_t i = 0; i < n; ++i) cells[i] = sky_cell_of(directions[i], settings.static_sky_cell_deg);
+  std::vector<std::shared_ptr<const PathSet>> found(n);
+  std::shared_ptr<SkyCellPaths> kept;
+  {
+    const std::lock_guard lock(sky_cell_mutex_);
+    for (const auto& candidate : sky_cell_paths_) {
+      if (candidate && candidate->origin_m == origin_m && same_search(candidate->settings, settings)) kept = candidate;
+    }
+    if (!kept) {
+      kept = std::make_shared<SkyCellPaths>();
+      kept->origin_m = origin_m;
+      kept->settings = settings;
+      sky_cell_paths_[next_sky_cell_paths_] = kept;
+      next_sky_cell_paths_ = (next_sky_cell_paths_ + 1) % sky_cell_paths_.size();
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (const auto it = kept->cells.find(cells[i].key); it != kept->cells.end()) found[i] = it->second;
+    }
+  }
+  // The cells not known yet, each searched once at its centre.
+  std::vector<Eigen::Vector3d> centres;
+  std::vector<std::uint64_t> keys;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!found[i] && std::find(keys.begin(), keys.end(), cells[i].key) == keys.end()) {
+      keys.push_back(cells[i].key);
+      centres.push_back(cells[i].centre);
+    }
+  }
+  if (!keys.empty()) {
+    std::vector<PathSet> searched = search_paths(origin_m, centres, settings);
+    std::vector<std::shared_ptr<const PathSet>> fresh(keys.size());
+    for (std::size_t k = 0; k < keys.size(); ++k) fresh[k] = std::make_shared<const PathSet>(std::move(searched[k]));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!found[i]) found[i] = fresh[static_cast<std::size_t>(std::find(keys.begin(), keys.end(), cells[i].key) - keys.begin())];
+    }
+    const std::lock_guard lock(sky_cell_mutex_);
+    if (kept->cells.size() + keys.size() > kMaxCells) kept->cells.clear();
+    for (std::size_t k = 0; k < keys.size(); ++k) kept->cells.emplace(keys[k], fresh[k]);
+  }
+  // Each direction gets its cell's paths, the excess delays carried from the centre to it (exact
+  // for reflections, whose excess is linear in the direction; second order in the offset for the
+  // others), the direct path arriving from the direction itself.
+  std::vector<PathSet> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = *found[i];
+    const Eigen::Vector3d offset = directions[i] - cells[i].centre;
+    for (SignalPath& p : out[i].paths) {
+      if (p.type == PathType::kDirect) {
+        p.arrival_direction = directions[i];
+      } else {
+        p.excess_delay_m = std::max(p.excess_delay_m + p.delay_gradient_direction.dot(offset), 0.0);
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
+                                                    const PathSearchSettings& settings) const {
   const Eigen::Vector3d& r = origin_m;
   const std::size_t n_sat = directions.size();
   const double kInf = std::numeric_limits<double>::infinity();

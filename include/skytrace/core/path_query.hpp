@@ -109,6 +109,13 @@ struct PathSearchSettings {
   int scattering_lobe_exponent = 0;
   double scattering_radius_m = 100.0;
   double scattering_patch_m = 2.0;
+  // For an antenna that stays at one point (the simulator sets it for receivers at a fixed
+  // position, models.static_sky_cell_deg): > 0 searches each direction at the centre of its sky
+  // cell of about this size, keeps each cell's paths for the point, and carries every path's excess
+  // delay to the direction by its gradient, so that a satellite is searched again only when it
+  // enters a new cell. The answer depends on the cell alone, never on what was asked before.
+  // 0: every direction is searched as given.
+  double static_sky_cell_deg = 0.0;
 };
 
 // Every path of one satellite: the direct ray's outcome (blocked or not, vegetation) and the

@@ -43,6 +43,8 @@ class KinematicsSource {
  public:
   virtual ~KinematicsSource() = default;
   [[nodiscard]] virtual Result<Kinematics> at(const GnssTime& t) const = 0;
+  // Whether the receiver stays at one point whatever the time (its paths can be kept).
+  [[nodiscard]] virtual bool fixed() const { return false; }
 };
 
 // A receiver that stands still.
@@ -52,6 +54,7 @@ class StaticPosition final : public KinematicsSource {
   [[nodiscard]] Result<Kinematics> at(const GnssTime& /*t*/) const override {
     return Kinematics{position_m_, Eigen::Vector3d::Zero()};
   }
+  [[nodiscard]] bool fixed() const override { return true; }
 
  private:
   Eigen::Vector3d position_m_;

@@ -98,6 +98,9 @@ struct ModelSettings {
   double scattering_coefficient = 0.0;
   int scattering_lobe_exponent = 0;  // 0: Lambertian; n: directive lobe ((1 + cos psi) / 2)^n
   double scattering_radius_m = 100.0;
+  // A receiver at a fixed position searches the world's paths once per sky cell of this size that a
+  // satellite passes through (PathSearchSettings::static_sky_cell_deg; 0: at every epoch).
+  double static_sky_cell_deg = 0.05;
   // Residual fields the models leave, shared by the receivers (docs/models/atmosphere-residuals.md):
   // gradients in parts per million of the distance (0: none), correlation lengths.
   double ionosphere_residual_ppm = 0.0;

@@ -56,6 +56,10 @@ struct FresnelCoefficients {
 // for v > -0.78, 0 below.
 [[nodiscard]] double knife_edge_loss_db(double v);
 
+// The centre of the sky cell (PathSearchSettings::static_sky_cell_deg) that holds the unit
+// direction (world frame, z up): where the paths of every direction of the cell are searched.
+[[nodiscard]] Eigen::Vector3d sky_cell_centre(const Eigen::Vector3d& direction, double cell_deg);
+
 // A planar reflector: coplanar triangles of one static object merged.
 struct Facet {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit; the plane is normal . x = offset_m
@@ -122,6 +126,13 @@ class PropagationScene final : public PathQuery {
 
  private:
   PropagationScene() = default;
+  // paths() for the directions as given (settings.static_sky_cell_deg ignored).
+  [[nodiscard]] std::vector<PathSet> search_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
+                                                  const PathSearchSettings& settings) const;
+  // paths() with settings.static_sky_cell_deg > 0: each direction's paths from its sky cell's.
+  [[nodiscard]] std::vector<PathSet> paths_by_sky_cell(const Eigen::Vector3d& origin_m,
+                                                       const std::vector<Eigen::Vector3d>& directions,
+                                                       const PathSearchSettings& settings) const;
   // A facet near the receiver, seen from it: the normal turned towards it, its height above the
   // plane, the material's permittivity.
   // A patch of a facet for diffuse scattering: its centre and area.
@@ -319,6 +330,11 @@ class PropagationScene final : public PathQuery {
   mutable RecentResults<PatchSight> patch_sights_;
   mutable RecentResults<ReflectedEdgeIndex> reflected_edge_indexes_;
   mutable RecentResults<ReflectorIndex> reflector_indexes_;
+  // The paths searched at sky-cell centres, per antenna point and settings (paths_by_sky_cell).
+  struct SkyCellPaths;
+  mutable std::mutex sky_cell_mutex_;
+  mutable std::array<std::shared_ptr<SkyCellPaths>, kCachedCandidateSets> sky_cell_paths_;
+  mutable std::size_t next_sky_cell_paths_ = 0;
 };
 
 }  // namespace skytrace::world
