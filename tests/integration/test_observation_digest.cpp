@@ -19,6 +19,10 @@
 // 732abd079afaceba); truth.csv also gained the columns foliage_code_m, foliage_phase_m,
 // foliage_power_db.
 //
+// Again (QuickstartMultipath) when a receiver at a fixed position got its paths by sky cell
+// (models.static_sky_cell_deg, issue #15, docs/adr/0006-static-paths-by-sky-cell.md); with the cells
+// off the run gives the previous digests (QuickstartMultipathSearchedEveryEpoch).
+//
 // When a model change is intended: check the new outputs (skytrace compare, the report), then
 // record the digests this test prints on failure, and say so in the commit message.
 //
@@ -90,6 +94,13 @@ TEST(ObservationDigest, QuickstartMinute) {
 
 TEST(ObservationDigest, QuickstartMultipath) {
   const Digests d = run_quickstart("multipath", "--set time.duration_s=30 --set models.multipath=true");
+  EXPECT_EQ(d.obs_records, "4da22daa7c8543fb") << "obs.rnx records changed (see the comment at the top to re-record)";
+  EXPECT_EQ(d.truth, "64e6d290183bb41d") << "truth.csv changed (see the comment at the top to re-record)";
+}
+
+TEST(ObservationDigest, QuickstartMultipathSearchedEveryEpoch) {
+  const Digests d = run_quickstart("multipath-every-epoch",
+                                   "--set time.duration_s=30 --set models.multipath=true --set models.static_sky_cell_deg=0");
   EXPECT_EQ(d.obs_records, "18acfedd7cbdaecd") << "obs.rnx records changed (see the comment at the top to re-record)";
   EXPECT_EQ(d.truth, "3b45fcedf813510b") << "truth.csv changed (see the comment at the top to re-record)";
 }
