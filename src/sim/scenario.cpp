@@ -396,7 +396,10 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (auto c = models->child("scattering_coefficient")) s.models.scattering_coefficient = c->as_double_in(0.0, 1.0);
     if (auto c = models->child("scattering_lobe_exponent")) s.models.scattering_lobe_exponent = c->as_int_in(0, 20);
     if (auto c = models->child("scattering_radius_m")) s.models.scattering_radius_m = c->as_double_in(1.0, 1000.0);
-    if (auto c = models->child("static_sky_cell_deg")) s.models.static_sky_cell_deg = c->as_double_in(0.0, 1.0);
+    if (auto c = models->child("static_sky_cell_deg")) {
+      s.models.static_sky_cell_deg = c->as_double_in(0.0, 1.0);
+      if (s.models.static_sky_cell_deg > 0.0 && s.models.static_sky_cell_deg < 1e-3) c->fail("must be 0 or 0.001 to 1");
+    }
     if (auto c = models->child("ionosphere_residual_ppm")) s.models.ionosphere_residual_ppm = c->as_double_in(0.0, 50.0);
     if (auto c = models->child("ionosphere_residual_length_km")) {
       s.models.ionosphere_residual_length_km = c->as_double_in(10.0, 5000.0);

@@ -411,8 +411,9 @@ struct SkyCell {
   std::uint64_t key = 0;
   Eigen::Vector3d centre = Eigen::Vector3d::UnitZ();
 };
-SkyCell sky_cell_of(const Eigen::Vector3d& s, double cell_deg) {
+SkyCell sky_cell_of(const Eigen::Vector3d& s, double requested_cell_deg) {
   constexpr double kDeg = std::numbers::pi / 180.0;
+  const double cell_deg = std::max(requested_cell_deg, 1e-3);  // so that a cell's number fits its 32 bits
   const double elevation_deg = std::asin(std::clamp(s.z(), -1.0, 1.0)) / kDeg;
   double azimuth_deg = std::atan2(s.x(), s.y()) / kDeg;
   if (azimuth_deg < 0.0) azimuth_deg += 360.0;

@@ -114,7 +114,7 @@ struct PathSearchSettings {
   // cell of about this size, keeps each cell's paths for the point, and carries every path's excess
   // delay to the direction by its gradient, so that a satellite is searched again only when it
   // enters a new cell. The answer depends on the cell alone, never on what was asked before.
-  // 0: every direction is searched as given.
+  // 0: every direction is searched as given; cells below 0.001 deg are taken as 0.001 deg.
   double static_sky_cell_deg = 0.0;
 };
 
