@@ -427,19 +427,8 @@ SkyCell sky_cell_of(const Eigen::Vector3d& s, double requested_cell_deg) {
   const double centre_azimuth_deg = (static_cast<double>(cell) + 0.5) * cell_azimuth_deg;
   SkyCell out;
   out.key = (static_cast<std::uint64_t>(band) << 32U) | static_cast<std::uint64_t>(cell);
-  out.centre = Eigen::Vector3d(std::sin(centre_azimuth_deg * kDeg) * std::cos(centre_elevation_deg * kDeg),
-                               std::cos(centre_azimuth_deg * kDeg) * std::cos(centre_elevation_deg * kDeg),
-                               std::sin(centre_elevation_deg * kDeg));
+  out.centre = enu_direction(centre_azimuth_deg, centre_elevation_deg);
   return out;
-}
-
-bool same_search(const PathSearchSettings& a, const PathSearchSettings& b) {
-  const auto fields = [](const PathSearchSettings& x) {
-    return std::tie(x.radius_m, x.max_reflection_order, x.second_order_radius_m, x.diffraction, x.max_diffraction_loss_db,
-                    x.frequency_hz, x.min_relative_power_db, x.min_facet_area_m2, x.scattering_coefficient,
-                    x.scattering_lobe_exponent, x.scattering_radius_m, x.scattering_patch_m, x.static_sky_cell_deg);
-  };
-  return fields(a) == fields(b);
 }
 
 }  // namespace
@@ -1773,7 +1762,7 @@ std::vector<PathSet> PropagationScene::paths_by_sky_cell(const Eigen::Vector3d& 
   {
     const std::lock_guard lock(sky_cell_mutex_);
     for (const auto& candidate : sky_cell_paths_) {
-      if (candidate && candidate->origin_m == origin_m && same_search(candidate->settings, settings)) kept = candidate;
+      if (candidate && candidate->origin_m == origin_m && candidate->settings == settings) kept = candidate;
     }
     if (!kept) {
       kept = std::make_shared<SkyCellPaths>();

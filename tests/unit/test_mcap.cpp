@@ -477,7 +477,11 @@ TEST_P(McapWriterTest, MemoryDoesNotGrowWithTheNumberOfMessages) {
   ASSERT_FALSE(HasFatalFailure());
   const size_t in_use_after_36_mib = mallinfo2().uordblks;
   // 128 more chunks keep a Chunk Index entry each (~100 bytes): nothing near the 32 MiB written.
-  EXPECT_LT(in_use_after_36_mib, in_use_after_4_mib + (size_t{256} << 10));
+  // The worker thread holds up to kQueuedChunks (2) chunks waiting, one being compressed with its
+  // output, and the one being filled: how many of those buffers exist when memory is sampled depends
+  // on how far the worker is behind (0.03-0.5 MiB more on an idle machine, up to 0.9 MiB while a CI
+  // run loaded it), so the bound allows six chunks' worth (1.5 MiB), a 21st of what was written.
+  EXPECT_LT(in_use_after_36_mib, in_use_after_4_mib + 6 * (size_t{256} << 10));
   EXPECT_GT(w.statistics().chunk_count, 140u);
   ASSERT_TRUE(w.close().ok());
   EXPECT_GT(std::filesystem::file_size(path), 0u);

@@ -116,6 +116,8 @@ struct PathSearchSettings {
   // enters a new cell. The answer depends on the cell alone, never on what was asked before.
   // 0: every direction is searched as given; cells below 0.001 deg are taken as 0.001 deg.
   double static_sky_cell_deg = 0.0;
+
+  [[nodiscard]] bool operator==(const PathSearchSettings&) const = default;
 };
 
 // Every path of one satellite: the direct ray's outcome (blocked or not, vegetation) and the
