@@ -86,8 +86,9 @@ std::vector<Eigen::Vector3d> directions_at(const City& city, long k) {
 // nlos_models: also double bounces between facets within 40 m and directive diffuse scattering
 // (S = 0.4, n = 4), as the Berlin validation scenarios take them (docs/validation.md).
 // sky_cell_deg: PathSearchSettings::static_sky_cell_deg (what the simulator gives a receiver at a fixed position).
+// moving_cell_m: PathSearchSettings::moving_cell_m (what the simulator gives a moving receiver).
 void run_paths(benchmark::State& state, bool moving, int order, bool diffraction, bool nlos_models = false,
-               double sky_cell_deg = 0.0) {
+               double sky_cell_deg = 0.0, double moving_cell_m = 0.0) {
   const City& city = citysim();
   if (!city.scene) return state.SkipWithError("citysim world absent or not loadable (set SKYTRACE_SHARED_DATA)");
   PathSearchSettings settings;
@@ -100,6 +101,7 @@ void run_paths(benchmark::State& state, bool moving, int order, bool diffraction
     settings.scattering_lobe_exponent = 4;
   }
   settings.static_sky_cell_deg = sky_cell_deg;
+  settings.moving_cell_m = moving_cell_m;
   // Epochs kept per sky cell would come back from the cache if a repetition started the sky again:
   // with cells, each repetition goes on where the last one stopped.
   static std::map<long, long> next_epoch;  // per receiver
@@ -178,6 +180,12 @@ BENCHMARK(BM_CitysimPathsNlosModelsMoving)->Unit(benchmark::kMicrosecond)->Arg(0
 // 0.05 deg (models.static_sky_cell_deg), the satellites moving about 0.01 deg per 1 s epoch.
 void BM_CitysimPathsNlosModelsStaticCells(benchmark::State& state) { run_paths(state, false, 1, true, true, 0.05); }
 BENCHMARK(BM_CitysimPathsNlosModelsStaticCells)->Unit(benchmark::kMicrosecond)->Arg(0)->Arg(1)->Iterations(100);
+// A moving antenna as the simulator runs one on a trajectory: its second-order and scattered paths
+// kept per cube of models.moving_cell_m (the argument, in dm) and sky cell.
+void BM_CitysimPathsNlosModelsMovingCells(benchmark::State& state) {
+  run_paths(state, true, 1, true, true, 0.0, 0.1 * static_cast<double>(state.range(1)));
+}
+BENCHMARK(BM_CitysimPathsNlosModelsMovingCells)->Unit(benchmark::kMicrosecond)->Args({0, 10})->Args({0, 20})->Args({0, 30})->Args({0, 40})->Iterations(100);
 
 // Receiver side: 40 satellites x 4 signals (BPSK(1), BOC(1,1), BPSK(2), BPSK(10)) from the paths
 // the static antenna sees.

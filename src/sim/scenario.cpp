@@ -369,7 +369,7 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
   if (auto models = root.child("models")) {
     models->expect_keys({"ionosphere", "ionex_file", "troposphere", "receiver_clock", "noise", "multipath",
                          "multipath_radius_m", "multipath_order", "multipath_order2_radius_m", "diffraction", "scattering_coefficient",
-                         "scattering_lobe_exponent", "scattering_radius_m", "static_sky_cell_deg", "ionosphere_residual_ppm",
+                         "scattering_lobe_exponent", "scattering_radius_m", "static_sky_cell_deg", "moving_cell_m", "ionosphere_residual_ppm",
                          "ionosphere_residual_length_km", "troposphere_residual_ppm", "troposphere_residual_length_km",
                          "foliage_fading", "foliage_diffuse_db", "foliage_wind_spread_hz"});
     if (auto c = models->child("ionosphere")) s.models.ionosphere = c->as_choice({"none", "klobuchar", "ionex"});
@@ -399,6 +399,10 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
     if (auto c = models->child("static_sky_cell_deg")) {
       s.models.static_sky_cell_deg = c->as_double_in(0.0, 1.0);
       if (s.models.static_sky_cell_deg > 0.0 && s.models.static_sky_cell_deg < 1e-3) c->fail("must be 0 or 0.001 to 1");
+    }
+    if (auto c = models->child("moving_cell_m")) {
+      s.models.moving_cell_m = c->as_double_in(0.0, 20.0);
+      if (s.models.moving_cell_m > 0.0 && s.models.moving_cell_m < 0.1) c->fail("must be 0 or 0.1 to 20");
     }
     if (auto c = models->child("ionosphere_residual_ppm")) s.models.ionosphere_residual_ppm = c->as_double_in(0.0, 50.0);
     if (auto c = models->child("ionosphere_residual_length_km")) {
@@ -644,6 +648,7 @@ std::string scenario_to_json(const Scenario& s) {
                  {"scattering_lobe_exponent", s.models.scattering_lobe_exponent},
                  {"scattering_radius_m", s.models.scattering_radius_m},
                  {"static_sky_cell_deg", s.models.static_sky_cell_deg},
+                 {"moving_cell_m", s.models.moving_cell_m},
                  {"ionosphere_residual_ppm", s.models.ionosphere_residual_ppm},
                  {"ionosphere_residual_length_km", s.models.ionosphere_residual_length_km},
                  {"troposphere_residual_ppm", s.models.troposphere_residual_ppm},

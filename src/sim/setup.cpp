@@ -434,7 +434,11 @@ Result<std::unique_ptr<receiver::ObservationGenerator>> make_generator(
   g.path_search.scattering_lobe_exponent = s.models.scattering_lobe_exponent;
   g.path_search.scattering_radius_m = s.models.scattering_radius_m;
   // Only an antenna that cannot move has paths worth keeping per sky cell (a live pose may move it).
-  if (kinematics->fixed()) g.path_search.static_sky_cell_deg = s.models.static_sky_cell_deg;
+  if (kinematics->fixed()) {
+    g.path_search.static_sky_cell_deg = s.models.static_sky_cell_deg;
+  } else {
+    g.path_search.moving_cell_m = s.models.moving_cell_m;
+  }
   g.foliage.enabled = s.models.foliage_fading;
   g.foliage.diffuse_db = s.models.foliage_diffuse_db;
   g.foliage.wind_spread_hz = s.models.foliage_wind_spread_hz;

@@ -1737,8 +1737,43 @@ std::shared_ptr<const PropagationScene::FacetEdgeList> PropagationScene::facet_e
 
 std::vector<PathSet> PropagationScene::paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                                              const PathSearchSettings& settings) const {
-  return settings.static_sky_cell_deg > 0.0 ? paths_by_sky_cell(origin_m, directions, settings)
-                                            : search_paths(origin_m, directions, settings);
+  if (settings.moving_cell_m > 0.0) return paths_by_moving_cell(origin_m, directions, settings);
+  return settings.static_sky_cell_deg > 0.0 ? paths_by_sky_cell(origin_m, directions, settings, SearchScope{})
+                                            : search_paths(origin_m, directions, settings, SearchScope{});
+}
+
+Eigen::Vector3d moving_cell_centre(const Eigen::Vector3d& point_m, double cell_m) {
+  return ((point_m / cell_m).array().floor() + 0.5).matrix() * cell_m;
+}
+
+std::vector<PathSet> PropagationScene::paths_by_moving_cell(const Eigen::Vector3d& origin_m,
+                                                            const std::vector<Eigen::Vector3d>& directions,
+                                                            const PathSearchSettings& settings) const {
+  // What changes within a step of the antenna -- the line of sight, the single reflections, the
+  // knife edges -- is searched where the antenna is.
+  std::vector<PathSet> out = search_paths(origin_m, directions, settings, SearchScope{.near_only = true});
+  if (settings.max_reflection_order < 2 && settings.scattering_coefficient <= 0.0) return out;
+  // The rest comes from the cube's centre, searched once per sky cell there (with no index of the
+  // point: a cube is left within a few epochs), its excess delays carried to the antenna.
+  const Eigen::Vector3d centre = moving_cell_centre(origin_m, settings.moving_cell_m);
+  PathSearchSettings whole = settings;
+  whole.moving_cell_m = 0.0;
+  whole.static_sky_cell_deg = PathSearchSettings::kMovingSkyCell_deg;
+  std::vector<PathSet> far = paths_by_sky_cell(centre, directions, whole, SearchScope{.point_indexes = false});
+  const Eigen::Vector3d offset = origin_m - centre;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    for (SignalPath& p : far[i].paths) {
+      // Scattering is searched for a satellite hidden from the antenna only (as search_paths does).
+      const bool far_kind = (p.type == PathType::kScattered && out[i].direct.blocked) ||
+                            (p.type == PathType::kReflected && p.reflections >= 2) ||
+                            (p.type == PathType::kDiffracted && p.reflections >= 1);
+      if (!far_kind) continue;
+      p.excess_delay_m = std::max(p.excess_delay_m + p.delay_gradient_origin.dot(offset), 0.0);
+      out[i].paths.push_back(std::move(p));
+    }
+  }
+  sort_indirect_paths_by_power(out);
+  return out;
 }
 
 // The paths found at a cell's centre, for one antenna point and settings.
@@ -1750,7 +1785,7 @@ struct PropagationScene::SkyCellPaths {
 
 std::vector<PathSet> PropagationScene::paths_by_sky_cell(const Eigen::Vector3d& origin_m,
                                                          const std::vector<Eigen::Vector3d>& directions,
-                                                         const PathSearchSettings& settings) const {
+                                                         const PathSearchSettings& settings, SearchScope scope) const {
   // A day at one point passes through about 10^5 cells; the oldest are forgotten (as a cell's paths
   // depend on the cell alone, searching one again gives the same answer).
   constexpr std::size_t kMaxCells = 4096;
@@ -1785,7 +1820,7 @@ std::vector<PathSet> PropagationScene::paths_by_sky_cell(const Eigen::Vector3d& 
     }
   }
   if (!keys.empty()) {
-    std::vector<PathSet> searched = search_paths(origin_m, centres, settings);
+    std::vector<PathSet> searched = search_paths(origin_m, centres, settings, scope);
     std::vector<std::shared_ptr<const PathSet>> fresh(keys.size());
     for (std::size_t k = 0; k < keys.size(); ++k) fresh[k] = std::make_shared<const PathSet>(std::move(searched[k]));
     for (std::size_t i = 0; i < n; ++i) {
@@ -1814,8 +1849,11 @@ std::vector<PathSet> PropagationScene::paths_by_sky_cell(const Eigen::Vector3d& 
 }
 
 std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
-                                                    const PathSearchSettings& settings) const {
+                                                    const PathSearchSettings& settings, SearchScope scope) const {
   const Eigen::Vector3d& r = origin_m;
+  // What this search looks for (the settings' reflection coefficients whatever the scope).
+  const int max_order = scope.near_only ? std::min(settings.max_reflection_order, 1) : settings.max_reflection_order;
+  const bool scattering = !scope.near_only && settings.scattering_coefficient > 0.0;
   const std::size_t n_sat = directions.size();
   const double kInf = std::numeric_limits<double>::infinity();
   std::vector<PathSet> out(n_sat);
@@ -1863,10 +1901,10 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
   // A static antenna's first-order reflectors by sky cell; else the facets as arrays, for the first
   // test of the first-order reflections of all facets at once.
   const std::shared_ptr<const ReflectorIndex> first_order_index =
-      settings.max_reflection_order >= 1 ? reflector_index(r, near_facets) : nullptr;
+      max_order >= 1 && scope.point_indexes ? reflector_index(r, near_facets) : nullptr;
   ReflectorArrays reflectors;
   std::vector<double> may_reflect;
-  if (settings.max_reflection_order >= 1 && !first_order_index) {
+  if (max_order >= 1 && !first_order_index) {
     may_reflect.resize(near_facets.size());
     for (auto* v : {&reflectors.nx, &reflectors.ny, &reflectors.nz, &reflectors.height, &reflectors.ix, &reflectors.iy,
                     &reflectors.iz, &reflectors.cx, &reflectors.cy, &reflectors.cz, &reflectors.radius2}) {
@@ -1891,7 +1929,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
   }
   // Double bounces between the facets within second_order_radius_m (their number grows as its square).
   std::vector<NearFacet> second_order_facets;
-  if (settings.max_reflection_order >= 2) {
+  if (max_order >= 2) {
     const double radius2_m = settings.second_order_radius_m > 0.0 ? settings.second_order_radius_m : settings.radius_m;
     for (const NearFacet& nf : near_facets) {
       const Facet& f = facets_[nf.index];
@@ -1943,8 +1981,9 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
   const double grazing_excess_max_m = 0.78 * 0.78 * wavelength_m / 4.0;
   // A static antenna's facet-edge pairs for diffraction then reflection, by sky cell.
   const std::shared_ptr<const ReflectedEdgeIndex> edge_index =
-      settings.diffraction && !edges_.empty() ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m, settings.radius_m)
-                                              : nullptr;
+      settings.diffraction && !edges_.empty() && scope.point_indexes
+          ? reflected_edge_index(r, second_order_facets, blocked_excess_max_m, settings.radius_m)
+          : nullptr;
 
   // Second order: satellite -> B -> A -> receiver; the image of the receiver's image in A taken in
   // B gives the point on B, the line from there to the first image the point on A. Pairs go facet
@@ -1952,7 +1991,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
   // receiver side, A reaches B's side of the first image): what depends on the pair alone is
   // worked out once instead of once per satellite. Paths are kept per satellite in pair order.
   std::vector<std::vector<Pending>> second_order(n_sat);
-  if (settings.max_reflection_order >= 2) {
+  if (max_order >= 2) {
     // Facet A's plane (na . x = ca) and the receiver's image in it.
     std::vector<double> plane_a(second_order_facets.size());
     std::vector<Eigen::Vector3d> image_of(second_order_facets.size());
@@ -2018,7 +2057,8 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       p.legs.push_back(Leg{p2 + kSurfaceOffset_m * nb, s, kInf});
       second_order[i].push_back(std::move(p));
     };
-    const std::shared_ptr<const DoubleBounceIndex> index = double_bounce_index(r, second_order_facets, plane_a, image_of);
+    const std::shared_ptr<const DoubleBounceIndex> index =
+        scope.point_indexes ? double_bounce_index(r, second_order_facets, plane_a, image_of) : nullptr;
     if (index) {
       // A static antenna: every pair is known, each satellite tries those whose cone covers its
       // sky cell, in pair order (as below).
@@ -2103,7 +2143,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
     const Eigen::Vector3d& s = directions[i];
     // First order: the image of the receiver in the facet's plane, the line from it towards the
     // satellite meets the plane at the reflection point.
-    if (settings.max_reflection_order >= 1) {
+    if (max_order >= 1) {
       const auto reflect_off = [&](std::size_t k) {
         const NearFacet& nf = near_facets[k];
         const double ns = nf.normal.dot(s);
@@ -2274,7 +2314,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       // (a street canyon's usual NLOS path: over the roof across the street, down onto a facade
       // and back). The knife edge as seen from the receiver's image in the facet; the reflection
       // point is where the line from the edge point to the image crosses the facet.
-      if (settings.max_reflection_order < 2 || second_order_facets.empty()) continue;
+      if (max_order < 2 || second_order_facets.empty()) continue;
       struct ReflectedEdgeHit {
         std::size_t facet = 0, edge = 0;  // second-order facet, edge
         Eigen::Vector3d edge_point_m, reflection_point_m;
@@ -2509,7 +2549,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       }
     }
   }
-  if (settings.scattering_coefficient > 0.0) add_scattered_paths(r, directions, settings, *near, near_facets, out);
+  if (scattering) add_scattered_paths(r, directions, settings, *near, near_facets, out);
   if (pending.empty()) {
     sort_indirect_paths_by_power(out);
     return out;
@@ -2522,7 +2562,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
     std::size_t satellite = 0, facet = 0, object = 0;
   };
   std::vector<HiddenReflection> hidden_reflections;
-  const bool reflection_then_diffraction = settings.max_reflection_order >= 2 && settings.diffraction && !edges_.empty();
+  const bool reflection_then_diffraction = max_order >= 2 && settings.diffraction && !edges_.empty();
   std::vector<std::array<std::size_t, 2>> diffracted_kept(n_sat, {0, 0});  // without, with a reflection
   std::vector<Eigen::Vector3d> one(1);
   const auto settle = [&](std::vector<Pending>& candidates, const std::vector<Eigen::Vector3d>& first_directions) {

@@ -451,6 +451,130 @@ TEST(Propagation, StaticSkyCellsGiveTheirCentresPathsCarriedToTheDirection) {
   EXPECT_GT(compared_diffractions, 100);
 }
 
+bool is_far_kind(const SignalPath& p) {  // what a moving antenna takes from its cube's centre
+  return p.type == PathType::kScattered || (p.type == PathType::kReflected && p.reflections == 2) ||
+         (p.type == PathType::kDiffracted && p.reflections == 1);
+}
+
+// A moving antenna's cubes (moving_cell_m): the direct paths, single reflections and knife edges are
+// those of the search at the antenna itself, the same values; the second-order and scattered paths
+// are those searched at the cube's centre for the directions' sky-cell centres, their excess delays
+// carried to the antenna and the direction by their gradients (scattering kept for a satellite
+// hidden from the antenna, as the search at the antenna keeps it).
+TEST(Propagation, MovingCellsTakeNearPathsAtTheAntennaAndTheRestFromTheCubesCentre) {
+  const WorldModel w = blocks_world();
+  const PathSearchSettings exact = nlos_models();
+  PathSearchSettings celled = exact;
+  celled.moving_cell_m = 3.0;
+  const std::vector<Eigen::Vector3d> sky = fibonacci_sky(600);
+  int near = 0, far = 0, carried_off_centre = 0;
+  for (const Eigen::Vector3d& rx : {Eigen::Vector3d(2.0, 3.0, 1.5), Eigen::Vector3d(-12.0, 1.0, 1.5), Eigen::Vector3d(0.7, -8.2, 2.4)}) {
+    const auto by_cell = propagation(w)->paths(rx, sky, celled);
+    const auto at_antenna = propagation(w)->paths(rx, sky, exact);
+    const Eigen::Vector3d centre = moving_cell_centre(rx, celled.moving_cell_m);
+    EXPECT_LE((centre - rx).cwiseAbs().maxCoeff(), 1.5);
+    std::vector<Eigen::Vector3d> centres;
+    for (const Eigen::Vector3d& s : sky) centres.push_back(sky_cell_centre(s, PathSearchSettings::kMovingSkyCell_deg));
+    const auto at_centre = propagation(w)->paths(centre, centres, exact);
+    for (std::size_t i = 0; i < sky.size(); ++i) {
+      const std::string what = "direction " + std::to_string(i);
+      EXPECT_EQ(by_cell[i].direct.blocked, at_antenna[i].direct.blocked) << what;
+      // Per kind in power order, as each search lists them.
+      for (const bool far_kind : {false, true}) {
+        std::vector<SignalPath> got, want;
+        for (const SignalPath& p : by_cell[i].paths) {
+          if (is_far_kind(p) == far_kind) got.push_back(p);
+        }
+        for (const SignalPath& p : far_kind ? at_centre[i].paths : at_antenna[i].paths) {
+          if (is_far_kind(p) != far_kind) continue;
+          if (far_kind && p.type == PathType::kScattered && !at_antenna[i].direct.blocked) continue;
+          want.push_back(p);
+        }
+        ASSERT_EQ(got.size(), want.size()) << what << (far_kind ? " far" : " near");
+        for (std::size_t j = 0; j < got.size(); ++j) {
+          EXPECT_EQ(got[j].type, want[j].type) << what;
+          EXPECT_EQ(got[j].reflections, want[j].reflections) << what;
+          EXPECT_EQ(got[j].rhcp_amplitude, want[j].rhcp_amplitude) << what;
+          EXPECT_EQ(got[j].point_m, want[j].point_m) << what;
+          if (!far_kind) {
+            EXPECT_EQ(got[j].excess_delay_m, want[j].excess_delay_m) << what;
+            ++near;
+            continue;
+          }
+          const double carried = std::max(want[j].excess_delay_m + want[j].delay_gradient_direction.dot(sky[i] - centres[i]), 0.0);
+          EXPECT_DOUBLE_EQ(got[j].excess_delay_m, std::max(carried + want[j].delay_gradient_origin.dot(rx - centre), 0.0)) << what;
+          carried_off_centre += got[j].excess_delay_m != want[j].excess_delay_m ? 1 : 0;
+          ++far;
+        }
+      }
+    }
+  }
+  EXPECT_GT(near, 300);  // enough of each to mean something
+  EXPECT_GT(far, 100);
+  EXPECT_GT(carried_off_centre, 100);
+}
+
+// A double bounce's excess is linear in the antenna's position (its image in both planes): carried
+// from the cube's centre it is the excess searched at the antenna, wherever the path exists at both.
+TEST(Propagation, MovingCellsCarryDoubleBouncesExactly) {
+  const WorldModel w = blocks_world();
+  PathSearchSettings exact = nlos_models();
+  exact.scattering_coefficient = 0.0;
+  PathSearchSettings celled = exact;
+  celled.moving_cell_m = 2.0;
+  // Directions at their sky cells' centres: only the antenna's offset is carried.
+  std::vector<Eigen::Vector3d> sky;
+  for (const Eigen::Vector3d& s : fibonacci_sky(600)) sky.push_back(sky_cell_centre(s, PathSearchSettings::kMovingSkyCell_deg));
+  int compared = 0;
+  for (const Eigen::Vector3d& rx : {Eigen::Vector3d(2.0, 3.0, 1.5), Eigen::Vector3d(-12.0, 1.0, 1.5)}) {
+    const auto by_cell = propagation(w)->paths(rx, sky, celled);
+    const auto at_antenna = propagation(w)->paths(rx, sky, exact);
+    for (std::size_t i = 0; i < sky.size(); ++i) {
+      for (const SignalPath& carried : by_cell[i].paths) {
+        if (carried.type != PathType::kReflected || carried.reflections != 2) continue;
+        // The same two facets: the same object and material, the points within the antenna's offset.
+        for (const SignalPath& own : at_antenna[i].paths) {
+          if (own.type != carried.type || own.reflections != 2 || own.object != carried.object) continue;
+          if ((own.point_m - carried.point_m).norm() > 2.0 || (own.second_point_m - carried.second_point_m).norm() > 2.0) continue;
+          if ((own.delay_gradient_origin - carried.delay_gradient_origin).norm() > 1e-9) continue;  // another pair of planes
+          EXPECT_NEAR(carried.excess_delay_m, own.excess_delay_m, 1e-9) << "direction " << i;
+          ++compared;
+          break;
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 20);
+}
+
+// What a cube answers depends on the cube and the sky cells alone: two scenes asked the same epochs
+// of a moving antenna in opposite orders answer alike.
+TEST(Propagation, MovingCellsAnswerAlikeWhateverWasAskedBefore) {
+  const WorldModel w = blocks_world();
+  PathSearchSettings settings = nlos_models();
+  settings.moving_cell_m = 3.0;
+  const std::vector<Eigen::Vector3d> sky = fibonacci_sky(150);
+  std::vector<Eigen::Vector3d> antenna;
+  std::vector<std::vector<Eigen::Vector3d>> epochs;
+  for (int k = 0; k < 8; ++k) {
+    antenna.emplace_back(-14.0 + 1.1 * k, 1.0, 1.5);  // 1.1 m per epoch: cubes met more than once
+    std::vector<Eigen::Vector3d> turned;
+    const Eigen::AngleAxisd turn(0.4 * k * kDeg, Eigen::Vector3d(0.3, -0.2, 1.0).normalized());
+    for (const Eigen::Vector3d& s : sky) turned.push_back(turn * s);
+    epochs.push_back(turned);
+  }
+  const auto forwards = propagation(w);
+  const auto backwards = propagation(w);
+  std::vector<std::vector<PathSet>> first(epochs.size()), second(epochs.size());
+  for (std::size_t k = 0; k < epochs.size(); ++k) first[k] = forwards->paths(antenna[k], epochs[k], settings);
+  for (std::size_t k = epochs.size(); k-- > 0;) second[k] = backwards->paths(antenna[k], epochs[k], settings);
+  for (std::size_t k = 0; k < epochs.size(); ++k) {
+    for (std::size_t i = 0; i < sky.size(); ++i) {
+      expect_same_paths(first[k][i], second[k][i], "epoch " + std::to_string(k) + " direction " + std::to_string(i));
+    }
+  }
+}
+
 // What a cell answers depends on the cell alone: two scenes asked the same directions in opposite
 // orders (as threads sharing a scene may ask them) answer alike.
 TEST(Propagation, StaticSkyCellsAnswerAlikeWhateverWasAskedBefore) {

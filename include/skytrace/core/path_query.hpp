@@ -116,6 +116,17 @@ struct PathSearchSettings {
   // enters a new cell. The answer depends on the cell alone, never on what was asked before.
   // 0: every direction is searched as given; cells below 0.001 deg are taken as 0.001 deg.
   double static_sky_cell_deg = 0.0;
+  // For an antenna that moves (the simulator sets it for trajectories and live poses,
+  // models.moving_cell_m): > 0 searches the direct paths, the single reflections and the knife
+  // edges at the antenna as given, and the second-order paths (double bounces, a diffraction with a
+  // reflection) and the diffuse scattering, which cost three quarters of a moving search, once per
+  // cube of this size (m) that the antenna enters and per sky cell of kMovingSkyCell_deg, at their
+  // centres; those paths' excess delays are carried to the antenna and the direction by their
+  // gradients. The answer depends on the cells alone. 0: every path searched as given.
+  double moving_cell_m = 0.0;
+  // The sky cells of a moving antenna's second-order and scattered paths (deg): a cube of a few
+  // metres at reflectors 10-30 m away already moves their geometry by several degrees.
+  static constexpr double kMovingSkyCell_deg = 2.0;
 
   [[nodiscard]] bool operator==(const PathSearchSettings&) const = default;
 };

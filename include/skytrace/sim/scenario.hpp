@@ -101,6 +101,9 @@ struct ModelSettings {
   // A receiver at a fixed position searches the world's paths once per sky cell of this size that a
   // satellite passes through (PathSearchSettings::static_sky_cell_deg; 0: at every epoch).
   double static_sky_cell_deg = 0.05;
+  // A receiver that moves (a trajectory, a live pose) searches its second-order and scattered paths
+  // once per cube of this size (m) it enters (PathSearchSettings::moving_cell_m; 0: at every epoch).
+  double moving_cell_m = 4.0;
   // Residual fields the models leave, shared by the receivers (docs/models/atmosphere-residuals.md):
   // gradients in parts per million of the distance (0: none), correlation lengths.
   double ionosphere_residual_ppm = 0.0;

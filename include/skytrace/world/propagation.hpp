@@ -60,6 +60,10 @@ struct FresnelCoefficients {
 // direction (world frame, z up): where the paths of every direction of the cell are searched.
 [[nodiscard]] Eigen::Vector3d sky_cell_centre(const Eigen::Vector3d& direction, double cell_deg);
 
+// The centre of the cube (PathSearchSettings::moving_cell_m, world frame) that holds the point:
+// where a moving antenna's second-order and scattered paths are searched.
+[[nodiscard]] Eigen::Vector3d moving_cell_centre(const Eigen::Vector3d& point_m, double cell_m);
+
 // A planar reflector: coplanar triangles of one static object merged.
 struct Facet {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit; the plane is normal . x = offset_m
@@ -126,13 +130,26 @@ class PropagationScene final : public PathQuery {
 
  private:
   PropagationScene() = default;
-  // paths() for the directions as given (settings.static_sky_cell_deg ignored).
+  // What a search finds and keeps.
+  struct SearchScope {
+    // Only the direct paths, single reflections and knife edges (a second-order or scattered path
+    // none, the specular reflections still losing what the settings scatter).
+    bool near_only = false;
+    // Indexes of an antenna point met twice (a static antenna's): a moving antenna's cube centres
+    // are searched once per sky cell and would build them for nothing.
+    bool point_indexes = true;
+  };
+  // paths() for the directions as given (settings.static_sky_cell_deg and moving_cell_m ignored).
   [[nodiscard]] std::vector<PathSet> search_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
-                                                  const PathSearchSettings& settings) const;
+                                                  const PathSearchSettings& settings, SearchScope scope) const;
   // paths() with settings.static_sky_cell_deg > 0: each direction's paths from its sky cell's.
   [[nodiscard]] std::vector<PathSet> paths_by_sky_cell(const Eigen::Vector3d& origin_m,
                                                        const std::vector<Eigen::Vector3d>& directions,
-                                                       const PathSearchSettings& settings) const;
+                                                       const PathSearchSettings& settings, SearchScope scope) const;
+  // paths() with settings.moving_cell_m > 0: the near paths at the antenna, the others from its cube's.
+  [[nodiscard]] std::vector<PathSet> paths_by_moving_cell(const Eigen::Vector3d& origin_m,
+                                                          const std::vector<Eigen::Vector3d>& directions,
+                                                          const PathSearchSettings& settings) const;
   // A facet near the receiver, seen from it: the normal turned towards it, its height above the
   // plane, the material's permittivity.
   // A patch of a facet for diffuse scattering: its centre and area.
