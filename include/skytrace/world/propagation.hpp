@@ -132,8 +132,8 @@ class PropagationScene final : public PathQuery {
   PropagationScene() = default;
   // What a search finds and keeps.
   struct SearchScope {
-    // Only the direct paths, single reflections and knife edges (a second-order or scattered path
-    // none, the specular reflections still losing what the settings scatter).
+    // Only the direct paths, single reflections and knife edges: no second-order or scattered path
+    // (the specular reflections still keep only the share that the settings' scattering leaves).
     bool near_only = false;
     // Indexes of an antenna point met twice (a static antenna's): a moving antenna's cube centres
     // are searched once per sky cell and would build them for nothing.
