@@ -547,59 +547,49 @@ TEST(Propagation, MovingCellsCarryDoubleBouncesExactly) {
   EXPECT_GT(compared, 20);
 }
 
-// What a cube answers depends on the cube and the sky cells alone: two scenes asked the same epochs
-// of a moving antenna in opposite orders answer alike.
-TEST(Propagation, MovingCellsAnswerAlikeWhateverWasAskedBefore) {
-  const WorldModel w = blocks_world();
-  PathSearchSettings settings = nlos_models();
-  settings.moving_cell_m = 3.0;
-  const std::vector<Eigen::Vector3d> sky = fibonacci_sky(150);
-  std::vector<Eigen::Vector3d> antenna;
-  std::vector<std::vector<Eigen::Vector3d>> epochs;
-  for (int k = 0; k < 8; ++k) {
-    antenna.emplace_back(-14.0 + 1.1 * k, 1.0, 1.5);  // 1.1 m per epoch: cubes met more than once
+// The sky turned by step_deg more at each of `epochs` epochs, about a fixed axis.
+std::vector<std::vector<Eigen::Vector3d>> turning_sky(const std::vector<Eigen::Vector3d>& sky, int epochs, double step_deg) {
+  std::vector<std::vector<Eigen::Vector3d>> out;
+  for (int k = 0; k < epochs; ++k) {
+    const Eigen::AngleAxisd turn(step_deg * k * kDeg, Eigen::Vector3d(0.3, -0.2, 1.0).normalized());
     std::vector<Eigen::Vector3d> turned;
-    const Eigen::AngleAxisd turn(0.4 * k * kDeg, Eigen::Vector3d(0.3, -0.2, 1.0).normalized());
     for (const Eigen::Vector3d& s : sky) turned.push_back(turn * s);
-    epochs.push_back(turned);
+    out.push_back(std::move(turned));
   }
+  return out;
+}
+
+// Two scenes asked the same epochs (antenna k, directions k) in opposite orders, as threads sharing
+// a scene may ask them, answer alike.
+void expect_alike_in_either_order(const WorldModel& w, const PathSearchSettings& settings, const std::vector<Eigen::Vector3d>& antenna,
+                                  const std::vector<std::vector<Eigen::Vector3d>>& epochs) {
   const auto forwards = propagation(w);
   const auto backwards = propagation(w);
   std::vector<std::vector<PathSet>> first(epochs.size()), second(epochs.size());
   for (std::size_t k = 0; k < epochs.size(); ++k) first[k] = forwards->paths(antenna[k], epochs[k], settings);
   for (std::size_t k = epochs.size(); k-- > 0;) second[k] = backwards->paths(antenna[k], epochs[k], settings);
   for (std::size_t k = 0; k < epochs.size(); ++k) {
-    for (std::size_t i = 0; i < sky.size(); ++i) {
+    for (std::size_t i = 0; i < epochs[k].size(); ++i) {
       expect_same_paths(first[k][i], second[k][i], "epoch " + std::to_string(k) + " direction " + std::to_string(i));
     }
   }
 }
 
-// What a cell answers depends on the cell alone: two scenes asked the same directions in opposite
-// orders (as threads sharing a scene may ask them) answer alike.
+// What a cube answers depends on the cube and the sky cells alone.
+TEST(Propagation, MovingCellsAnswerAlikeWhateverWasAskedBefore) {
+  PathSearchSettings settings = nlos_models();
+  settings.moving_cell_m = 3.0;
+  std::vector<Eigen::Vector3d> antenna;
+  for (int k = 0; k < 8; ++k) antenna.emplace_back(-14.0 + 1.1 * k, 1.0, 1.5);  // 1.1 m per epoch: cubes met more than once
+  expect_alike_in_either_order(blocks_world(), settings, antenna, turning_sky(fibonacci_sky(150), 8, 0.4));
+}
+
+// What a cell answers depends on the cell alone.
 TEST(Propagation, StaticSkyCellsAnswerAlikeWhateverWasAskedBefore) {
-  const WorldModel w = blocks_world();
   PathSearchSettings settings = nlos_models();
   settings.static_sky_cell_deg = 0.05;
-  const Eigen::Vector3d rx(-12.0, 1.0, 1.5);
-  std::vector<std::vector<Eigen::Vector3d>> epochs;
-  const std::vector<Eigen::Vector3d> sky = fibonacci_sky(150);
-  for (int k = 0; k < 6; ++k) {
-    std::vector<Eigen::Vector3d> turned;
-    const Eigen::AngleAxisd turn(0.02 * k * kDeg, Eigen::Vector3d(0.3, -0.2, 1.0).normalized());
-    for (const Eigen::Vector3d& s : sky) turned.push_back(turn * s);
-    epochs.push_back(turned);
-  }
-  const auto forwards = propagation(w);
-  const auto backwards = propagation(w);
-  std::vector<std::vector<PathSet>> first(epochs.size()), second(epochs.size());
-  for (std::size_t k = 0; k < epochs.size(); ++k) first[k] = forwards->paths(rx, epochs[k], settings);
-  for (std::size_t k = epochs.size(); k-- > 0;) second[k] = backwards->paths(rx, epochs[k], settings);
-  for (std::size_t k = 0; k < epochs.size(); ++k) {
-    for (std::size_t i = 0; i < sky.size(); ++i) {
-      expect_same_paths(first[k][i], second[k][i], "epoch " + std::to_string(k) + " direction " + std::to_string(i));
-    }
-  }
+  const std::vector<Eigen::Vector3d> antenna(6, Eigen::Vector3d(-12.0, 1.0, 1.5));
+  expect_alike_in_either_order(blocks_world(), settings, antenna, turning_sky(fibonacci_sky(150), 6, 0.02));
 }
 
 // The excess delay of the path diffracted once and reflected once, moved a little from the
