@@ -974,6 +974,13 @@ std::shared_ptr<const PropagationScene::PatchSight> PropagationScene::patch_sigh
     if (o.blocked && o.blocking_distance_m < distance_m[k] - leg_tolerance_m(distance_m[k])) continue;
     sight->vegetation_db[slot[k]] = o.vegetation_attenuation_db;
   }
+  for (std::size_t k = 0; k < near_facets.size(); ++k) {
+    sight->in_view_first.push_back(sight->in_view.size());
+    for (std::size_t v = sight->first[k]; v < sight->first[k + 1]; ++v) {
+      if (!std::isnan(sight->vegetation_db[v])) sight->in_view.push_back(static_cast<std::uint32_t>(v - sight->first[k]));
+    }
+  }
+  sight->in_view_first.push_back(sight->in_view.size());
   const std::lock_guard lock(cache_mutex_);
   patch_sights_.keep(sight);
   return sight;
@@ -1059,6 +1066,9 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   std::vector<double> facet_bound;              // their summed patch bounds
   for (std::size_t k = 0; k < near_facets.size(); ++k) {
     const NearFacet& nf = near_facets[k];
+    // A static antenna sees no patch of most facets (the patches out of view add nothing to the
+    // bounds below either: what they bound stays an upper bound of what the sums give).
+    if (sight && sight->in_view_first[k] == sight->in_view_first[k + 1]) continue;
     const Facet& f = facets_[nf.index];
     const double nearest_m = (r.cwiseMax(f.min_m).cwiseMin(f.max_m) - r).norm();
     if (nf.patches == nullptr || nf.patches->empty() || nearest_m > settings.scattering_radius_m) continue;
@@ -1080,7 +1090,9 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     if (lit_by.empty()) continue;
     facet_bound.assign(lit_by.size(), 0.0);
     const std::size_t first_patch = patches.size(), first_visible = visible.size();
-    for (std::size_t p_index = 0; p_index < nf.patches->size(); ++p_index) {
+    const std::size_t n_considered = sight ? sight->in_view_first[k + 1] - sight->in_view_first[k] : nf.patches->size();
+    for (std::size_t c = 0; c < n_considered; ++c) {
+      const std::size_t p_index = sight ? sight->in_view[sight->in_view_first[k] + c] : c;
       const FacetPatch& facet_patch = (*nf.patches)[p_index];
       const Eigen::Vector3d to_point = facet_patch.point_m - r;
       const double d = to_point.norm();
@@ -1247,6 +1259,59 @@ struct PropagationScene::DoubleBounceIndex {
   std::vector<std::uint32_t> cell_start, cell_pairs;  // pairs per cell, ascending
   std::vector<std::uint32_t> everywhere;              // pairs without a cone
 
+  // The pairs a cell may hold, copied together with their cones in single precision (a little
+  // wider than the exact ones, which are tested after) when a satellite first needs the cell: a
+  // satellite then screens them in one pass over contiguous memory. Visiting each pair where the
+  // index keeps it (160 bytes, anywhere in tens of megabytes) waited on memory far longer than the
+  // tests take.
+  struct Screen {
+    float axis_x, axis_y, axis_z, cos_wide;
+    float mirrored_x, mirrored_y, mirrored_z, mirrored_cos_wide;
+  };
+  struct CellBlock {
+    std::vector<Screen> screens;
+    std::vector<FacetPair> pairs;  // ascending in the index's pair order (the everywhere pairs merged in)
+  };
+  static constexpr float kNoCone = -3.0F;
+  static constexpr double kSinglePrecisionSlack = 1e-5;  // far above the rounding of a float dot product
+  // Beyond this many pairs in all blocks (some 50 MB) they start afresh: the satellites have moved
+  // on from most of the cells they hold.
+  static constexpr std::size_t kMaxBlockPairs = 250'000;
+  mutable std::mutex block_mutex;
+  mutable std::vector<std::shared_ptr<const CellBlock>> blocks;
+  mutable std::size_t block_pairs = 0;
+
+  static Screen screen_of(const FacetPair& pair) {
+    const auto wide = [](double cos) { return cos <= -2.0 ? kNoCone : static_cast<float>(cos - kSinglePrecisionSlack); };
+    return {static_cast<float>(pair.cone_axis.x()),          static_cast<float>(pair.cone_axis.y()),
+            static_cast<float>(pair.cone_axis.z()),          wide(pair.cone_cos),
+            static_cast<float>(pair.mirrored_cone_axis.x()), static_cast<float>(pair.mirrored_cone_axis.y()),
+            static_cast<float>(pair.mirrored_cone_axis.z()), wide(pair.mirrored_cone_cos)};
+  }
+  std::shared_ptr<const CellBlock> block_of(int cell) const {
+    const std::lock_guard lock(block_mutex);
+    if (blocks.empty()) blocks.resize(static_cast<std::size_t>(kRows * kColumns));
+    auto& block = blocks[static_cast<std::size_t>(cell)];
+    if (block) return block;
+    if (block_pairs >= kMaxBlockPairs) {
+      for (auto& other : blocks) other.reset();
+      block_pairs = 0;
+    }
+    auto made = std::make_shared<CellBlock>();
+    const std::uint32_t* it = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell)];
+    const std::uint32_t* end = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell) + 1];
+    auto other = everywhere.begin();
+    made->pairs.reserve(static_cast<std::size_t>(end - it) + everywhere.size());
+    while (it != end || other != everywhere.end()) {
+      made->pairs.push_back(pairs[other == everywhere.end() || (it != end && *it < *other) ? *it++ : *other++]);
+    }
+    made->screens.reserve(made->pairs.size());
+    for (const FacetPair& pair : made->pairs) made->screens.push_back(screen_of(pair));
+    block_pairs += made->pairs.size();
+    block = std::move(made);
+    return block;
+  }
+
   static int row_of(double elevation_rad) {
     return std::clamp(static_cast<int>(std::floor((elevation_rad + std::numbers::pi / 2.0) / kCell_rad)), 0, kRows - 1);
   }
@@ -1310,18 +1375,18 @@ struct PropagationScene::DoubleBounceIndex {
       for (int k = 0; k < count; ++k) visit(row * kColumns + (((column0 + k) % kColumns) + kColumns) % kColumns);
     }
   }
-  // The pairs that satellite direction s may use, in ascending order.
+  // The pairs that satellite direction s may use (a superset of those whose cones hold it), in
+  // ascending order.
   template <class Visit>
   void for_each_candidate(const Eigen::Vector3d& s, Visit&& visit) const {
     const int cell = row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * kColumns + column_of(std::atan2(s.y(), s.x()));
-    const std::uint32_t* it = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell)];
-    const std::uint32_t* end = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell) + 1];
-    auto other = everywhere.begin();
-    while (it != end || other != everywhere.end()) {
-      if (other == everywhere.end() || (it != end && *it < *other)) {
-        visit(*it++);
-      } else {
-        visit(*other++);
+    const std::shared_ptr<const CellBlock> block = block_of(cell);
+    const float sx = static_cast<float>(s.x()), sy = static_cast<float>(s.y()), sz = static_cast<float>(s.z());
+    for (std::size_t k = 0; k < block->pairs.size(); ++k) {
+      const Screen& c = block->screens[k];
+      if (c.axis_x * sx + c.axis_y * sy + c.axis_z * sz >= c.cos_wide &&
+          c.mirrored_x * sx + c.mirrored_y * sy + c.mirrored_z * sz >= c.mirrored_cos_wide) {
+        visit(block->pairs[k]);
       }
     }
   }
@@ -2063,7 +2128,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       // A static antenna: every pair is known, each satellite tries those whose cone covers its
       // sky cell, in pair order (as below).
       for (std::size_t i = 0; i < n_sat; ++i) {
-        index->for_each_candidate(directions[i], [&](std::size_t k) { bounce(index->pairs[k], i); });
+        index->for_each_candidate(directions[i], [&](const FacetPair& pair) { bounce(pair, i); });
       }
     } else {
       // A moving antenna: the pairs of each facet A in turn, screened all at once (the arrays below);

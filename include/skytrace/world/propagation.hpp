@@ -191,6 +191,10 @@ class PropagationScene final : public PathQuery {
     double radius_m = 0.0;
     std::vector<std::size_t> first;      // per near facet, its first patch in vegetation_db
     std::vector<double> vegetation_db;
+    // Per near facet, the patches in view (indices into its patches) from in_view[in_view_first[k]]
+    // on: the search passes over the others, most of a city's, without a look.
+    std::vector<std::size_t> in_view_first;
+    std::vector<std::uint32_t> in_view;
   };
   std::shared_ptr<const PatchSight> patch_sight(const Eigen::Vector3d& origin_m, const Candidates& candidates,
                                                 const std::vector<NearFacet>& near_facets, double radius_m) const;
