@@ -8,6 +8,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <map>
 #include <mutex>
 #include <numbers>
@@ -1215,9 +1216,11 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   }
 }
 
-struct PropagationScene::FacetPair {
-  std::size_t a = 0, b = 0;  // indices into the second-order facets
-  double hb = 0.0;           // the first image's height above B
+// What a bounce needs first fills the first cache line (the pair is two lines, aligned): a pair
+// whose cones a satellite's screen has settled is tested without loading its cones.
+struct alignas(64) PropagationScene::FacetPair {
+  std::uint32_t a = 0, b = 0;  // indices into the second-order facets
+  double hb = 0.0;             // the first image's height above B
   Eigen::Vector3d nb = Eigen::Vector3d::Zero();        // B's normal on the side of the first image
   Eigen::Vector3d image_ab = Eigen::Vector3d::Zero();  // the first image mirrored in B
   // The point on B lies on the ray from image_ab towards the satellite and within B's bounding
@@ -1244,6 +1247,7 @@ struct PropagationScene::FacetPair {
 // The pairs of one antenna position by the sky cells (6 deg in elevation and azimuth) their cones
 // overlap, so that a satellite tries only the pairs whose cone may hold it.
 struct PropagationScene::DoubleBounceIndex {
+  static_assert(sizeof(FacetPair) == 128 && offsetof(FacetPair, cone_axis) == 64);
   static constexpr int kRows = 30, kColumns = 60;
   static constexpr double kCell_rad = std::numbers::pi / kRows;
   static constexpr double kMargin_rad = 1e-6;  // cells a hair wider than the cones need
@@ -1375,19 +1379,22 @@ struct PropagationScene::DoubleBounceIndex {
       for (int k = 0; k < count; ++k) visit(row * kColumns + (((column0 + k) % kColumns) + kColumns) % kColumns);
     }
   }
-  // The pairs that satellite direction s may use (a superset of those whose cones hold it), in
-  // ascending order.
+  // The pairs whose two cones hold satellite direction s (FacetPair::may_carry), in ascending
+  // order. The single-precision screen settles all but the pairs within a few times its slack of
+  // a cone's edge, which take the exact test.
   template <class Visit>
   void for_each_candidate(const Eigen::Vector3d& s, Visit&& visit) const {
     const int cell = row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * kColumns + column_of(std::atan2(s.y(), s.x()));
     const std::shared_ptr<const CellBlock> block = block_of(cell);
     const float sx = static_cast<float>(s.x()), sy = static_cast<float>(s.y()), sz = static_cast<float>(s.z());
+    constexpr auto kSure = static_cast<float>(3.0 * kSinglePrecisionSlack);
     for (std::size_t k = 0; k < block->pairs.size(); ++k) {
       const Screen& c = block->screens[k];
-      if (c.axis_x * sx + c.axis_y * sy + c.axis_z * sz >= c.cos_wide &&
-          c.mirrored_x * sx + c.mirrored_y * sy + c.mirrored_z * sz >= c.mirrored_cos_wide) {
-        visit(block->pairs[k]);
-      }
+      const float to_axis = c.axis_x * sx + c.axis_y * sy + c.axis_z * sz;
+      const float to_mirrored = c.mirrored_x * sx + c.mirrored_y * sy + c.mirrored_z * sz;
+      if (to_axis < c.cos_wide || to_mirrored < c.mirrored_cos_wide) continue;
+      const bool sure = to_axis >= c.cos_wide + kSure && to_mirrored >= c.mirrored_cos_wide + kSure;
+      if (sure || block->pairs[k].may_carry(s)) visit(block->pairs[k]);
     }
   }
 };
@@ -1420,8 +1427,8 @@ bool PropagationScene::make_facet_pair(std::size_t a_index, std::size_t b_index,
   const double side = hb >= 0.0 ? 1.0 : -1.0;
   if (side * (fb.normal.dot(fa.centre_m) - fb.offset_m) + fa.radius_m <= 0.0) return false;
   pair = FacetPair{};
-  pair.a = a_index;
-  pair.b = b_index;
+  pair.a = static_cast<std::uint32_t>(a_index);
+  pair.b = static_cast<std::uint32_t>(b_index);
   pair.hb = hb;
   pair.nb = hb >= 0.0 ? fb.normal : Eigen::Vector3d(-fb.normal);
   pair.image_ab = image_a - 2.0 * std::abs(hb) * pair.nb;
@@ -2065,10 +2072,9 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       plane_a[k] = a.normal.dot(r) - a.height_m;
       image_of[k] = r - 2.0 * a.height_m * a.normal;
     }
-    // The double bounce of satellite i off a pair, if there is one.
+    // The double bounce of satellite i off a pair whose cones hold it, if there is one.
     const auto bounce = [&](const FacetPair& pair, std::size_t i) {
       const Eigen::Vector3d& s = directions[i];
-      if (!pair.may_carry(s)) return;
       const NearFacet& a = second_order_facets[pair.a];
       const NearFacet& b = second_order_facets[pair.b];
       const Facet& fa = facets_[a.index];
@@ -2198,7 +2204,9 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
           for (std::size_t m = 0; m < n_marked; ++m) candidates[marked[m]].push_back(k);
         }
         for (std::size_t i = 0; i < n_sat; ++i) {
-          for (const std::uint32_t k : candidates[i]) bounce(pairs[k], i);
+          for (const std::uint32_t k : candidates[i]) {
+            if (pairs[k].may_carry(directions[i])) bounce(pairs[k], i);
+          }
         }
       }
     }
