@@ -2393,6 +2393,12 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
         Eigen::Vector3d edge_point_m, reflection_point_m;
         double from_image_m = 0.0, v = 0.0, loss_db = 0.0;
       };
+      // A few more than kept, as some fail their leg checks: the least lossy, ties in the order of
+      // the facets and edges (so that which are kept does not depend on the order they are met).
+      constexpr std::size_t kReflectedHitsKept = 4 * kMaxDiffractedPaths;
+      const auto less_lossy = [](const ReflectedEdgeHit& a, const ReflectedEdgeHit& b) {
+        return std::tie(a.loss_db, a.facet, a.edge) < std::tie(b.loss_db, b.facet, b.edge);
+      };
       std::vector<ReflectedEdgeHit> reflected_hits;
       // The blocking objects' spheres (made with the scene).
       std::vector<Sphere> object_spheres;
@@ -2487,12 +2493,24 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
         if ((v.image + from_image.dot(s) * s - q).dot(edge.outward) >= 0.0) return;
         const double excess = d_image - s.dot(from_image);
         if (excess > blocked_excess_max_m) return;
+        const double v_fresnel = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
+        ReflectedEdgeHit hit{f_index, e, q, Eigen::Vector3d::Zero(), d_image, v_fresnel, knife_edge_loss_db(v_fresnel)};
+        // Only the least lossy hits are kept: one that cannot be among them is dropped before its
+        // reflection point is looked for.
+        if (reflected_hits.size() == kReflectedHitsKept && !less_lossy(hit, reflected_hits.front())) return;
         const Eigen::Vector3d point = q + above / (above + nf.height_m) * (v.image - q);
         if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) return;
         const double d1 = (point - r).norm();
         if (d1 < 1e-3 || d1 > settings.radius_m) return;
-        const double v_fresnel = std::sqrt(4.0 * std::max(excess, 0.0) / wavelength_m);
-        reflected_hits.push_back(ReflectedEdgeHit{f_index, e, q, point, d_image, v_fresnel, knife_edge_loss_db(v_fresnel)});
+        hit.reflection_point_m = point;
+        // A max-heap of the kept hits, the lossiest on top.
+        if (reflected_hits.size() == kReflectedHitsKept) {
+          std::pop_heap(reflected_hits.begin(), reflected_hits.end(), less_lossy);
+          reflected_hits.back() = hit;
+        } else {
+          reflected_hits.push_back(hit);
+        }
+        std::push_heap(reflected_hits.begin(), reflected_hits.end(), less_lossy);
       };
       // A static antenna: the facet-edge pairs that may serve a satellite in its sky cell, found
       // once per cell and object (docs/performance.md); the same hits as the search below.
@@ -2579,9 +2597,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
           }
         }
       }
-      std::sort(reflected_hits.begin(), reflected_hits.end(),
-                [](const ReflectedEdgeHit& a, const ReflectedEdgeHit& b) { return a.loss_db < b.loss_db; });
-      if (reflected_hits.size() > 4 * kMaxDiffractedPaths) reflected_hits.resize(4 * kMaxDiffractedPaths);
+      std::sort_heap(reflected_hits.begin(), reflected_hits.end(), less_lossy);
       for (const ReflectedEdgeHit& hit : reflected_hits) {
         const NearFacet& nf = second_order_facets[hit.facet];
         const Facet& f = facets_[nf.index];
