@@ -2478,10 +2478,11 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
         const NearFacet& nf = second_order_facets[f_index];
         const Facet& f = facets_[nf.index];
         const DiffractionEdge& edge = edges_[e];
-        // Keller's point first: it lies outside most edges near the facet.
+        // Keller's point first: it lies outside most edges near the facet. Then the exact tests
+        // from the cheapest; the bounds of may_hold, which hold for every point they pass (the
+        // search stays the same whatever their order), after them.
         const std::optional<Eigen::Vector3d> keller = keller_point(edge, v.image, s);
         if (!keller) return;
-        if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_line)) return;
         const Eigen::Vector3d& q = *keller;
         const Eigen::Vector3d from_image = q - v.image;
         const double d_image = from_image.norm();
@@ -2498,6 +2499,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
         // Only the least lossy hits are kept: one that cannot be among them is dropped before its
         // reflection point is looked for.
         if (reflected_hits.size() == kReflectedHitsKept && !less_lossy(hit, reflected_hits.front())) return;
+        if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_line)) return;
         const Eigen::Vector3d point = q + above / (above + nf.height_m) * (v.image - q);
         if ((point - f.centre_m).squaredNorm() > f.radius_m * f.radius_m || !f.contains(point)) return;
         const double d1 = (point - r).norm();
