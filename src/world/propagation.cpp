@@ -1266,8 +1266,7 @@ struct PropagationScene::DoubleBounceIndex {
   // The pairs a cell may hold, copied together with their cones in single precision (a little
   // wider than the exact ones, which are tested after) when a satellite first needs the cell: a
   // satellite then screens them in one pass over contiguous memory. Visiting each pair where the
-  // index keeps it (160 bytes, anywhere in tens of megabytes) waited on memory far longer than the
-  // tests take.
+  // index keeps it (anywhere in tens of megabytes) waited on memory far longer than the tests take.
   struct Screen {
     float axis_x, axis_y, axis_z, cos_wide;
     float mirrored_x, mirrored_y, mirrored_z, mirrored_cos_wide;
