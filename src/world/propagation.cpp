@@ -32,6 +32,9 @@ constexpr std::size_t kMaxDiffractedPaths = 3;
 constexpr std::size_t kMaxPatchesPerFacet = 256;
 // The facet candidates found for one point serve antenna positions this close to it.
 constexpr double kCandidateMargin_m = 10.0;
+// How much wider the single-precision screens take a cosine than the exact tests after them: far
+// above the rounding of a float dot product of unit vectors (below 1e-6).
+constexpr float kSinglePrecisionSlack = 1e-5F;
 
 double leg_tolerance_m(double length_m) { return std::max(0.02, 1e-4 * length_m); }
 
@@ -105,8 +108,7 @@ const std::array<double, 91>& directive_lobe_integrals(int exponent) {
 __attribute__((target_clones("arch=x86-64-v3", "default"))) int mark_within_cones(
     const float* __restrict x, const float* __restrict y, const float* __restrict z, std::size_t n, float ax, float ay, float az,
     float cos1, float bx, float by, float bz, float cos2, std::int32_t* __restrict within) {
-  constexpr float kWider = 1e-5F;
-  const float min1 = cos1 - kWider, min2 = cos2 - kWider;
+  const float min1 = cos1 - kSinglePrecisionSlack, min2 = cos2 - kSinglePrecisionSlack;
   int count = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const bool in1 = ax * x[i] + ay * y[i] + az * z[i] >= min1;
@@ -940,7 +942,7 @@ std::shared_ptr<const PropagationScene::PatchSight> PropagationScene::patch_sigh
     const std::lock_guard lock(cache_mutex_);
     auto cached = patch_sights_.find([&](const PatchSight& sight) {
       return sight.origin_m == r && sight.candidates == &candidates && sight.radius_m == radius_m &&
-             sight.first.size() == near_facets.size() + 1;
+             sight.in_view_first.size() == near_facets.size() + 1;
     });
     if (cached) return cached;
     // A moving antenna never comes back to the very same point: keep the view of a point met before.
@@ -952,36 +954,33 @@ std::shared_ptr<const PropagationScene::PatchSight> PropagationScene::patch_sigh
   sight->radius_m = radius_m;
   std::vector<Eigen::Vector3d> towards;
   std::vector<double> distance_m;
-  std::vector<std::size_t> slot;
+  std::vector<std::size_t> facet_of;
+  std::vector<std::uint32_t> patch_of;
   for (std::size_t k = 0; k < near_facets.size(); ++k) {
     const NearFacet& nf = near_facets[k];
-    sight->first.push_back(sight->vegetation_db.size());
     if (nf.patches == nullptr) continue;
-    for (const FacetPatch& facet_patch : *nf.patches) {
-      sight->vegetation_db.push_back(std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t p_index = 0; p_index < nf.patches->size(); ++p_index) {
       // The same filters and ray as add_scattered_paths.
-      const Eigen::Vector3d to_point = facet_patch.point_m - r;
+      const Eigen::Vector3d to_point = (*nf.patches)[p_index].point_m - r;
       const double d = to_point.norm();
       if (d < 0.5 || d > radius_m || -nf.normal.dot(to_point) / d <= 1e-3) continue;
       towards.push_back(to_point / d);
       distance_m.push_back(d);
-      slot.push_back(sight->vegetation_db.size() - 1);
+      facet_of.push_back(k);
+      patch_of.push_back(static_cast<std::uint32_t>(p_index));
     }
   }
-  sight->first.push_back(sight->vegetation_db.size());
+  // The rays go facet by facet: the patches in view of each are a run of them.
   const std::vector<RayOutcome> seen = scene_->trace(r, towards);
+  sight->in_view_first.assign(near_facets.size() + 1, 0);
   for (std::size_t k = 0; k < seen.size(); ++k) {
     const RayOutcome& o = seen[k];
     if (o.blocked && o.blocking_distance_m < distance_m[k] - leg_tolerance_m(distance_m[k])) continue;
-    sight->vegetation_db[slot[k]] = o.vegetation_attenuation_db;
+    sight->in_view.push_back(patch_of[k]);
+    sight->in_view_vegetation_db.push_back(o.vegetation_attenuation_db);
+    ++sight->in_view_first[facet_of[k] + 1];
   }
-  for (std::size_t k = 0; k < near_facets.size(); ++k) {
-    sight->in_view_first.push_back(sight->in_view.size());
-    for (std::size_t v = sight->first[k]; v < sight->first[k + 1]; ++v) {
-      if (!std::isnan(sight->vegetation_db[v])) sight->in_view.push_back(static_cast<std::uint32_t>(v - sight->first[k]));
-    }
-  }
-  sight->in_view_first.push_back(sight->in_view.size());
+  for (std::size_t k = 0; k < near_facets.size(); ++k) sight->in_view_first[k + 1] += sight->in_view_first[k];
   const std::lock_guard lock(cache_mutex_);
   patch_sights_.keep(sight);
   return sight;
@@ -1093,7 +1092,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
     const std::size_t first_patch = patches.size(), first_visible = visible.size();
     const std::size_t n_considered = sight ? sight->in_view_first[k + 1] - sight->in_view_first[k] : nf.patches->size();
     for (std::size_t c = 0; c < n_considered; ++c) {
-      const std::size_t p_index = sight ? sight->in_view[sight->in_view_first[k] + c] : c;
+      const std::size_t in_view = sight ? sight->in_view_first[k] + c : 0;
+      const std::size_t p_index = sight ? sight->in_view[in_view] : c;
       const FacetPatch& facet_patch = (*nf.patches)[p_index];
       const Eigen::Vector3d to_point = facet_patch.point_m - r;
       const double d = to_point.norm();
@@ -1112,8 +1112,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       }
       if (!matters) continue;
       if (sight) {
-        const double vegetation_db = sight->vegetation_db[sight->first[k] + p_index];
-        if (!std::isnan(vegetation_db)) visible.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, vegetation_db});
+        visible.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, sight->in_view_vegetation_db[in_view]});
         continue;
       }
       patches.push_back(Patch{k, facet_patch.point_m, facet_patch.area_m2, d, cos_receiver, 0.0});
@@ -1216,6 +1215,36 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   }
 }
 
+// Lists per sky cell, each made when a direction first needs its cell and kept; beyond max_entries
+// entries in all cells they start afresh (the satellites have moved on from most of the cells they
+// hold). Thread-safe; a list is never changed once made.
+template <class List>
+class CellLists {
+ public:
+  CellLists(std::size_t cells, std::size_t max_entries) : cells_(cells), max_entries_(max_entries) {}
+  template <class Make>
+  std::shared_ptr<const List> get(int cell, Make&& make) const {
+    const std::lock_guard lock(mutex_);
+    if (lists_.empty()) lists_.resize(cells_);
+    auto& list = lists_[static_cast<std::size_t>(cell)];
+    if (list) return list;
+    if (entries_ >= max_entries_) {
+      for (auto& other : lists_) other.reset();
+      entries_ = 0;
+    }
+    auto made = std::make_shared<const List>(make());
+    entries_ += made->size();
+    list = std::move(made);
+    return list;
+  }
+
+ private:
+  std::size_t cells_, max_entries_;
+  mutable std::mutex mutex_;
+  mutable std::vector<std::shared_ptr<const List>> lists_;
+  mutable std::size_t entries_ = 0;
+};
+
 // What a bounce needs first fills the first cache line (the pair is two lines, aligned): a pair
 // whose cones a satellite's screen has settled is tested without loading its cones.
 struct alignas(64) PropagationScene::FacetPair {
@@ -1274,45 +1303,32 @@ struct PropagationScene::DoubleBounceIndex {
   struct CellBlock {
     std::vector<Screen> screens;
     std::vector<FacetPair> pairs;  // ascending in the index's pair order (the everywhere pairs merged in)
+    [[nodiscard]] std::size_t size() const { return pairs.size(); }
   };
   static constexpr float kNoCone = -3.0F;
-  static constexpr double kSinglePrecisionSlack = 1e-5;  // far above the rounding of a float dot product
-  // Beyond this many pairs in all blocks (some 50 MB) they start afresh: the satellites have moved
-  // on from most of the cells they hold.
+  // Beyond this many pairs in all blocks (some 50 MB) they start afresh.
   static constexpr std::size_t kMaxBlockPairs = 250'000;
-  mutable std::mutex block_mutex;
-  mutable std::vector<std::shared_ptr<const CellBlock>> blocks;
-  mutable std::size_t block_pairs = 0;
+  CellLists<CellBlock> blocks{static_cast<std::size_t>(kRows * kColumns), kMaxBlockPairs};
 
   static Screen screen_of(const FacetPair& pair) {
-    const auto wide = [](double cos) { return cos <= -2.0 ? kNoCone : static_cast<float>(cos - kSinglePrecisionSlack); };
+    const auto wide = [](double cos) { return cos <= -2.0 ? kNoCone : static_cast<float>(cos) - kSinglePrecisionSlack; };
     return {static_cast<float>(pair.cone_axis.x()),          static_cast<float>(pair.cone_axis.y()),
             static_cast<float>(pair.cone_axis.z()),          wide(pair.cone_cos),
             static_cast<float>(pair.mirrored_cone_axis.x()), static_cast<float>(pair.mirrored_cone_axis.y()),
             static_cast<float>(pair.mirrored_cone_axis.z()), wide(pair.mirrored_cone_cos)};
   }
-  std::shared_ptr<const CellBlock> block_of(int cell) const {
-    const std::lock_guard lock(block_mutex);
-    if (blocks.empty()) blocks.resize(static_cast<std::size_t>(kRows * kColumns));
-    auto& block = blocks[static_cast<std::size_t>(cell)];
-    if (block) return block;
-    if (block_pairs >= kMaxBlockPairs) {
-      for (auto& other : blocks) other.reset();
-      block_pairs = 0;
-    }
-    auto made = std::make_shared<CellBlock>();
+  CellBlock block_of(int cell) const {
+    CellBlock made;
     const std::uint32_t* it = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell)];
     const std::uint32_t* end = cell_pairs.data() + cell_start[static_cast<std::size_t>(cell) + 1];
     auto other = everywhere.begin();
-    made->pairs.reserve(static_cast<std::size_t>(end - it) + everywhere.size());
+    made.pairs.reserve(static_cast<std::size_t>(end - it) + everywhere.size());
     while (it != end || other != everywhere.end()) {
-      made->pairs.push_back(pairs[other == everywhere.end() || (it != end && *it < *other) ? *it++ : *other++]);
+      made.pairs.push_back(pairs[other == everywhere.end() || (it != end && *it < *other) ? *it++ : *other++]);
     }
-    made->screens.reserve(made->pairs.size());
-    for (const FacetPair& pair : made->pairs) made->screens.push_back(screen_of(pair));
-    block_pairs += made->pairs.size();
-    block = std::move(made);
-    return block;
+    made.screens.reserve(made.pairs.size());
+    for (const FacetPair& pair : made.pairs) made.screens.push_back(screen_of(pair));
+    return made;
   }
 
   static int row_of(double elevation_rad) {
@@ -1321,6 +1337,10 @@ struct PropagationScene::DoubleBounceIndex {
   static int column_of(double azimuth_rad) {
     const int c = static_cast<int>(std::floor((azimuth_rad + std::numbers::pi) / kCell_rad));
     return ((c % kColumns) + kColumns) % kColumns;
+  }
+  // The cell of unit direction s.
+  static int cell_of(const Eigen::Vector3d& s) {
+    return row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * kColumns + column_of(std::atan2(s.y(), s.x()));
   }
   // Every cell both cones of the pair may reach: the cells of the narrower one's bounding box
   // (rows and columns) whose centre lies within the half angles plus a cell's reach of both axes,
@@ -1383,10 +1403,10 @@ struct PropagationScene::DoubleBounceIndex {
   // a cone's edge, which take the exact test.
   template <class Visit>
   void for_each_candidate(const Eigen::Vector3d& s, Visit&& visit) const {
-    const int cell = row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * kColumns + column_of(std::atan2(s.y(), s.x()));
-    const std::shared_ptr<const CellBlock> block = block_of(cell);
+    const int cell = cell_of(s);
+    const std::shared_ptr<const CellBlock> block = blocks.get(cell, [&] { return block_of(cell); });
     const float sx = static_cast<float>(s.x()), sy = static_cast<float>(s.y()), sz = static_cast<float>(s.z());
-    constexpr auto kSure = static_cast<float>(3.0 * kSinglePrecisionSlack);
+    constexpr float kSure = 3.0F * kSinglePrecisionSlack;
     for (std::size_t k = 0; k < block->pairs.size(); ++k) {
       const Screen& c = block->screens[k];
       const float to_axis = c.axis_x * sx + c.axis_y * sy + c.axis_z * sz;
@@ -1662,37 +1682,27 @@ struct PropagationScene::ReflectorIndex {
   // sphere's half angle plus a cell's reach; -2: every cell, the image lies within the sphere).
   std::vector<Eigen::Vector3d> normal, axis;
   std::vector<double> reach_cos;
-  mutable std::mutex mutex;
   using List = std::vector<std::uint32_t>;
-  mutable std::vector<std::shared_ptr<const List>> cells = std::vector<std::shared_ptr<const List>>(kCells);
-  mutable std::size_t entries = 0;
+  CellLists<List> cells{kCells, kMaxEntries};
 
   // The facets (indices into the near facets, ascending) on which the line from the antenna's
   // image towards direction s may meet the plane within the bounding sphere, and s light the
   // antenna's side: a superset of those where a first-order reflection of s can lie. The list
   // of s's cell is made when a direction first needs it.
   std::shared_ptr<const List> facets_towards(const Eigen::Vector3d& s) const {
-    const int cell = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0))) * Cells::kColumns +
-                     Cells::column_of(std::atan2(s.y(), s.x()));
-    const std::lock_guard lock(mutex);
-    auto& list = cells[static_cast<std::size_t>(cell)];
-    if (list) return list;
-    if (entries >= kMaxEntries) {
-      for (auto& other : cells) other.reset();
-      entries = 0;
-    }
-    // Every direction of the cell lies within one cell size of its centre.
-    const Eigen::Vector3d& centre = Cells::cell_centres()[static_cast<std::size_t>(cell)];
-    const double lit_reach = -std::sin(Cells::kCell_rad + Cells::kMargin_rad);
-    auto made = std::make_shared<List>();
-    for (std::size_t k = 0; k < facets.size(); ++k) {
-      if (normal[k].dot(centre) >= lit_reach && (reach_cos[k] <= -2.0 || axis[k].dot(centre) >= reach_cos[k])) {
-        made->push_back(static_cast<std::uint32_t>(k));
+    const int cell = Cells::cell_of(s);
+    return cells.get(cell, [&] {
+      // Every direction of the cell lies within one cell size of its centre.
+      const Eigen::Vector3d& centre = Cells::cell_centres()[static_cast<std::size_t>(cell)];
+      const double lit_reach = -std::sin(Cells::kCell_rad + Cells::kMargin_rad);
+      List made;
+      for (std::size_t k = 0; k < facets.size(); ++k) {
+        if (normal[k].dot(centre) >= lit_reach && (reach_cos[k] <= -2.0 || axis[k].dot(centre) >= reach_cos[k])) {
+          made.push_back(static_cast<std::uint32_t>(k));
+        }
       }
-    }
-    entries += made->size();
-    list = std::move(made);
-    return list;
+      return made;
+    });
   }
 };
 
@@ -1771,9 +1781,8 @@ std::shared_ptr<const PropagationScene::FacetEdgeList> PropagationScene::facet_e
     const FacetEdgeSearch& search) {
   auto& lists = knife_edges ? index.edge_lists : index.lists;
   using Cells = DoubleBounceIndex;
-  const int row = Cells::row_of(std::asin(std::clamp(s.z(), -1.0, 1.0)));
-  const int column = Cells::column_of(std::atan2(s.y(), s.x()));
-  const std::pair<int, std::size_t> key{row * Cells::kColumns + column, object};
+  const int cell = Cells::cell_of(s);
+  const std::pair<int, std::size_t> key{cell, object};
   {
     const std::lock_guard lock(index.mutex);
     if (auto it = lists.find(key); it != lists.end()) return it->second;
@@ -1783,21 +1792,16 @@ std::shared_ptr<const PropagationScene::FacetEdgeList> PropagationScene::facet_e
       index.entries = 0;
     }
   }
-  const double elevation = (row + 0.5) * Cells::kCell_rad - std::numbers::pi / 2.0;
-  const double azimuth = (column + 0.5) * Cells::kCell_rad - std::numbers::pi;
-  const Eigen::Vector3d centre(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                               std::sin(elevation));
+  const Eigen::Vector3d& centre = Cells::cell_centres()[static_cast<std::size_t>(cell)];
   // No direction of a cell is farther than one cell size from its centre.
   auto made = std::make_shared<FacetEdgeList>();
   made->entries = search(centre, Cells::kCell_rad + Cells::kMargin_rad);
-  // Single precision moves s . axis by less than 1e-6 (unit vectors): the bands widened by 1e-5.
-  constexpr float kWider = 1e-5F;
   for (const FacetEdge& entry : made->entries) {
     made->axis_x.push_back(static_cast<float>(entry.axis.x()));
     made->axis_y.push_back(static_cast<float>(entry.axis.y()));
     made->axis_z.push_back(static_cast<float>(entry.axis.z()));
-    made->cos_low.push_back(static_cast<float>(entry.cos_min) - kWider);
-    made->cos_high.push_back(static_cast<float>(entry.cos_max) + kWider);
+    made->cos_low.push_back(static_cast<float>(entry.cos_min) - kSinglePrecisionSlack);
+    made->cos_high.push_back(static_cast<float>(entry.cos_max) + kSinglePrecisionSlack);
   }
   const std::shared_ptr<const FacetEdgeList> pairs = std::move(made);
   const std::lock_guard lock(index.mutex);

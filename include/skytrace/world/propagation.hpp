@@ -183,18 +183,18 @@ class PropagationScene final : public PathQuery {
   void add_scattered_paths(const Eigen::Vector3d& origin_m, const std::vector<Eigen::Vector3d>& directions,
                            const PathSearchSettings& settings, const Candidates& candidates,
                            const std::vector<NearFacet>& near_facets, std::vector<PathSet>& out) const;
-  // What an antenna met at the same point twice sees of the scattering patches (the vegetation its
-  // ray to each crosses; NaN: hidden, or beyond the radius), kept so that it traces them once.
+  // What an antenna met at the same point twice sees of the scattering patches (within the radius,
+  // facing it, not hidden), kept so that it traces them once.
   struct PatchSight {
     Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
     const Candidates* candidates = nullptr;
     double radius_m = 0.0;
-    std::vector<std::size_t> first;      // per near facet, its first patch in vegetation_db
-    std::vector<double> vegetation_db;
-    // Per near facet, the patches in view (indices into its patches) from in_view[in_view_first[k]]
-    // on: the search passes over the others, most of a city's, without a look.
+    // Per near facet k, its patches in view (indices into its patches) and the vegetation the ray
+    // to each crosses, from in_view_first[k] to in_view_first[k + 1]: the search passes over the
+    // others, most of a city's, without a look.
     std::vector<std::size_t> in_view_first;
     std::vector<std::uint32_t> in_view;
+    std::vector<double> in_view_vegetation_db;
   };
   std::shared_ptr<const PatchSight> patch_sight(const Eigen::Vector3d& origin_m, const Candidates& candidates,
                                                 const std::vector<NearFacet>& near_facets, double radius_m) const;
