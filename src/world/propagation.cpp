@@ -1161,7 +1161,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       if (lobe != nullptr) {
         const Eigen::Vector3d specular = -s + 2.0 * nf.normal.dot(s) * nf.normal;
         const Eigen::Vector3d to_receiver = (r - patch.point_m) / patch.distance_m;
-        pattern = std::pow(0.5 * (1.0 + specular.dot(to_receiver)), settings.scattering_lobe_exponent) / light.lobe_integral;
+        pattern = lobe_power(0.5 * (1.0 + specular.dot(to_receiver))) / light.lobe_integral;
       }
       const double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
