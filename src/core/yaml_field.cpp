@@ -20,7 +20,18 @@ std::string one_of(std::initializer_list<const char*> items) {
 
 void YamlField::fail(const std::string& what) const {
   std::string where = *file_;
-  if (node_.Mark().line >= 0) where += ":" + std::to_string(node_.Mark().line + 1);
+  const auto set_here = [&](const YamlOverride& set) {
+    const std::string& p = set.path;
+    return path_ == p || (path_.size() > p.size() && path_.compare(0, p.size(), p) == 0 && (path_[p.size()] == '.' || path_[p.size()] == '['));
+  };
+  // The last option that set the value wins, as it did when the options were applied.
+  const auto set = overridden_ != nullptr ? std::find_if(overridden_->rbegin(), overridden_->rend(), set_here)
+                                          : std::vector<YamlOverride>::const_reverse_iterator{};
+  if (overridden_ != nullptr && set != overridden_->rend()) {
+    where += " (" + set->option + ")";  // the value is not in the file: its line would mislead
+  } else if (node_.Mark().line >= 0) {
+    where += ":" + std::to_string(node_.Mark().line + 1);
+  }
   throw YamlFieldError{where + ": " + (path_.empty() ? document_ : path_) + ": " + what};
 }
 

@@ -487,8 +487,9 @@ Scenario parse_root(const Node& root, const std::filesystem::path& base) {
 
 namespace {
 
-// Sets `a.b.c=value` in the YAML tree (value parsed as YAML), creating missing mappings.
-Status apply_override(YAML::Node& root, const std::string& assignment) {
+// Sets `a.b.c=value` in the YAML tree (value parsed as YAML), creating missing mappings, and
+// appends what it set to `set_values`.
+Status apply_override(YAML::Node& root, const std::string& assignment, std::vector<YamlOverride>& set_values) {
   const auto equals = assignment.find('=');
   if (equals == std::string::npos || equals == 0) {
     return make_error(ErrorCode::kInvalidArgument, "--set '" + assignment + "': expected KEY.PATH=VALUE");
@@ -521,6 +522,7 @@ Status apply_override(YAML::Node& root, const std::string& assignment) {
     if (index >= node.size()) return std::nullopt;
     return index;
   };
+  std::string field_path;  // the path as the parser names it, an index of a list in brackets
   for (size_t i = 0; i < keys.size(); ++i) {
     if (node.IsSequence()) {
       if (!list_index(keys[i])) {
@@ -532,6 +534,11 @@ Status apply_override(YAML::Node& root, const std::string& assignment) {
       return make_error(ErrorCode::kInvalidArgument,
                         "--set " + path + ": " + (walked.empty() ? "the document" : "'" + walked + "'") + " is not a mapping");
     }
+    if (node.IsSequence()) {
+      field_path.append(1, '[').append(std::to_string(*list_index(keys[i]))).append(1, ']');
+    } else {
+      field_path.append(field_path.empty() ? "" : ".").append(keys[i]);
+    }
     if (i + 1 == keys.size()) break;
     walked += (walked.empty() ? "" : ".") + keys[i];
     YAML::Node child = node.IsSequence() ? node[*list_index(keys[i])] : node[keys[i]];
@@ -542,6 +549,7 @@ Status apply_override(YAML::Node& root, const std::string& assignment) {
   } else {
     node[keys.back()] = value;
   }
+  set_values.push_back({field_path, "--set " + assignment});
   return Ok{};
 }
 
@@ -552,11 +560,12 @@ Result<Scenario> parse_scenario(const std::string& text, const std::string& name
   auto document = load_yaml_document(text, name);
   if (!document) return document.error();
   YAML::Node root = std::move(*document);
+  std::vector<YamlOverride> set_values;
   for (const std::string& assignment : overrides) {
-    if (auto st = apply_override(root, assignment); !st) return st.error().with_context(name);
+    if (auto st = apply_override(root, assignment, set_values); !st) return st.error().with_context(name);
   }
   try {
-    Scenario s = parse_root(Node(root, "", &name, "scenario"), base_dir);
+    Scenario s = parse_root(Node(root, "", &name, "scenario", &set_values), base_dir);
     return s;
   } catch (const YamlFieldError& e) {
     return make_error(ErrorCode::kParse, e.message);

@@ -85,6 +85,30 @@ TEST(Scenario, BadOverridesAreNamed) {
   EXPECT_NE(r.error().message.find("empty key"), std::string::npos) << r.error().message;
 }
 
+// A value given on the command line is not on any line of the file: the message names the option.
+TEST(Scenario, ABadOverriddenValueNamesTheOptionNotALineOfTheFile) {
+  auto r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"time.interval_s=0"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("s.yaml (--set time.interval_s=0): time.interval_s: value 0 out of range"), std::string::npos)
+      << r.error().message;
+  // Below an overridden value, and in a list reached by index (the parser's path in brackets).
+  r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"receiver.signals=[G1C, Q]"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("s.yaml (--set receiver.signals=[G1C, Q]): receiver.signals[1]: invalid signal 'Q'"),
+            std::string::npos)
+      << r.error().message;
+  r = parse_scenario(kMinimal, "s.yaml", "/tmp", {"receiver.signals.1=Q"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("s.yaml (--set receiver.signals.1=Q): receiver.signals[1]:"), std::string::npos)
+      << r.error().message;
+  // The file's own values keep their lines, also beside an overridden key that their key begins with.
+  r = parse_scenario(replace(kMinimal, "ephemeris:", "models:\n  multipath_order: 7\nephemeris:"), "s.yaml", "/tmp",
+                     {"models.multipath=true", "receiver.signals.1=E5Q"});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("s.yaml:12: models.multipath_order: value 7"), std::string::npos) << r.error().message;
+  EXPECT_EQ(r.error().message.find("(--set"), std::string::npos) << r.error().message;
+}
+
 TEST(Scenario, TimeScaleApplies) {
   const Scenario s = parse(replace(kMinimal, "scale: GPST", "scale: UTC")).value();
   EXPECT_EQ(s.time.start.to_iso8601(TimeScale::kGpst, 0), "2020-06-25T00:00:18");

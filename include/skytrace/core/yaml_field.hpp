@@ -28,12 +28,21 @@ struct YamlFieldError {
 // A YAML document parsed, or the error "file:LINE: YAML syntax error: ..." / a duplicate key (kParse).
 [[nodiscard]] Result<YAML::Node> load_yaml_document(const std::string& text, const std::string& file);
 
+// A value set on the command line: its key path as YamlField::path() writes it (list indices in
+// brackets), and the option as the user gave it ("--set receivers.0.name=A").
+struct YamlOverride {
+  std::string path, option;
+};
+
 class YamlField {
  public:
   // `file` names the document in messages and must outlive the field; `document` stands for the
-  // empty path ("scenario", "profile").
-  YamlField(YAML::Node node, std::string path, const std::string* file, std::string document = "document")
-      : node_(std::move(node)), path_(std::move(path)), file_(file), document_(std::move(document)) {}
+  // empty path ("scenario", "profile"). `overridden`, when given, lists the values set on the
+  // command line and must outlive the field: a message about one of them, or about anything below
+  // it, names the option instead of a line of the file.
+  YamlField(YAML::Node node, std::string path, const std::string* file, std::string document = "document",
+            const std::vector<YamlOverride>* overridden = nullptr)
+      : node_(std::move(node)), path_(std::move(path)), file_(file), document_(std::move(document)), overridden_(overridden) {}
 
   [[nodiscard]] const std::string& path() const { return path_; }
   [[nodiscard]] const YAML::Node& node() const { return node_; }
@@ -64,13 +73,14 @@ class YamlField {
  private:
   [[nodiscard]] std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
   [[nodiscard]] YamlField at(YAML::Node node, std::string path) const {
-    return YamlField(std::move(node), std::move(path), file_, document_);
+    return YamlField(std::move(node), std::move(path), file_, document_, overridden_);
   }
 
   YAML::Node node_;
   std::string path_;
   const std::string* file_;
   std::string document_;
+  const std::vector<YamlOverride>* overridden_ = nullptr;
 };
 
 }  // namespace skytrace
