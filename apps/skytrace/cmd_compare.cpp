@@ -1,5 +1,6 @@
 // `skytrace compare REAL.obs SIM.obs`: how far a simulation is from a real recording, per system
 // and signal (pseudorange, Doppler, epoch-differenced phase, C/N0, tracked-set overlap).
+#include <fmt/format.h>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -29,6 +30,15 @@ struct CompareArgs {
 };
 
 int run_compare(const CompareArgs& args) {
+  // Named as the user gave them, before the files are read (compare() checks its options again).
+  if (!(args.min_elevation_deg >= -90.0 && args.min_elevation_deg <= 90.0)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--min-elevation-deg {}: expected -90 to 90", args.min_elevation_deg)));
+  }
+  if (!(args.epoch_tolerance_ms >= 0.0 && args.epoch_tolerance_ms <= 500.0)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--epoch-tolerance-ms {}: expected 0 to 500", args.epoch_tolerance_ms)));
+  }
   io::CompareOptions options;
   options.min_elevation_deg = args.min_elevation_deg;
   options.epoch_tolerance_s = args.epoch_tolerance_ms * 1e-3;

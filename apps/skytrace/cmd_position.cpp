@@ -170,6 +170,18 @@ int run_position(const PositionArgs& args) {
   if (!(args.elevation_mask_deg >= -90.0 && args.elevation_mask_deg < 90.0)) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "--elevation-mask-deg must be in [-90, 90)"));
   }
+  // CLI11's range check lets NaN through (no comparison with it fails).
+  if (!(args.ratio_threshold >= 1.0 && args.ratio_threshold <= 100.0)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--ratio-threshold {}: expected 1 to 100", args.ratio_threshold)));
+  }
+  if (!(args.rtk_elevation_mask_deg >= -90.0 && args.rtk_elevation_mask_deg < 90.0)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument, "--rtk-elevation-mask-deg must be in [-90, 90)"));
+  }
+  if (!(args.min_cn0_dbhz >= 0.0 && args.min_cn0_dbhz <= 100.0)) {
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--min-cn0-dbhz {}: expected 0 (no limit) to 100", args.min_cn0_dbhz)));
+  }
 
   orbits::NavigationData navigation;
   for (const auto& path : args.nav_files) {

@@ -19,8 +19,9 @@ struct RunArgs {
   bool no_truth = false;
   std::string truth_format;  // --truth-format: output.truth_format
   bool quiet = false;
-  std::vector<std::string> overrides;
-  std::optional<int> threads;  // --threads; default: one per hardware thread
+  std::vector<std::string> overrides;              // --set
+  std::vector<sim::ScenarioOverride> from_options;  // keys set by other options (skytrace iq's)
+  std::optional<int> threads;                       // --threads; default: one per hardware thread
 };
 
 int run(const RunArgs& args) {
@@ -28,8 +29,12 @@ int run(const RunArgs& args) {
     return report_error(make_error(ErrorCode::kInvalidArgument,
                                    fmt::format("--threads {}: expected 1 to 1024 (default: one per hardware thread)", *args.threads)));
   }
-  std::vector<std::string> overrides = args.overrides;
-  if (!args.truth_format.empty()) overrides.push_back("output.truth_format=" + args.truth_format);
+  std::vector<sim::ScenarioOverride> overrides;
+  for (const std::string& assignment : args.overrides) overrides.push_back({assignment, "--set " + assignment});
+  overrides.insert(overrides.end(), args.from_options.begin(), args.from_options.end());
+  if (!args.truth_format.empty()) {
+    overrides.push_back({"output.truth_format=" + args.truth_format, "--truth-format " + args.truth_format});
+  }
   auto scenario = sim::load_scenario(args.scenario, overrides);
   if (!scenario) return report_error(scenario.error());
   sim::RunOptions options;
@@ -84,12 +89,14 @@ void register_iq_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--set", args->overrides, "Override a scenario key, KEY.PATH=YAML_VALUE (repeatable)");
   cmd->callback([args, sample_rate, format, bands, &exit_code]() {
     RunArgs with_iq = *args;
-    std::string band_list;
+    std::string band_list, band_options;
     for (const auto& band : bands->empty() ? std::vector<std::string>{"L1"} : *bands) {
       band_list += (band_list.empty() ? "" : ", ") + band;
+      band_options += " --band " + band;
     }
-    with_iq.overrides.push_back(fmt::format("output.iq={{sample_rate_hz: {:.17g}, format: \"{}\", bands: [{}]}}",
-                                            *sample_rate, *format, band_list));
+    with_iq.from_options.push_back(
+        {fmt::format("output.iq={{sample_rate_hz: {:.17g}, format: \"{}\", bands: [{}]}}", *sample_rate, *format, band_list),
+         fmt::format("--sample-rate {:g} --format {}{}", *sample_rate, *format, band_options)});
     exit_code = run(with_iq);
   });
 }

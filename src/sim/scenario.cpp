@@ -489,7 +489,8 @@ namespace {
 
 // Sets `a.b.c=value` in the YAML tree (value parsed as YAML), creating missing mappings, and
 // appends what it set to `set_values`.
-Status apply_override(YAML::Node& root, const std::string& assignment, std::vector<YamlOverride>& set_values) {
+Status apply_override(YAML::Node& root, const ScenarioOverride& given, std::vector<YamlOverride>& set_values) {
+  const std::string& assignment = given.assignment;
   const auto equals = assignment.find('=');
   if (equals == std::string::npos || equals == 0) {
     return make_error(ErrorCode::kInvalidArgument, "--set '" + assignment + "': expected KEY.PATH=VALUE");
@@ -549,20 +550,36 @@ Status apply_override(YAML::Node& root, const std::string& assignment, std::vect
   } else {
     node[keys.back()] = value;
   }
-  set_values.push_back({field_path, "--set " + assignment});
+  set_values.push_back({field_path, given.option});
   return Ok{};
+}
+
+}  // namespace
+
+namespace {
+
+std::vector<ScenarioOverride> given_with_set(const std::vector<std::string>& assignments) {
+  std::vector<ScenarioOverride> out;
+  out.reserve(assignments.size());
+  for (const std::string& assignment : assignments) out.push_back({assignment, "--set " + assignment});
+  return out;
 }
 
 }  // namespace
 
 Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
                                 const std::vector<std::string>& overrides) {
+  return parse_scenario(text, name, base_dir, given_with_set(overrides));
+}
+
+Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
+                                const std::vector<ScenarioOverride>& overrides) {
   auto document = load_yaml_document(text, name);
   if (!document) return document.error();
   YAML::Node root = std::move(*document);
   std::vector<YamlOverride> set_values;
-  for (const std::string& assignment : overrides) {
-    if (auto st = apply_override(root, assignment, set_values); !st) return st.error().with_context(name);
+  for (const ScenarioOverride& given : overrides) {
+    if (auto st = apply_override(root, given, set_values); !st) return st.error().with_context(name);
   }
   try {
     Scenario s = parse_root(Node(root, "", &name, "scenario", &set_values), base_dir);
@@ -585,6 +602,10 @@ Result<size_t> find_receiver(const Scenario& scenario, std::string_view name) {
 }
 
 Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
+  return load_scenario(path, given_with_set(overrides));
+}
+
+Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<ScenarioOverride>& overrides) {
   auto text = read_text_file(path);
   if (!text) return text.error();
   auto scenario = parse_scenario(*text, path.string(), path.parent_path(), overrides);

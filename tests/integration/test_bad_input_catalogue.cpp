@@ -439,6 +439,28 @@ TEST_F(BadInputCatalogue, DuplicateYamlKeyNamesBothLines) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "s.yaml:2: name: duplicate key \\(first at line 1");
 }
 
+// Values given on the command line are named by their options: the file holds no line of them.
+TEST_F(BadInputCatalogue, ARefusedSetValueNamesTheOptionNotALine) {
+  write_text(dir_ / "s.yaml", nominal_scenario());
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out") + " --set time.interval_s=0", 3,
+           "s.yaml \\(--set time.interval_s=0\\): time.interval_s: value 0 out of range");
+  run_case(skytrace_cmd() + " iq " + q(dir_ / "s.yaml") + " --out " + q(dir_ / "out") + " --sample-rate 1e308", 3,
+           "s.yaml \\(--sample-rate 1e\\+308 --format sc8 --band L1\\): output.iq.sample_rate_hz: value 1e\\+308 out of range");
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "obs.rnx"));
+}
+
+// NaN passes CLI11's range checks (no comparison with it fails): each option checks it itself.
+TEST_F(BadInputCatalogue, NanOptionsOfPositionAndCompareAreRefused) {
+  run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(nav()) + " --base " + q(obs()) + " --ratio-threshold nan", 2,
+           "--ratio-threshold nan: expected 1 to 100");
+  run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(nav()) + " --min-cn0-dbhz inf", 2,
+           "--min-cn0-dbhz inf: expected 0 \\(no limit\\) to 100");
+  run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(nav()) + " --rtk-elevation-mask-deg -100", 2,
+           "--rtk-elevation-mask-deg must be in");
+  run_case(skytrace_cmd() + " compare " + q(obs()) + " " + q(obs()) + " --epoch-tolerance-ms nan", 2,
+           "--epoch-tolerance-ms nan: expected 0 to 500");
+}
+
 // Antennas (issue #13): an unknown name lists the known ones; a band the antenna lacks and a gain
 // beyond -40..+20 dBic name the antenna's file and field.
 std::string receiver_with_antenna(const std::string& antenna, const std::string& signals) {

@@ -227,14 +227,26 @@ struct Scenario {
 // an error naming the receivers there are otherwise.
 [[nodiscard]] Result<size_t> find_receiver(const Scenario& scenario, std::string_view name);
 
-// `overrides` ("models.ionosphere=none", "ephemeris.precise_orbits=[]": a key path and a YAML value)
-// replace or add keys before the scenario is checked.
+// A key set from outside the file: the assignment ("models.ionosphere=none",
+// "ephemeris.precise_orbits=[]": a key path and a YAML value) and the option the user gave for it,
+// which messages about the value name ("--set models.ionosphere=none", "--sample-rate 1e308").
+struct ScenarioOverride {
+  std::string assignment, option;
+};
+
+// `overrides` replace or add keys before the scenario is checked; as strings, each is an assignment
+// given as `--set ASSIGNMENT`.
 [[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path,
                                              const std::vector<std::string>& overrides = {});
+[[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path,
+                                             const std::vector<ScenarioOverride>& overrides);
 // Parses scenario text; `name` is used in messages and `base_dir` resolves relative paths.
 [[nodiscard]] Result<Scenario> parse_scenario(const std::string& text, const std::string& name,
                                               const std::filesystem::path& base_dir,
                                               const std::vector<std::string>& overrides = {});
+[[nodiscard]] Result<Scenario> parse_scenario(const std::string& text, const std::string& name,
+                                              const std::filesystem::path& base_dir,
+                                              const std::vector<ScenarioOverride>& overrides);
 // The effective configuration (defaults filled in) as YAML-compatible JSON text, for summary.json.
 [[nodiscard]] std::string scenario_to_json(const Scenario& scenario);
 
