@@ -528,6 +528,9 @@ Result<std::vector<FetchedProduct>> fetch_product(const FetchRequest& request, P
   if (request.retries < 0 || request.retries > 10) {
     return make_error(ErrorCode::kInvalidArgument, "retries must be between 0 and 10");
   }
+  if (!(request.retry_delay_s >= 0.0 && request.retry_delay_s <= 60.0)) {  // NaN too
+    return make_error(ErrorCode::kInvalidArgument, "the retry delay must be 0 to 60 s");
+  }
   std::filesystem::path cache_dir = request.cache_dir;
   if (cache_dir.empty()) {
     auto dir = default_cache_dir();

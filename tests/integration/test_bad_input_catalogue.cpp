@@ -450,7 +450,7 @@ TEST_F(BadInputCatalogue, ARefusedSetValueNamesTheOptionNotALine) {
 }
 
 // NaN passes CLI11's range checks (no comparison with it fails): each option checks it itself.
-TEST_F(BadInputCatalogue, NanOptionsOfPositionAndCompareAreRefused) {
+TEST_F(BadInputCatalogue, NanOptionsOfPositionCompareFetchAndServeAreRefused) {
   run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(nav()) + " --base " + q(obs()) + " --ratio-threshold nan", 2,
            "--ratio-threshold nan: expected 1 to 100");
   run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(nav()) + " --min-cn0-dbhz inf", 2,
@@ -459,6 +459,11 @@ TEST_F(BadInputCatalogue, NanOptionsOfPositionAndCompareAreRefused) {
            "--rtk-elevation-mask-deg must be in");
   run_case(skytrace_cmd() + " compare " + q(obs()) + " " + q(obs()) + " --epoch-tolerance-ms nan", 2,
            "--epoch-tolerance-ms nan: expected 0 to 500");
+  run_case(skytrace_cmd() + " fetch --date 2020-01-01 --cache " + q(dir_ / "cache") + " --retry-delay-s nan", 2,
+           "--retry-delay-s nan: expected 0 to 60");
+  // serve took NaN for no limit and served until killed.
+  run_case(skytrace_cmd() + " serve " + q(base_ / "scenario.yaml") + " --nmea-tcp 127.0.0.1:0 --duration-s nan", 2,
+           "--duration-s nan: expected seconds");
 }
 
 // Antennas (issue #13): an unknown name lists the known ones; a band the antenna lacks and a gain
