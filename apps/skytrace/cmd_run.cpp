@@ -35,7 +35,7 @@ int run(const RunArgs& args) {
   if (!args.truth_format.empty()) {
     overrides.push_back({"output.truth_format=" + args.truth_format, "--truth-format " + args.truth_format});
   }
-  auto scenario = sim::load_scenario(args.scenario, overrides);
+  auto scenario = sim::load_scenario_with_options(args.scenario, overrides);
   if (!scenario) return report_error(scenario.error());
   sim::RunOptions options;
   options.write_truth = !args.no_truth;

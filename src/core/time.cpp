@@ -298,7 +298,11 @@ Result<GnssTime> GnssTime::parse_iso8601(std::string_view text, TimeScale scale)
   if (hour < 0 || hour > 23 || minute < 0 || minute > 59) return fail("hour or minute out of range");
   const double max_second = has_leap_seconds(scale) ? 61.0 : 60.0;
   if (second < 0.0 || second >= max_second) return fail("second out of range");
-  return from_calendar(CalendarTime{year, month, day, hour, minute, second}, scale);
+  const GnssTime t = from_calendar(CalendarTime{year, month, day, hour, minute, second}, scale);
+  // Every GNSS time scale counts from 1980 or later; earlier readings only produced output dated
+  // before any satellite (the nominal constellation ran silently in 1900).
+  if (t.whole_seconds() < 0) return fail("before GPS time began (1980-01-06T00:00:00 GPST)");
+  return t;
 }
 
 WeekTow GnssTime::to_week_tow(TimeScale scale) const {

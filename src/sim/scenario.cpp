@@ -569,11 +569,12 @@ std::vector<ScenarioOverride> given_with_set(const std::vector<std::string>& ass
 
 Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
                                 const std::vector<std::string>& overrides) {
-  return parse_scenario(text, name, base_dir, given_with_set(overrides));
+  return parse_scenario_with_options(text, name, base_dir, given_with_set(overrides));
 }
 
-Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
-                                const std::vector<ScenarioOverride>& overrides) {
+Result<Scenario> parse_scenario_with_options(const std::string& text, const std::string& name,
+                                             const std::filesystem::path& base_dir,
+                                             const std::vector<ScenarioOverride>& overrides) {
   auto document = load_yaml_document(text, name);
   if (!document) return document.error();
   YAML::Node root = std::move(*document);
@@ -602,13 +603,13 @@ Result<size_t> find_receiver(const Scenario& scenario, std::string_view name) {
 }
 
 Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
-  return load_scenario(path, given_with_set(overrides));
+  return load_scenario_with_options(path, given_with_set(overrides));
 }
 
-Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<ScenarioOverride>& overrides) {
+Result<Scenario> load_scenario_with_options(const std::filesystem::path& path, const std::vector<ScenarioOverride>& overrides) {
   auto text = read_text_file(path);
   if (!text) return text.error();
-  auto scenario = parse_scenario(*text, path.string(), path.parent_path(), overrides);
+  auto scenario = parse_scenario_with_options(*text, path.string(), path.parent_path(), overrides);
   if (scenario) scenario->source = path;
   return scenario;
 }

@@ -129,6 +129,12 @@ TEST(GnssTime, ParseErrors) {
   EXPECT_FALSE(GnssTime::parse_iso8601("2020-06-25 25:00:00", TimeScale::kGpst).ok());
   EXPECT_FALSE(GnssTime::parse_iso8601("yesterday", TimeScale::kGpst).ok());
   EXPECT_FALSE(GnssTime::parse_iso8601("2020-06-25T00:00:60", TimeScale::kGpst).ok());
+  // Before GPS time began: no GNSS time scale is defined there.
+  const auto early = GnssTime::parse_iso8601("1900-01-01T00:00:00", TimeScale::kUtc);
+  ASSERT_FALSE(early.ok());
+  EXPECT_NE(early.error().message.find("before GPS time began"), std::string::npos) << early.error().message;
+  EXPECT_FALSE(GnssTime::parse_iso8601("1980-01-05T23:59:59", TimeScale::kGpst).ok());
+  EXPECT_TRUE(GnssTime::parse_iso8601("1980-01-06T00:00:00", TimeScale::kGpst).ok());
   EXPECT_FALSE(GnssTime::parse_iso8601("2020-06-25T00:00:00Z", TimeScale::kGpst).ok());
   EXPECT_TRUE(GnssTime::parse_iso8601("2020-06-25T00:00:00Z", TimeScale::kUtc).ok());
   EXPECT_TRUE(GnssTime::parse_iso8601("2020-06-25", TimeScale::kGpst).ok());

@@ -234,19 +234,19 @@ struct ScenarioOverride {
   std::string assignment, option;
 };
 
-// `overrides` replace or add keys before the scenario is checked; as strings, each is an assignment
-// given as `--set ASSIGNMENT`.
+// `overrides` replace or add keys before the scenario is checked: assignments given as
+// `--set ASSIGNMENT`, or (the _with_options forms) each with the option it came from.
 [[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path,
                                              const std::vector<std::string>& overrides = {});
-[[nodiscard]] Result<Scenario> load_scenario(const std::filesystem::path& path,
-                                             const std::vector<ScenarioOverride>& overrides);
+[[nodiscard]] Result<Scenario> load_scenario_with_options(const std::filesystem::path& path,
+                                                          const std::vector<ScenarioOverride>& overrides);
 // Parses scenario text; `name` is used in messages and `base_dir` resolves relative paths.
 [[nodiscard]] Result<Scenario> parse_scenario(const std::string& text, const std::string& name,
                                               const std::filesystem::path& base_dir,
                                               const std::vector<std::string>& overrides = {});
-[[nodiscard]] Result<Scenario> parse_scenario(const std::string& text, const std::string& name,
-                                              const std::filesystem::path& base_dir,
-                                              const std::vector<ScenarioOverride>& overrides);
+[[nodiscard]] Result<Scenario> parse_scenario_with_options(const std::string& text, const std::string& name,
+                                                           const std::filesystem::path& base_dir,
+                                                           const std::vector<ScenarioOverride>& overrides);
 // The effective configuration (defaults filled in) as YAML-compatible JSON text, for summary.json.
 [[nodiscard]] std::string scenario_to_json(const Scenario& scenario);
 
