@@ -499,6 +499,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   // Tracked satellite-epochs per system, counted by index (summary.satellite_epochs_per_system is
   // filled from them once the epochs are written, before the sinks end their files).
   std::array<std::int64_t, kAllSystems.size()> tracked_per_system{};
+  std::vector<std::int64_t> tracked_per_receiver(receivers.size(), 0);
   // Hands every receiver's epoch of one instant to the sinks.
   auto write_instant = [&](const QueuedEpoch& instant) -> Status {
     if (cancellation_requested()) return cancelled_error();
@@ -510,6 +511,7 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
         if (sat.status != receiver::SatelliteStatus::kTracked) continue;
         ++summary.satellite_epochs;
         ++tracked_per_system[static_cast<size_t>(sat.satellite.system)];
+        ++tracked_per_receiver[i];
         summary.observations += static_cast<std::int64_t>(sat.signals.size());
       }
       const auto& fix = instant.fixes[i];
@@ -727,6 +729,18 @@ Result<RunSummary> run_scenario(const Scenario& s, const std::filesystem::path& 
   for (const GnssSystem system : kAllSystems) {
     const std::int64_t count = tracked_per_system[static_cast<size_t>(system)];
     if (count > 0) summary.satellite_epochs_per_system[std::string(system_name(system))] = count;
+  }
+  // A receiver that tracked nothing would leave files without an observation and no word why (in
+  // the report too: the sinks read the warnings when they end, below).
+  for (size_t i = 0; i < receivers.size(); ++i) {
+    if (tracked_per_receiver[i] > 0) continue;
+    const ReceiverSettings& rx = *context.receivers[i].settings;
+    std::string signals;
+    for (const Signal& signal : rx.signals) signals += (signals.empty() ? "" : ", ") + signal.to_string();
+    resources->warnings.push_back(fmt::format(
+        "receiver '{}' tracked no signal in the whole run (signals {}; elevation mask {:g} deg): check the mask, "
+        "which of these signals the satellites transmit at this date, and whether the world hides the antenna",
+        rx.name, signals, rx.elevation_mask_deg));
   }
   // The sinks end their files (the report draws its pages then, the bag and the compressed truth
   // write their last blocks): side by side when threads allow; errors in the sinks' order.

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -127,6 +128,29 @@ TEST(WorldHeights, AReceiverHighAboveTheGroundOverNoObjectIsWarnedAbout) {
   const auto right = test::run_command(run + test::shell_quote((dir / "right").string()) + " 2>&1");
   ASSERT_EQ(right.exit_code, 0) << right.output;
   EXPECT_EQ(right.output.find("above the world's ground"), std::string::npos) << right.output;
+}
+
+// A receiver that tracks nothing in the whole run says so (console, summary.json, report); one that
+// tracks does not.
+TEST(RunWarnings, AReceiverThatTrackedNothingIsWarnedAbout) {
+  const auto dir = test::make_temp_dir("tracked_nothing");
+  const std::string run = test::shell_quote(skytrace_binary().string()) + " run " +
+                          test::shell_quote((test::source_dir() / "examples/quickstart.yaml").string()) +
+                          " --set time.duration_s=5 --out ";
+  const auto masked = test::run_command(run + test::shell_quote((dir / "masked").string()) +
+                                        " --set receiver.elevation_mask_deg=89.9 2>&1");
+  ASSERT_EQ(masked.exit_code, 0) << masked.output;
+  const std::string expected = "receiver 'QUICK' tracked no signal in the whole run (signals G1C, ";
+  EXPECT_NE(masked.output.find("warning: " + expected), std::string::npos) << masked.output;
+  const auto text_of = [](const std::filesystem::path& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_NE(text_of(dir / "masked" / "summary.json").find(expected), std::string::npos);
+  EXPECT_NE(text_of(dir / "masked" / "report.html").find("tracked no signal"), std::string::npos);
+  const auto open = test::run_command(run + test::shell_quote((dir / "open").string()) + " 2>&1");
+  ASSERT_EQ(open.exit_code, 0) << open.output;
+  EXPECT_EQ(open.output.find("tracked no signal"), std::string::npos) << open.output;
 }
 
 }  // namespace
