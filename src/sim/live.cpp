@@ -9,6 +9,7 @@
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/sim/streams.hpp"
+#include "skytrace/sim/trajectory.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -29,7 +30,7 @@ class ExternalPose final : public receiver::KinematicsSource {
       // Velocity from successive poses, when they are close enough in time to mean it.
       const double dt_s = time - pose_->time;
       if (dt_s > 1e-3 && dt_s <= 2.0 * timeout_s_) velocity = (position_m - pose_->position_m) / dt_s;
-      if (velocity.norm() > 2e4) velocity = Eigen::Vector3d::Zero();  // a jump, not a motion
+      if (velocity.norm() > kMaxAntennaSpeed_mps) velocity = Eigen::Vector3d::Zero();  // a jump, not a motion
     }
     pose_ = Pose{time, position_m, velocity};
   }
@@ -217,9 +218,7 @@ Status check_antenna_pose(const Eigen::Vector3d& position_ecef_m, const std::opt
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("antenna pose {:.1f} km from the Earth's centre ignored (not near the Earth)", radius_m / 1e3));
   }
-  // Faster than a low Earth orbit is no robot, vehicle or aircraft.
-  constexpr double kMaxSpeed_mps = 2e4;
-  if (velocity_ecef_mps && velocity_ecef_mps->norm() > kMaxSpeed_mps) {
+  if (velocity_ecef_mps && velocity_ecef_mps->norm() > kMaxAntennaSpeed_mps) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("antenna velocity {:.3g} m/s ignored (more than 20 km/s)", velocity_ecef_mps->norm()));
   }

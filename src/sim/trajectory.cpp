@@ -1,5 +1,7 @@
 #include "skytrace/sim/trajectory.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -133,6 +135,14 @@ Result<std::vector<TrajectorySample>> read_trajectory_csv(const TrajectorySettin
     if (!samples.empty() && !(samples.back().time < sample.time)) {
       return lines->error_at(i, "time is not later than the previous sample's (line " + std::to_string(previous_line + 1) +
                                     "): a trajectory's times must increase");
+    }
+    if (!samples.empty()) {
+      const double speed_mps = (*ecef - samples.back().position_m).norm() / (sample.time - samples.back().time);
+      if (speed_mps > kMaxAntennaSpeed_mps) {
+        return lines->error_at(i, fmt::format("{:.3g} km/s from the previous sample (line {}), more than {:g} km/s: "
+                                              "a coordinate or a time is wrong",
+                                              speed_mps / 1e3, previous_line + 1, kMaxAntennaSpeed_mps / 1e3));
+      }
     }
     previous_line = i;
     sample.position_m = *ecef;

@@ -291,6 +291,14 @@ TEST_F(BadInputCatalogue, TrajectoryGoingBackInTimeNamesItsLine) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "track.csv:4: time is not later than the previous sample");
 }
 
+// 1,000 km in 10 s: a typo, not a motion (live poses have the same bound, 20 km/s).
+TEST_F(BadInputCatalogue, TrajectoryFasterThanAnyVehicleNamesItsLine) {
+  write_text(dir_ / "track.csv", "t_s,x,y,z\n0,4400000,800000,4500000\n10,4400010,800000,4500000\n20,4400010,1800000,4500000\n");
+  write_text(dir_ / "s.yaml", nominal_scenario("receiver:\n  trajectory:\n    file: track.csv\n    frame: ecef\n"
+                                                "  signals: [G1C]\n"));
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "track.csv:4: 100 km/s from the previous sample \\(line 3\\), more than 20 km/s");
+}
+
 // ---------------------------------------------------------------- small inputs, large allocations
 
 TEST_F(BadInputCatalogue, SdfWorldIncludingItselfIsACycle) {
