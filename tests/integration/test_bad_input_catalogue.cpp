@@ -299,6 +299,14 @@ TEST_F(BadInputCatalogue, TrajectoryFasterThanAnyVehicleNamesItsLine) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "out"), 3, "track.csv:4: 100 km/s from the previous sample \\(line 3\\), more than 20 km/s");
 }
 
+// A moving model's pose far outside any world (the world frame is a tangent plane).
+TEST_F(BadInputCatalogue, MovingModelFarOutsideTheWorldNamesItsLine) {
+  write_text(dir_ / "van.csv", "t,x,y,z,yaw\n0,0,0,0,0\n10,1e300,0,0,0\n");
+  run_case(skytrace_cmd() + " run " + q(test::source_dir() / "examples" / "quickstart.yaml") + " --out " + q(dir_ / "out") +
+               " --set time.duration_s=5 --set 'world.moving=[{model: east_wing, trajectory: " + (dir_ / "van.csv").string() + "}]'",
+           3, "van.csv:3: position \\(1e\\+300, 0, 0\\) m: expected within 1000 km of the world's origin");
+}
+
 // ---------------------------------------------------------------- small inputs, large allocations
 
 TEST_F(BadInputCatalogue, SdfWorldIncludingItselfIsACycle) {
