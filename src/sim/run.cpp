@@ -83,6 +83,7 @@ class StagingDir {
  public:
   static Result<StagingDir> create(const std::filesystem::path& out_dir) {
     std::error_code ec;
+    if (out_dir.empty()) return make_error(ErrorCode::kOutput, "the output folder is an empty path (--out names it)");
     if (std::filesystem::exists(out_dir, ec) && !std::filesystem::is_directory(out_dir, ec)) {
       return make_error(ErrorCode::kOutput, out_dir.string() + ": is not a folder (--out names the output folder)");
     }

@@ -218,6 +218,10 @@ TEST_F(BadInputCatalogue, RunIntoARegularFileIsRefused) {
   EXPECT_EQ(read_text(dir_ / "taken"), "a file, not a folder\n");
 }
 
+TEST_F(BadInputCatalogue, RunIntoAnEmptyPathIsExit5) {
+  run_case(skytrace_cmd() + " run " + q(base_ / "scenario.yaml") + " --out ''", 5, "the output folder is an empty path");
+}
+
 TEST_F(BadInputCatalogue, RunIntoAnUncreatableFolderIsExit5) {
   run_case(run_cmd(base_ / "scenario.yaml", "/proc/skytrace-cannot-be-here/out"), 5, "cannot create output folder");
 }
