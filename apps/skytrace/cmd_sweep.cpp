@@ -557,6 +557,9 @@ int sweep(const SweepArgs& args) {
   if (args.poll_s <= 0.0 || !std::isfinite(args.poll_s)) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "--poll-s: expected a positive number of seconds"));
   }
+  if (args.out_dir.empty()) {
+    return report_error(make_error(ErrorCode::kOutput, "the output folder is an empty path (--out names it)"));
+  }
   auto plan = sim::load_sweep(args.sweep_file);
   if (!plan) return report_error(plan.error());
   plan->fixed_overrides.insert(plan->fixed_overrides.end(), args.overrides.begin(), args.overrides.end());

@@ -218,8 +218,11 @@ TEST_F(BadInputCatalogue, RunIntoARegularFileIsRefused) {
   EXPECT_EQ(read_text(dir_ / "taken"), "a file, not a folder\n");
 }
 
-TEST_F(BadInputCatalogue, RunIntoAnEmptyPathIsExit5) {
+TEST_F(BadInputCatalogue, RunAndSweepIntoAnEmptyPathAreExit5) {
   run_case(skytrace_cmd() + " run " + q(base_ / "scenario.yaml") + " --out ''", 5, "the output folder is an empty path");
+  // sweep ended in "internal error: filesystem error: cannot make absolute path" (exit 1).
+  write_text(dir_ / "sweep.yaml", "scenario: " + (base_ / "scenario.yaml").string() + "\naxes:\n  seed: [1, 2]\n");
+  run_case(skytrace_cmd() + " sweep " + q(dir_ / "sweep.yaml") + " --out ''", 5, "the output folder is an empty path");
 }
 
 TEST_F(BadInputCatalogue, RunIntoAnUncreatableFolderIsExit5) {
