@@ -17,6 +17,13 @@ namespace skytrace {
 Result<std::string> read_text_file(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
+    // Only regular files are read: a device or pipe could block or never end (/dev/zero).
+    if (path.empty()) return make_error(ErrorCode::kIo, "an empty path was given for a file");
+    const auto status = std::filesystem::status(path, ec);
+    if (std::filesystem::is_directory(status)) return make_error(ErrorCode::kIo, path.string() + ": is a folder, expected a file");
+    if (std::filesystem::exists(status)) {
+      return make_error(ErrorCode::kIo, path.string() + ": not a regular file (a device, pipe or socket); give a file");
+    }
     return make_error(ErrorCode::kIo, path.string() + ": no such file");
   }
   // gzopen reads plain files transparently and decompresses gzip ones.

@@ -218,6 +218,14 @@ TEST_F(BadInputCatalogue, RunIntoARegularFileIsRefused) {
   EXPECT_EQ(read_text(dir_ / "taken"), "a file, not a folder\n");
 }
 
+// Inputs are read only from regular files: a device or a pipe could block or never end. Before,
+// each of these was "no such file".
+TEST_F(BadInputCatalogue, InputsThatAreNoRegularFilesSayWhatTheyAre) {
+  run_case(skytrace_cmd() + " position /dev/zero --nav " + q(nav()), 3, "/dev/zero: not a regular file \\(a device, pipe or socket\\)");
+  run_case(skytrace_cmd() + " compare " + q(dir_) + " " + q(obs()), 3, "REAL: .*: is a folder, expected a file");
+  run_case(skytrace_cmd() + " run '' --out " + q(dir_ / "out"), 3, "an empty path was given for a file");
+}
+
 TEST_F(BadInputCatalogue, RunAndSweepIntoAnEmptyPathAreExit5) {
   run_case(skytrace_cmd() + " run " + q(base_ / "scenario.yaml") + " --out ''", 5, "the output folder is an empty path");
   // sweep ended in "internal error: filesystem error: cannot make absolute path" (exit 1).
