@@ -14,18 +14,18 @@
 
 namespace skytrace {
 
-Result<std::string> read_text_file(const std::filesystem::path& path) {
+std::string why_not_an_input_file(const std::filesystem::path& path) {
+  if (path.empty()) return "an empty path was given for a file";
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    // Only regular files are read: a device or pipe could block or never end (/dev/zero).
-    if (path.empty()) return make_error(ErrorCode::kIo, "an empty path was given for a file");
-    const auto status = std::filesystem::status(path, ec);
-    if (std::filesystem::is_directory(status)) return make_error(ErrorCode::kIo, path.string() + ": is a folder, expected a file");
-    if (std::filesystem::exists(status)) {
-      return make_error(ErrorCode::kIo, path.string() + ": not a regular file (a device, pipe or socket); give a file");
-    }
-    return make_error(ErrorCode::kIo, path.string() + ": no such file");
-  }
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::is_regular_file(status)) return {};
+  if (std::filesystem::is_directory(status)) return path.string() + ": is a folder, expected a file";
+  if (std::filesystem::exists(status)) return path.string() + ": not a regular file (a device, pipe or socket); give a file";
+  return path.string() + ": no such file";
+}
+
+Result<std::string> read_text_file(const std::filesystem::path& path) {
+  if (std::string why = why_not_an_input_file(path); !why.empty()) return make_error(ErrorCode::kIo, why);
   // gzopen reads plain files transparently and decompresses gzip ones.
   gzFile file = gzopen(path.c_str(), "rb");
   if (file == nullptr) {

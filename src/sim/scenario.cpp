@@ -50,8 +50,10 @@ std::filesystem::path resolve(const std::filesystem::path& base, const std::stri
 
 std::filesystem::path existing_file(const Node& node, const std::filesystem::path& base) {
   const auto p = resolve(base, node.as_string());
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(p, ec)) node.fail("file not found: " + p.string());
+  if (std::string why = why_not_an_input_file(p); !why.empty()) {
+    std::error_code ec;
+    node.fail(std::filesystem::exists(p, ec) ? why : "file not found: " + p.string());  // a folder, a device
+  }
   return p;
 }
 

@@ -11,6 +11,11 @@
 
 namespace skytrace {
 
+// Why `path` cannot serve as an input file ("no such file", "is a folder, expected a file", "not a
+// regular file ..."), or an empty string when it is a regular file. Only regular files are read:
+// a device or a pipe could block or never end (/dev/zero).
+[[nodiscard]] std::string why_not_an_input_file(const std::filesystem::path& path);
+
 // Reads a whole file; gzip-compressed content (.gz or by magic number) is decompressed.
 [[nodiscard]] Result<std::string> read_text_file(const std::filesystem::path& path);
 
