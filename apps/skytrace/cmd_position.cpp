@@ -192,6 +192,15 @@ int run_position(const PositionArgs& args) {
   if (navigation.record_count() == 0) {
     return report_error(make_error(ErrorCode::kNotFound, "the navigation file(s) hold no ephemeris record"));
   }
+  // The records' reference times, so that observations outside them can be told plainly.
+  std::optional<GnssTime> first_record, last_record;
+  const auto note_record = [&](const GnssTime& t) {
+    if (!first_record || t < *first_record) first_record = t;
+    if (!last_record || *last_record < t) last_record = t;
+  };
+  for (const auto& e : navigation.kepler) note_record(e.toe);
+  for (const auto& e : navigation.glonass) note_record(e.toe);
+  for (const auto& e : navigation.sbas) note_record(e.toe);
   std::optional<orbits::KlobucharCoefficients> klobuchar = navigation.ionosphere.gps;
   if (!klobuchar && settings.ionosphere_klobuchar) {
     std::cerr << "skytrace: warning: no GPS Klobuchar coefficients (ION ALPHA/BETA, GPSA/GPSB) in the "
@@ -256,6 +265,20 @@ int run_position(const PositionArgs& args) {
   }
   if (epochs == 0) return report_error(make_error(ErrorCode::kNotFound, args.obs_path + ": no observation epoch"));
   if (fixes == 0) {
+    // A broadcast record serves a few hours around its reference time: observations a day or more
+    // away from every record are another day's, which is what to say.
+    constexpr double kFarFromEveryRecord_s = 86400.0;
+    const GnssTime& obs_first = observations->epochs.front().time;
+    const GnssTime& obs_last = observations->epochs.back().time;
+    if (first_record && last_record &&
+        (*last_record + kFarFromEveryRecord_s < obs_first || obs_last + kFarFromEveryRecord_s < *first_record)) {
+      return report_error(make_error(
+          ErrorCode::kOutOfRange,
+          fmt::format("the navigation data does not cover {}: its records run from {} to {} GPST, the observations from {} "
+                      "to {} GPST (give the navigation file of the observations' day)",
+                      args.obs_path, first_record->to_iso8601(TimeScale::kGpst, 1), last_record->to_iso8601(TimeScale::kGpst, 1),
+                      obs_first.to_iso8601(TimeScale::kGpst, 1), obs_last.to_iso8601(TimeScale::kGpst, 1))));
+    }
     return report_error(make_error(ErrorCode::kOutOfRange, "no epoch of " + args.obs_path +
                                                                " could be positioned; first: " + first_failure));
   }

@@ -279,6 +279,16 @@ TEST_F(BadInputCatalogue, NavRecordWithSqrtAZeroNamesTheField) {
   EXPECT_FALSE(fs::exists(dir_ / "o.csv"));
 }
 
+// Observations of one day against another day's navigation file: said plainly, with both spans.
+TEST_F(BadInputCatalogue, NavigationOfAnotherDayIsNamedWithBothSpans) {
+  write_text(dir_ / "s.yaml", nominal_scenario());
+  run_case(run_cmd(dir_ / "s.yaml", dir_ / "later") + " --set time.start=2026-03-20T12:00:00 --set time.duration_s=60 --no-truth",
+           0, "");
+  run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(dir_ / "later" / "nav.rnx"), 4,
+           "the navigation data does not cover .*obs.rnx: its records run from 2026-03-20.* the observations from "
+           "2026-03-01T12:00:00.0");
+}
+
 TEST_F(BadInputCatalogue, RinexVersion2E11IsRefused) {
   auto lines = split_lines(read_text(obs()));
   lines[0].replace(0, 9, "     2E11");
