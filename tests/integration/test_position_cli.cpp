@@ -182,11 +182,14 @@ TEST(PositionCli, BadInputsFailClearlyWithoutOutput) {
   EXPECT_EQ(systems.exit_code, 2) << systems.output;
   EXPECT_NE(systems.output.find("--systems"), std::string::npos) << systems.output;
 
-  // Ephemerides of 2022 for observations of 2020: no epoch can be positioned.
+  // Ephemerides of 2022 for observations of 2020: no epoch can be positioned, and the message says
+  // why with both spans.
   const auto uncovered = test::run_command(base + " --nav " + test::shell_quote(other_day.string()) + " --out " +
                                            test::shell_quote(csv.string()));
   EXPECT_EQ(uncovered.exit_code, 4) << uncovered.output;
-  EXPECT_NE(uncovered.output.find("no valid broadcast ephemeris"), std::string::npos) << uncovered.output;
+  EXPECT_NE(uncovered.output.find("the navigation data does not cover"), std::string::npos) << uncovered.output;
+  EXPECT_NE(uncovered.output.find("its records run from 2022-06-07"), std::string::npos) << uncovered.output;
+  EXPECT_NE(uncovered.output.find("the observations from 2020-06-25T00:00:00.0"), std::string::npos) << uncovered.output;
   EXPECT_FALSE(std::filesystem::exists(csv));
   std::filesystem::remove_all(dir);
 }
