@@ -30,10 +30,12 @@ struct FetchOptions {
 int run_fetch(const FetchOptions& options) {
   // Named as given, before anything is fetched (CLI11's range checks let NaN through).
   if (!(options.timeout_s > 0.0)) {
-    return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--timeout-s {}: expected a positive number of seconds", options.timeout_s)));
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--timeout-s {}: expected a positive number of seconds", options.timeout_s)));
   }
   if (!(options.retry_delay_s >= 0.0 && options.retry_delay_s <= 60.0)) {
-    return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--retry-delay-s {}: expected 0 to 60", options.retry_delay_s)));
+    return report_error(make_error(ErrorCode::kInvalidArgument,
+                                   fmt::format("--retry-delay-s {}: expected 0 to 60", options.retry_delay_s)));
   }
   auto day = orbits::parse_archive_day(options.date);
   if (!day.ok()) return report_error(day.error());

@@ -272,12 +272,12 @@ int run_position(const PositionArgs& args) {
     const GnssTime& obs_last = observations->epochs.back().time;
     if (first_record && last_record &&
         (*last_record + kFarFromEveryRecord_s < obs_first || obs_last + kFarFromEveryRecord_s < *first_record)) {
+      const auto iso = [](const GnssTime& t) { return t.to_iso8601(TimeScale::kGpst, 1); };
       return report_error(make_error(
           ErrorCode::kOutOfRange,
-          fmt::format("the navigation data does not cover {}: its records run from {} to {} GPST, the observations from {} "
-                      "to {} GPST (give the navigation file of the observations' day)",
-                      args.obs_path, first_record->to_iso8601(TimeScale::kGpst, 1), last_record->to_iso8601(TimeScale::kGpst, 1),
-                      obs_first.to_iso8601(TimeScale::kGpst, 1), obs_last.to_iso8601(TimeScale::kGpst, 1))));
+          fmt::format("the navigation data does not cover {}: its records run from {} to {} GPST, the "
+                      "observations from {} to {} GPST (give the navigation file of the observations' day)",
+                      args.obs_path, iso(*first_record), iso(*last_record), iso(obs_first), iso(obs_last))));
     }
     return report_error(make_error(ErrorCode::kOutOfRange, "no epoch of " + args.obs_path +
                                                                " could be positioned; first: " + first_failure));

@@ -292,8 +292,9 @@ int serve(const ServeArgs& args) {
     return report_error(make_error(ErrorCode::kInvalidArgument, fmt::format("--rate-hz {}: expected 0 < R <= 100", args.rate_hz)));
   }
   if (!(args.duration_s >= 0.0)) {  // NaN too: it compared as no limit and served for ever
-    return report_error(make_error(ErrorCode::kInvalidArgument,
-                                   fmt::format("--duration-s {}: expected seconds, 0 or more (0: until SIGINT/SIGTERM)", args.duration_s)));
+    return report_error(make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("--duration-s {}: expected seconds, 0 or more (0: until SIGINT/SIGTERM)", args.duration_s)));
   }
   if (args.nmea_tcp.empty() && args.rtcm_tcp.empty() && args.pty.empty()) {
     return report_error(make_error(ErrorCode::kInvalidArgument, "give at least one of --nmea-tcp, --rtcm-tcp, --pty"));

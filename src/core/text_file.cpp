@@ -20,7 +20,9 @@ std::string why_not_an_input_file(const std::filesystem::path& path) {
   const auto status = std::filesystem::status(path, ec);
   if (std::filesystem::is_regular_file(status)) return {};
   if (std::filesystem::is_directory(status)) return path.string() + ": is a folder, expected a file";
-  if (std::filesystem::exists(status)) return path.string() + ": not a regular file (a device, pipe or socket); give a file";
+  if (std::filesystem::exists(status)) {
+    return path.string() + ": not a regular file (a device, pipe or socket); give a file";
+  }
   return path.string() + ": no such file";
 }
 

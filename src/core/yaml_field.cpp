@@ -22,7 +22,8 @@ void YamlField::fail(const std::string& what) const {
   std::string where = *file_;
   const auto set_here = [&](const YamlOverride& set) {
     const std::string& p = set.path;
-    return path_ == p || (path_.size() > p.size() && path_.compare(0, p.size(), p) == 0 && (path_[p.size()] == '.' || path_[p.size()] == '['));
+    return path_ == p || (path_.size() > p.size() && path_.compare(0, p.size(), p) == 0 &&
+                          (path_[p.size()] == '.' || path_[p.size()] == '['));
   };
   // The last option that set the value wins, as it did when the options were applied.
   const auto set = overridden_ != nullptr ? std::find_if(overridden_->rbegin(), overridden_->rend(), set_here)

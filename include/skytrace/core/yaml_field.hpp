@@ -42,7 +42,11 @@ class YamlField {
   // it, names the option instead of a line of the file.
   YamlField(YAML::Node node, std::string path, const std::string* file, std::string document = "document",
             const std::vector<YamlOverride>* overridden = nullptr)
-      : node_(std::move(node)), path_(std::move(path)), file_(file), document_(std::move(document)), overridden_(overridden) {}
+      : node_(std::move(node)),
+        path_(std::move(path)),
+        file_(file),
+        document_(std::move(document)),
+        overridden_(overridden) {}
 
   [[nodiscard]] const std::string& path() const { return path_; }
   [[nodiscard]] const YAML::Node& node() const { return node_; }
