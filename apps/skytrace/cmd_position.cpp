@@ -192,15 +192,6 @@ int run_position(const PositionArgs& args) {
   if (navigation.record_count() == 0) {
     return report_error(make_error(ErrorCode::kNotFound, "the navigation file(s) hold no ephemeris record"));
   }
-  // The records' reference times, so that observations outside them can be told plainly.
-  std::optional<GnssTime> first_record, last_record;
-  const auto note_record = [&](const GnssTime& t) {
-    if (!first_record || t < *first_record) first_record = t;
-    if (!last_record || *last_record < t) last_record = t;
-  };
-  for (const auto& e : navigation.kepler) note_record(e.toe);
-  for (const auto& e : navigation.glonass) note_record(e.toe);
-  for (const auto& e : navigation.sbas) note_record(e.toe);
   std::optional<orbits::KlobucharCoefficients> klobuchar = navigation.ionosphere.gps;
   if (!klobuchar && settings.ionosphere_klobuchar) {
     std::cerr << "skytrace: warning: no GPS Klobuchar coefficients (ION ALPHA/BETA, GPSA/GPSB) in the "
@@ -268,6 +259,15 @@ int run_position(const PositionArgs& args) {
     // A broadcast record serves a few hours around its reference time: observations a day or more
     // away from every record are another day's, which is what to say.
     constexpr double kFarFromEveryRecord_s = 86400.0;
+    std::optional<GnssTime> first_record, last_record;  // the records' reference times
+    const auto note_record = [&](const GnssTime& t) {
+      if (!first_record || t < *first_record) first_record = t;
+      if (!last_record || *last_record < t) last_record = t;
+    };
+    const orbits::NavigationData& records = ephemerides.data();
+    for (const auto& e : records.kepler) note_record(e.toe);
+    for (const auto& e : records.glonass) note_record(e.toe);
+    for (const auto& e : records.sbas) note_record(e.toe);
     const GnssTime& obs_first = observations->epochs.front().time;
     const GnssTime& obs_last = observations->epochs.back().time;
     if (first_record && last_record &&

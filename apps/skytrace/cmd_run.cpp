@@ -29,8 +29,7 @@ int run(const RunArgs& args) {
     return report_error(make_error(ErrorCode::kInvalidArgument,
                                    fmt::format("--threads {}: expected 1 to 1024 (default: one per hardware thread)", *args.threads)));
   }
-  std::vector<sim::ScenarioOverride> overrides;
-  for (const std::string& assignment : args.overrides) overrides.push_back({assignment, "--set " + assignment});
+  std::vector<sim::ScenarioOverride> overrides = sim::overrides_given_with_set(args.overrides);
   overrides.insert(overrides.end(), args.from_options.begin(), args.from_options.end());
   if (!args.truth_format.empty()) {
     overrides.push_back({"output.truth_format=" + args.truth_format, "--truth-format " + args.truth_format});

@@ -9,7 +9,7 @@
 
 #include "skytrace/core/constants.hpp"
 #include "skytrace/sim/streams.hpp"
-#include "skytrace/sim/trajectory.hpp"
+#include "skytrace/sim/scenario.hpp"
 
 namespace skytrace::sim {
 namespace {
@@ -282,7 +282,6 @@ Status LiveSession::set_object_pose(const std::string& name, const Eigen::Isomet
   if (!pose_world.matrix().allFinite()) {
     return make_error(ErrorCode::kInvalidArgument, "pose of '" + name + "' with non-finite values ignored");
   }
-  constexpr double kMaxWorldDistance_m = 1e6;  // a world's local frame holds to a few hundred km
   if (pose_world.translation().norm() > kMaxWorldDistance_m) {
     return make_error(ErrorCode::kInvalidArgument, "pose of '" + name + "' more than 1000 km from the world origin ignored");
   }

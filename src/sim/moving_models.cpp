@@ -67,8 +67,7 @@ Result<ModelTrajectory> ModelTrajectory::read_csv(const MovingModelSetting& sett
       sample.time = *t;
     } else {
       auto seconds = parse_fortran_double(cells[0]);
-      constexpr double kMaxOffset_s = 400.0 * 86400.0;  // longer than any scenario (366 days), as for trajectories
-      if (!seconds || !(std::fabs(*seconds) <= kMaxOffset_s))
+      if (!seconds || !(std::fabs(*seconds) <= kMaxSecondsFromStart_s))
         return lines->error_at(
             i,
             "time: expected seconds since time.start (within 400 days) or an ISO 8601 time, got '" + cells[0] + "'");
@@ -84,9 +83,7 @@ Result<ModelTrajectory> ModelTrajectory::read_csv(const MovingModelSetting& sett
       values[k] = *v;
     }
     sample.position_m = {values[0], values[1], values[2]};
-    // The world frame is a tangent plane: as for receivers, nothing in it lies 1000 km from its origin.
-    constexpr double kMaxWorldDistance_m = 1e6;
-    if (sample.position_m.cwiseAbs().maxCoeff() > kMaxWorldDistance_m) {
+    if (sample.position_m.norm() > kMaxWorldDistance_m) {
       return lines->error_at(i, fmt::format("position ({:g}, {:g}, {:g}) m: expected within 1000 km of the world's origin",
                                             values[0], values[1], values[2]));
     }

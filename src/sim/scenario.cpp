@@ -78,7 +78,6 @@ PositionSetting parse_position(const Node& node) {
   }
   if (auto c = node.child("world_enu_m")) {
     position = {PositionSetting::Kind::kWorldEnu, c->as_vector3()};
-    constexpr double kMaxWorldDistance_m = 1e6;  // a world's local frame holds to a few hundred km
     if (position.value.norm() > kMaxWorldDistance_m) c->fail("position is more than 1000 km from the world's origin");
     ++forms;
   }
@@ -558,20 +557,16 @@ Status apply_override(YAML::Node& root, const ScenarioOverride& given, std::vect
 
 }  // namespace
 
-namespace {
-
-std::vector<ScenarioOverride> given_with_set(const std::vector<std::string>& assignments) {
+std::vector<ScenarioOverride> overrides_given_with_set(const std::vector<std::string>& assignments) {
   std::vector<ScenarioOverride> out;
   out.reserve(assignments.size());
   for (const std::string& assignment : assignments) out.push_back({assignment, "--set " + assignment});
   return out;
 }
 
-}  // namespace
-
 Result<Scenario> parse_scenario(const std::string& text, const std::string& name, const std::filesystem::path& base_dir,
                                 const std::vector<std::string>& overrides) {
-  return parse_scenario_with_options(text, name, base_dir, given_with_set(overrides));
+  return parse_scenario_with_options(text, name, base_dir, overrides_given_with_set(overrides));
 }
 
 Result<Scenario> parse_scenario_with_options(const std::string& text, const std::string& name,
@@ -605,7 +600,7 @@ Result<size_t> find_receiver(const Scenario& scenario, std::string_view name) {
 }
 
 Result<Scenario> load_scenario(const std::filesystem::path& path, const std::vector<std::string>& overrides) {
-  return load_scenario_with_options(path, given_with_set(overrides));
+  return load_scenario_with_options(path, overrides_given_with_set(overrides));
 }
 
 Result<Scenario> load_scenario_with_options(const std::filesystem::path& path, const std::vector<ScenarioOverride>& overrides) {

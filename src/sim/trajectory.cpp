@@ -118,8 +118,7 @@ Result<std::vector<TrajectorySample>> read_trajectory_csv(const TrajectorySettin
     } else {
       auto seconds = parse_fortran_double(cells[0]);
       if (!seconds) return lines->error_at(i, "time: " + seconds.error().message);
-      constexpr double kMaxOffset_s = 400.0 * 86400.0;  // longer than any scenario (366 days)
-      if (std::fabs(*seconds) > kMaxOffset_s) return lines->error_at(i, "time: expected seconds within 400 days of the start");
+      if (std::fabs(*seconds) > kMaxSecondsFromStart_s) return lines->error_at(i, "time: expected seconds within 400 days of the start");
       sample.time = start + *seconds;
     }
     Eigen::Vector3d value;

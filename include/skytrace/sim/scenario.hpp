@@ -54,6 +54,15 @@ struct RtkSettings {
   bool moving_base = false;
 };
 
+// Limits of what a receiver, a trajectory or a moving model may be given: beyond them an input is
+// a typo or a jump, not a place or a motion.
+// Faster than a low Earth orbit is no robot, vehicle or aircraft.
+inline constexpr double kMaxAntennaSpeed_mps = 2e4;
+// A world's local frame holds to a few hundred km: nothing in it lies farther from its origin.
+inline constexpr double kMaxWorldDistance_m = 1e6;
+// Seconds after time.start in a trajectory or moving-model CSV: longer than any scenario (366 days).
+inline constexpr double kMaxSecondsFromStart_s = 400.0 * 86400.0;
+
 struct ReceiverSettings {
   std::string name = "SKYT";  // marker name in RINEX
   std::optional<PositionSetting> position;
@@ -233,6 +242,9 @@ struct Scenario {
 struct ScenarioOverride {
   std::string assignment, option;
 };
+
+// Assignments given as `--set ASSIGNMENT`.
+[[nodiscard]] std::vector<ScenarioOverride> overrides_given_with_set(const std::vector<std::string>& assignments);
 
 // `overrides` replace or add keys before the scenario is checked: assignments given as
 // `--set ASSIGNMENT`, or (the _with_options forms) each with the option it came from.

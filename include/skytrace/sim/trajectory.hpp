@@ -41,10 +41,6 @@ using WorldOrigin = LocalFrame;
 [[nodiscard]] Result<Eigen::Vector3d> position_to_ecef(const PositionSetting& position,
                                                        const std::optional<WorldOrigin>& world);
 
-// The fastest a receiver's antenna may move: faster than a low Earth orbit is no robot, vehicle or
-// aircraft (a live pose or a trajectory beyond it is a typo or a jump, not a motion).
-inline constexpr double kMaxAntennaSpeed_mps = 2e4;
-
 // Reads a trajectory CSV (see docs/scenario.md): a header line naming the columns, then rows of a
 // time (ISO 8601 in the setting's time scale, or seconds since `start`) and three coordinates.
 // Consecutive samples may be at most kMaxAntennaSpeed_mps apart.
