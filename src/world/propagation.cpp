@@ -60,6 +60,14 @@ struct KeyHash {
   }
 };
 
+// x^n by repeated multiplication (n >= 0): the directive lobe's power, the same in its
+// normalisation table and in the sums; within a few ulp of std::pow and far cheaper.
+double lobe_power(double x, int n) {
+  double y = 1.0;
+  for (int e = 0; e < n; ++e) y *= x;
+  return y;
+}
+
 // For the directive scattering lobe ((1 + cos psi) / 2)^n around the specular direction: its
 // integral over the hemisphere in front of the surface, per incidence angle 0..90 deg (psi is the
 // angle from the specular direction, which leans away from the normal as the incidence does).
@@ -94,7 +102,7 @@ const std::array<double, 91>& directive_lobe_integrals(int exponent) {
     for (std::size_t a = 0; a < sin_theta.size(); ++a) {
       for (std::size_t b = 0; b < sin_phi.size(); ++b) {
         const Eigen::Vector3d w(sin_theta[a] * cos_phi[b], sin_theta[a] * sin_phi[b], cos_theta[a]);
-        sum += std::pow(0.5 * (1.0 + specular.dot(w)), exponent) * sin_theta[a] * d_theta * d_phi;
+        sum += lobe_power(0.5 * (1.0 + specular.dot(w)), exponent) * sin_theta[a] * d_theta * d_phi;
       }
     }
     it->second[static_cast<std::size_t>(incidence)] = sum;
@@ -363,17 +371,21 @@ bool may_reach_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& s, dou
   return h_min * h_min <= 2.0 * excess_max_m * (m.norm() + radius_m);
 }
 
-// may_reach_line for some direction s within reach_rad of `axis`: the line's reach at the sphere's
+// may_reach_line for some direction s within `reach` of `axis`: the line's reach at the sphere's
 // distance widened by that angle (or the sphere near the origin, where a line could also pass it
 // backwards within the excess).
-bool may_reach_cone(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, double reach_rad, double excess_max_m,
+bool may_reach_cone(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, const ConeReach& reach, double excess_max_m,
                     const Eigen::Vector3d& centre_m, double radius_m) {
   const Eigen::Vector3d m = centre_m - origin;
   const double distance_m = m.norm();
   const double rho_m = radius_m + std::sqrt(2.0 * excess_max_m * (distance_m + radius_m));
   if (distance_m <= std::sqrt(rho_m * rho_m + radius_m * radius_m) * (1.0 + 1e-9) + 1e-9 || rho_m >= distance_m) return true;
-  const double angle = std::acos(std::clamp(m.dot(axis) / distance_m, -1.0, 1.0));
-  return angle <= std::asin(rho_m / distance_m) + reach_rad;
+  if (reach.rad >= 0.5 * std::numbers::pi) return true;
+  // The angle from the axis within asin(x) + reach, x = rho / distance, both below pi / 2: as
+  // cosines, cos(asin(x) + reach) = sqrt(1 - x^2) cos(reach) - x sin(reach), a hair wide (a screen).
+  const double x = rho_m / distance_m;
+  const double cos_limit = std::sqrt(1.0 - x * x) * reach.cos - x * reach.sin;
+  return m.dot(axis) >= distance_m * (cos_limit - 1e-12);
 }
 
 // The point of the edge where the ray from `origin` and the direction s towards the satellite make
@@ -1002,8 +1014,8 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   if (blocked.empty()) return;
   const double s2 = settings.scattering_coefficient * settings.scattering_coefficient;
   const double min_power = std::pow(10.0, settings.min_relative_power_db / 10.0);
-  const std::array<double, 91>* lobe =
-      settings.scattering_lobe_exponent > 0 ? &directive_lobe_integrals(settings.scattering_lobe_exponent) : nullptr;
+  const int lobe_exponent = settings.scattering_lobe_exponent;
+  const std::array<double, 91>* lobe = lobe_exponent > 0 ? &directive_lobe_integrals(lobe_exponent) : nullptr;
   // What depends on the facet and the satellite only (a plane wave lights every patch of a facet
   // alike): S^2 |Gamma|^2 cos(theta_i), and the directive lobe's normalisation; 0 when unlit.
   struct Lighting {
@@ -1054,11 +1066,6 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
   // whole, as no path can come of it: the receiver traces no ray to it.
   // A static antenna's view of the patches is kept (traced once): the visible ones go straight on.
   const std::shared_ptr<const PatchSight> sight = patch_sight(r, candidates, near_facets, settings.scattering_radius_m);
-  const auto lobe_power = [&](double x) {  // x^n by multiplication; within a few ulp of std::pow
-    double y = 1.0;
-    for (int e = 0; e < settings.scattering_lobe_exponent; ++e) y *= x;
-    return y;
-  };
   std::vector<Patch> patches, visible;
   std::vector<Eigen::Vector3d> towards;
   std::vector<std::size_t> lit_by;              // blocked satellites lighting the facet (j)
@@ -1103,8 +1110,10 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       bool matters = false;
       for (std::size_t m = 0; m < lit_by.size(); ++m) {
         const Lighting& light = lighting[lit_by[m] * near_facets.size() + k];
-        const double pattern = lobe != nullptr ? lobe_power(0.5 * (1.0 - specular_of[m].dot(to_point) / d)) / light.lobe_integral
-                                               : cos_receiver / std::numbers::pi;
+        const double pattern =
+            lobe != nullptr
+                ? lobe_power(0.5 * (1.0 - specular_of[m].dot(to_point) / d), lobe_exponent) / light.lobe_integral
+                : cos_receiver / std::numbers::pi;
         const double bound = kBoundMargin * light.factor * facet_patch.area_m2 * pattern / (d * d);
         if (bound * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
         facet_bound[m] += bound;
@@ -1161,7 +1170,7 @@ void PropagationScene::add_scattered_paths(const Eigen::Vector3d& r, const std::
       if (lobe != nullptr) {
         const Eigen::Vector3d specular = -s + 2.0 * nf.normal.dot(s) * nf.normal;
         const Eigen::Vector3d to_receiver = (r - patch.point_m) / patch.distance_m;
-        pattern = lobe_power(0.5 * (1.0 + specular.dot(to_receiver))) / light.lobe_integral;
+        pattern = lobe_power(0.5 * (1.0 + specular.dot(to_receiver)), lobe_exponent) / light.lobe_integral;
       }
       const double power = light.factor * patch.area_m2 * pattern / (patch.distance_m * patch.distance_m);
       if (power * static_cast<double>(kMaxPatchesPerFacet) < min_power) continue;  // cannot matter
@@ -1573,11 +1582,11 @@ std::shared_ptr<const PropagationScene::DoubleBounceIndex> PropagationScene::dou
 // `image`, the plane normal . x = plane): the edge's direction and the band of satellite directions
 // s (as s . axis, a little wide) whose stationary point on the edge seen from the image (Keller's
 // cone, keller_point) lies above the plane and projects, along the line to the image, into the
-// facet's bounding rectangle; none when no direction within cell_reach_rad of cell_axis does.
+// facet's bounding rectangle; none when no direction within cell_reach of cell_axis does.
 // The point moves along the edge monotonically with s . axis, which makes the band exact.
 std::optional<PropagationScene::FacetEdge> PropagationScene::facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
                                                           double plane, const DiffractionEdge& edge,
-                                                          const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+                                                          const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach) {
   const Eigen::Vector3d& axis = edge.axis;
   const double length = edge.length_m;
   if (!(length > 0.0)) return std::nullopt;
@@ -1623,12 +1632,12 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::facet_edge_band(con
   const double u0 = u_at(t0), u1 = u_at(t1);
   const Eigen::Vector3d w = edge.start_m - image;
   const double along = w.dot(axis);
-  return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach_rad);
+  return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach);
 }
 
 std::optional<PropagationScene::FacetEdge> PropagationScene::band_of(const Eigen::Vector3d& axis, double along, double rho,
                                                                     double u0, double u1, const Eigen::Vector3d& cell_axis,
-                                                                    double cell_reach_rad) {
+                                                                    const ConeReach& cell_reach) {
   // keller_point: u = c rho / sqrt(1 - c^2) - along, so c = (u + along) / sqrt((u + along)^2 + rho^2),
   // increasing with u.
   const auto cos_at = [&](double u) { return (u + along) / std::hypot(u + along, rho); };
@@ -1637,21 +1646,21 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::band_of(const Eigen
   out.cos_min = std::min(cos_at(u0), cos_at(u1)) - 1e-9;
   out.cos_max = std::max(cos_at(u0), cos_at(u1)) + 1e-9;
   // The directions of the cell: s . axis within the cosines of the cell's angle to the axis
-  // plus and minus its reach.
-  const double angle = std::acos(std::clamp(cell_axis.dot(axis), -1.0, 1.0));
-  const double cell_max = std::cos(std::max(angle - cell_reach_rad, 0.0));
-  const double cell_min = std::cos(std::min(angle + cell_reach_rad, std::numbers::pi));
-  if (out.cos_max < cell_min || out.cos_min > cell_max) return std::nullopt;
+  // plus and minus its reach (by the angle-sum formulas; a screen, so a hair wide).
+  const double c = std::clamp(cell_axis.dot(axis), -1.0, 1.0), sin_angle = std::sqrt(1.0 - c * c);
+  const double cell_max = c >= cell_reach.cos ? 1.0 : c * cell_reach.cos + sin_angle * cell_reach.sin;
+  const double cell_min = c <= -cell_reach.cos ? -1.0 : c * cell_reach.cos - sin_angle * cell_reach.sin;
+  if (out.cos_max < cell_min - 1e-12 || out.cos_min > cell_max + 1e-12) return std::nullopt;
   return out;
 }
 
 // For knife-edge diffraction over `edge` from `origin`: the edge's direction and the band of
 // satellite directions s (as s . axis, a little wide) whose stationary point (keller_point) lies
-// on the edge within radius_m of the origin; none when no direction within cell_reach_rad of
+// on the edge within radius_m of the origin; none when no direction within cell_reach of
 // cell_axis is in the band.
 std::optional<PropagationScene::FacetEdge> PropagationScene::edge_band(const DiffractionEdge& edge, const Eigen::Vector3d& origin,
                                                                       double radius_m, const Eigen::Vector3d& cell_axis,
-                                                                      double cell_reach_rad) {
+                                                                      const ConeReach& cell_reach) {
   const Eigen::Vector3d& axis = edge.axis;
   const double length = edge.length_m;
   if (!(length > 0.0)) return std::nullopt;
@@ -1664,7 +1673,7 @@ std::optional<PropagationScene::FacetEdge> PropagationScene::edge_band(const Dif
   const double u0 = std::max(0.0, -along - std::sqrt(discriminant));
   const double u1 = std::min(length, -along + std::sqrt(discriminant));
   if (!(u0 <= u1)) return std::nullopt;
-  return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach_rad);
+  return band_of(axis, along, (w - along * axis).norm(), u0, u1, cell_axis, cell_reach);
 }
 
 struct PropagationScene::ReflectorIndex {
@@ -1795,7 +1804,8 @@ std::shared_ptr<const PropagationScene::FacetEdgeList> PropagationScene::facet_e
   const Eigen::Vector3d& centre = Cells::cell_centres()[static_cast<std::size_t>(cell)];
   // No direction of a cell is farther than one cell size from its centre.
   auto made = std::make_shared<FacetEdgeList>();
-  made->entries = search(centre, Cells::kCell_rad + Cells::kMargin_rad);
+  static const ConeReach cell_reach(Cells::kCell_rad + Cells::kMargin_rad);
+  made->entries = search(centre, cell_reach);
   for (const FacetEdge& entry : made->entries) {
     made->axis_x.push_back(static_cast<float>(entry.axis.x()));
     made->axis_y.push_back(static_cast<float>(entry.axis.y()));
@@ -2310,9 +2320,9 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       std::shared_ptr<const FacetEdgeList> knife_listed;
       if (edge_index && blocked && objects.size() == 1) {
         const std::size_t object = objects.front();
-        knife_listed = facet_edge_pairs(*edge_index, true, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+        knife_listed = facet_edge_pairs(*edge_index, true, object, s, [&](const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach) {
           const auto reach_cell = [&](const Eigen::Vector3d& centre_m, double radius_m) {
-            return may_reach_cone(r, cell_axis, cell_reach_rad, excess_max_m, centre_m, radius_m);
+            return may_reach_cone(r, cell_axis, cell_reach, excess_max_m, centre_m, radius_m);
           };
           std::vector<FacetEdge> entries;
           for (const EdgeCluster& cluster : object_clusters_[object]) {
@@ -2320,7 +2330,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
             for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
               const DiffractionEdge& edge = edges_[object_edges_[object][k]];
               if (!reach_cell(edge.midpoint_m, edge.half_length_m)) continue;
-              if (auto entry = edge_band(edge, r, settings.radius_m, cell_axis, cell_reach_rad)) {
+              if (auto entry = edge_band(edge, r, settings.radius_m, cell_axis, cell_reach)) {
                 entry->edge = static_cast<std::uint32_t>(k);
                 entries.push_back(*entry);
               }
@@ -2522,11 +2532,11 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
       std::shared_ptr<const FacetEdgeList> listed;
       if (edge_index && objects.size() == 1) {
         const std::size_t object = objects.front();
-        listed = facet_edge_pairs(*edge_index, false, object, s, [&](const Eigen::Vector3d& cell_axis, double cell_reach_rad) {
+        listed = facet_edge_pairs(*edge_index, false, object, s, [&](const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach) {
           // Near the image's line for some direction within the cell: the line's reach at the
           // sphere's distance widened by the cell's angle (or the sphere near the image).
           const auto reach_cell = [&](const Eigen::Vector3d& image, const Eigen::Vector3d& centre_m, double radius_m) {
-            return may_reach_cone(image, cell_axis, cell_reach_rad, blocked_excess_max_m, centre_m, radius_m);
+            return may_reach_cone(image, cell_axis, cell_reach, blocked_excess_max_m, centre_m, radius_m);
           };
           std::vector<FacetEdge> pairs;
           const auto& clusters = object_clusters_[object];
@@ -2542,7 +2552,7 @@ std::vector<PathSet> PropagationScene::search_paths(const Eigen::Vector3d& origi
                 for (std::size_t k = cluster.begin; k < cluster.end; ++k) {
                   const DiffractionEdge& edge = edges_[object_edges_[object][k]];
                   if (!may_hold(nf, v, edge.midpoint_m, edge.half_length_m, reach_cell)) continue;
-                  if (auto pair = facet_edge_band(nf, facets_[nf.index], v.image, v.plane, edge, cell_axis, cell_reach_rad)) {
+                  if (auto pair = facet_edge_band(nf, facets_[nf.index], v.image, v.plane, edge, cell_axis, cell_reach)) {
                     pair->facet = static_cast<std::uint32_t>(f_index);
                     pair->edge = static_cast<std::uint32_t>(k);
                     pairs.push_back(*pair);

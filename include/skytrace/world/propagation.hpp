@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cmath>
 #include <complex>
 #include <cstdint>
 #include <cstddef>
@@ -109,6 +110,13 @@ struct DiffractionEdge {
 // Diffraction edges are searched on the objects that matter: the blocking object of a hidden
 // satellite, and for a satellite in view the objects hit by 4 probe rays 3.5 deg around its
 // direction (an edge must pass within ~1.4 m of the ray 30 m away to cost the direct signal anything).
+// An angle with its cosine and sine: the sky-cell screens compare cosines rather than take an
+// inverse sine or cosine per sphere and edge.
+struct ConeReach {
+  explicit ConeReach(double angle_rad) : rad(angle_rad), cos(std::cos(angle_rad)), sin(std::sin(angle_rad)) {}
+  double rad = 0.0, cos = 1.0, sin = 0.0;
+};
+
 class PropagationScene final : public PathQuery {
  public:
   // `scene` must answer for the same world (it does the ray casting).
@@ -248,19 +256,19 @@ class PropagationScene final : public PathQuery {
   std::shared_ptr<const ReflectorIndex> reflector_index(const Eigen::Vector3d& origin_m,
                                                         const std::vector<NearFacet>& facets) const;
   // The pair of facet nf (the receiver's image in its plane normal . x = plane) and the edge, with
-  // its band; none when no direction within cell_reach_rad of cell_axis is in the band.
+  // its band; none when no direction within cell_reach of cell_axis is in the band.
   static std::optional<FacetEdge> facet_edge_band(const NearFacet& nf, const Facet& f, const Eigen::Vector3d& image,
                                                   double plane, const DiffractionEdge& edge,
-                                                  const Eigen::Vector3d& cell_axis, double cell_reach_rad);
+                                                  const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach);
   // The edge's direction and band for knife-edge diffraction from `origin` (Keller's point within
-  // radius_m), `facet` unused; none when no direction within cell_reach_rad of cell_axis is in it.
+  // radius_m), `facet` unused; none when no direction within cell_reach of cell_axis is in it.
   static std::optional<FacetEdge> edge_band(const DiffractionEdge& edge, const Eigen::Vector3d& origin, double radius_m,
-                                            const Eigen::Vector3d& cell_axis, double cell_reach_rad);
+                                            const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach);
   // The band of s . axis for Keller points between u0 and u1 along an edge whose start lies `along`
   // the axis from the origin and rho from its line; none when it misses the cell.
   static std::optional<FacetEdge> band_of(const Eigen::Vector3d& axis, double along, double rho, double u0, double u1,
-                                          const Eigen::Vector3d& cell_axis, double cell_reach_rad);
-  using FacetEdgeSearch = std::function<std::vector<FacetEdge>(const Eigen::Vector3d& cell_axis, double cell_reach_rad)>;
+                                          const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach);
+  using FacetEdgeSearch = std::function<std::vector<FacetEdge>(const Eigen::Vector3d& cell_axis, const ConeReach& cell_reach)>;
   // The index for an antenna found at the same point in an earlier call, else none.
   std::shared_ptr<const ReflectedEdgeIndex> reflected_edge_index(const Eigen::Vector3d& origin_m,
                                                                  const std::vector<NearFacet>& facets,
