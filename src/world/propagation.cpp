@@ -531,10 +531,27 @@ bool within_triangle(const Facet& f, const Eigen::Vector2d& p, std::size_t i) {
 bool Facet::contains(const Eigen::Vector3d& point_m) const {
   const Eigen::Vector2d p = plane_coordinates(*this, point_m);
   if (!within_box(*this, p)) return false;
+  const bool bounded = 3 * triangle_bounds_uv.size() == triangles_uv.size();
   for (std::size_t i = 0; i + 2 < triangles_uv.size(); i += 3) {
+    if (bounded) {
+      const std::array<double, 4>& b = triangle_bounds_uv[i / 3];
+      if (p.x() < b[0] || p.y() < b[1] || p.x() > b[2] || p.y() > b[3]) continue;
+    }
     if (within_triangle(*this, p, i)) return true;
   }
   return false;
+}
+
+void Facet::set_triangle_bounds() {
+  triangle_bounds_uv.clear();
+  for (std::size_t i = 0; i + 2 < triangles_uv.size(); i += 3) {
+    const Eigen::Vector2d low = triangles_uv[i].cwiseMin(triangles_uv[i + 1]).cwiseMin(triangles_uv[i + 2]);
+    const Eigen::Vector2d high = triangles_uv[i].cwiseMax(triangles_uv[i + 1]).cwiseMax(triangles_uv[i + 2]);
+    // within_triangle's barycentric slack reaches at most about 6 kContainsSlack times the
+    // triangle's extent beyond its corners: the box is a thousand times wider than that.
+    const double margin = 1e-6 * (high - low).maxCoeff() + 1e-9;
+    triangle_bounds_uv.push_back({low.x() - margin, low.y() - margin, high.x() + margin, high.y() + margin});
+  }
 }
 
 Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldModel& world,
@@ -641,6 +658,7 @@ Result<std::unique_ptr<PropagationScene>> PropagationScene::build(const WorldMod
       }
       f.centre_m = 0.5 * (f.min_m + f.max_m);
       f.radius_m = 0.5 * (f.max_m - f.min_m).norm();
+      f.set_triangle_bounds();
       out->facets_.push_back(std::move(f));
     }
 

@@ -80,8 +80,14 @@ struct Facet {
   MaterialClass material = MaterialClass::kConcrete;
   std::size_t object = 0;  // index into PropagationScene::object_names()
 
+  // Per triangle its box in (u, v), a hair wider than what contains() accepts, so that most
+  // triangles of a facet of many are passed over by four comparisons (set_triangle_bounds()).
+  std::vector<std::array<double, 4>> triangle_bounds_uv;  // min u, min v, max u, max v
+
   // Whether a point of the plane lies in one of the facet's triangles (boundary included).
   [[nodiscard]] bool contains(const Eigen::Vector3d& point_m) const;
+  // Fills triangle_bounds_uv from triangles_uv (contains() works without them, only slower).
+  void set_triangle_bounds();
 };
 
 // A convex edge of a static building-like object (not ground, not vegetation) where diffraction
