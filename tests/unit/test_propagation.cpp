@@ -182,6 +182,62 @@ TEST(Propagation, FacetsAndEdgesOfTheCanyon) {
   EXPECT_NEAR(ground_area, 600.0 * 600.0, 1e-6);
 }
 
+// The triangles' boxes only pass over triangles: a facet of many triangles (a fan of slivers and
+// a square) answers every point as the barycentric tests alone do, on the boundary and within the
+// slack just beyond it too.
+TEST(Propagation, FacetContainsAlikeWithAndWithoutTheTrianglesBoxes) {
+  Facet plain;
+  plain.normal = Eigen::Vector3d::UnitZ();
+  plain.origin_m = Eigen::Vector3d::Zero();
+  plain.axis_u = Eigen::Vector3d::UnitX();
+  plain.axis_v = Eigen::Vector3d::UnitY();
+  const Eigen::Vector2d centre(10.0, 10.0);
+  constexpr int kFan = 24;
+  for (int k = 0; k < kFan; ++k) {
+    const double a0 = 2.0 * std::numbers::pi * k / kFan, a1 = 2.0 * std::numbers::pi * (k + 1) / kFan;
+    const double radius_m = k % 3 == 0 ? 8.0 : 5.0;
+    plain.triangles_uv.push_back(centre);
+    plain.triangles_uv.push_back(centre + radius_m * Eigen::Vector2d(std::cos(a0), std::sin(a0)));
+    plain.triangles_uv.push_back(centre + radius_m * Eigen::Vector2d(std::cos(a1), std::sin(a1)));
+  }
+  for (const Eigen::Vector2d& corner : {Eigen::Vector2d(30, 0), Eigen::Vector2d(40, 0), Eigen::Vector2d(40, 10)}) {
+    plain.triangles_uv.push_back(corner);
+  }
+  plain.min_uv = Eigen::Vector2d::Constant(1e300);
+  plain.max_uv = Eigen::Vector2d::Constant(-1e300);
+  for (const Eigen::Vector2d& uv : plain.triangles_uv) {
+    plain.min_uv = plain.min_uv.cwiseMin(uv);
+    plain.max_uv = plain.max_uv.cwiseMax(uv);
+  }
+  Facet boxed = plain;
+  boxed.set_triangle_bounds();
+  ASSERT_EQ(3 * boxed.triangle_bounds_uv.size(), boxed.triangles_uv.size());
+  int inside = 0, tested = 0;
+  const auto expect_alike = [&](const Eigen::Vector2d& uv) {
+    const Eigen::Vector3d point(uv.x(), uv.y(), 0.0);
+    ++tested;
+    const bool answer = plain.contains(point);
+    inside += answer ? 1 : 0;
+    EXPECT_EQ(boxed.contains(point), answer) << "u " << uv.x() << " v " << uv.y();
+  };
+  for (double u = -1.0; u <= 41.0; u += 0.25) {
+    for (double v = -1.0; v <= 21.0; v += 0.25) expect_alike({u, v});
+  }
+  // Corners and points a hair inside and outside every edge.
+  for (std::size_t i = 0; i + 2 < plain.triangles_uv.size(); i += 3) {
+    for (int e = 0; e < 3; ++e) {
+      const Eigen::Vector2d& a = plain.triangles_uv[i + static_cast<std::size_t>(e)];
+      const Eigen::Vector2d& b = plain.triangles_uv[i + static_cast<std::size_t>((e + 1) % 3)];
+      const Eigen::Vector2d normal = Eigen::Vector2d(b.y() - a.y(), a.x() - b.x()).normalized();
+      for (const double along : {0.0, 0.3, 0.5, 1.0}) {
+        for (const double off_m : {-1e-6, -1e-9, 0.0, 1e-9, 1e-8, 1e-6}) expect_alike(a + along * (b - a) + off_m * normal);
+      }
+    }
+  }
+  EXPECT_GT(inside, 1000);
+  EXPECT_LT(inside, tested);
+}
+
 TEST(Propagation, GroundReflectionDelayIsTwoHeightsSineElevation) {
   WorldModel world;
   world.objects.push_back(ground_plane());
