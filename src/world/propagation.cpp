@@ -374,8 +374,8 @@ bool may_reach_line(const Eigen::Vector3d& origin, const Eigen::Vector3d& s, dou
 // may_reach_line for some direction s within `reach` of `axis`: the line's reach at the sphere's
 // distance widened by that angle (or the sphere near the origin, where a line could also pass it
 // backwards within the excess).
-bool may_reach_cone(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, const ConeReach& reach, double excess_max_m,
-                    const Eigen::Vector3d& centre_m, double radius_m) {
+bool may_reach_cone(const Eigen::Vector3d& origin, const Eigen::Vector3d& axis, const ConeReach& reach,
+                    double excess_max_m, const Eigen::Vector3d& centre_m, double radius_m) {
   const Eigen::Vector3d m = centre_m - origin;
   const double distance_m = m.norm();
   const double rho_m = radius_m + std::sqrt(2.0 * excess_max_m * (distance_m + radius_m));

@@ -110,12 +110,6 @@ struct DiffractionEdge {
   MaterialClass material = MaterialClass::kConcrete;
 };
 
-// A PathQuery that answers trace() with the given scene and paths() with reflections and
-// diffraction from the static objects of the world model (movable objects block but do not
-// reflect). paths() is const and thread-safe.
-// Diffraction edges are searched on the objects that matter: the blocking object of a hidden
-// satellite, and for a satellite in view the objects hit by 4 probe rays 3.5 deg around its
-// direction (an edge must pass within ~1.4 m of the ray 30 m away to cost the direct signal anything).
 // An angle with its cosine and sine: the sky-cell screens compare cosines rather than take an
 // inverse sine or cosine per sphere and edge.
 struct ConeReach {
@@ -123,6 +117,12 @@ struct ConeReach {
   double rad = 0.0, cos = 1.0, sin = 0.0;
 };
 
+// A PathQuery that answers trace() with the given scene and paths() with reflections and
+// diffraction from the static objects of the world model (movable objects block but do not
+// reflect). paths() is const and thread-safe.
+// Diffraction edges are searched on the objects that matter: the blocking object of a hidden
+// satellite, and for a satellite in view the objects hit by 4 probe rays 3.5 deg around its
+// direction (an edge must pass within ~1.4 m of the ray 30 m away to cost the direct signal anything).
 class PropagationScene final : public PathQuery {
  public:
   // `scene` must answer for the same world (it does the ray casting).
