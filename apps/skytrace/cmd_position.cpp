@@ -256,28 +256,18 @@ int run_position(const PositionArgs& args) {
   }
   if (epochs == 0) return report_error(make_error(ErrorCode::kNotFound, args.obs_path + ": no observation epoch"));
   if (fixes == 0) {
-    // A broadcast record serves a few hours around its reference time: observations a day or more
-    // away from every record are another day's, which is what to say.
-    constexpr double kFarFromEveryRecord_s = 86400.0;
-    std::optional<GnssTime> first_record, last_record;  // the records' reference times
-    const auto note_record = [&](const GnssTime& t) {
-      if (!first_record || t < *first_record) first_record = t;
-      if (!last_record || *last_record < t) last_record = t;
-    };
-    const orbits::NavigationData& records = ephemerides.data();
-    for (const auto& e : records.kepler) note_record(e.toe);
-    for (const auto& e : records.glonass) note_record(e.toe);
-    for (const auto& e : records.sbas) note_record(e.toe);
+    // Observations wholly outside what the records serve (their reference times and validity
+    // windows, as `skytrace run` tells it) are another day's, which is what to say.
     const GnssTime& obs_first = observations->epochs.front().time;
     const GnssTime& obs_last = observations->epochs.back().time;
-    if (first_record && last_record &&
-        (*last_record + kFarFromEveryRecord_s < obs_first || obs_last + kFarFromEveryRecord_s < *first_record)) {
+    if (const auto span = orbits::served_span(ephemerides.data());
+        span && (span->last < obs_first || obs_last < span->first)) {
       const auto iso = [](const GnssTime& t) { return t.to_iso8601(TimeScale::kGpst, 1); };
       return report_error(make_error(
           ErrorCode::kOutOfRange,
-          fmt::format("the navigation data does not cover {}: its records run from {} to {} GPST, the "
-                      "observations from {} to {} GPST (give the navigation file of the observations' day)",
-                      args.obs_path, iso(*first_record), iso(*last_record), iso(obs_first), iso(obs_last))));
+          fmt::format("the navigation data does not cover {}: its records serve {} to {} GPST, the "
+                      "observations run from {} to {} GPST (give the navigation file of the observations' day)",
+                      args.obs_path, iso(span->first), iso(span->last), iso(obs_first), iso(obs_last))));
     }
     return report_error(make_error(ErrorCode::kOutOfRange, "no epoch of " + args.obs_path +
                                                                " could be positioned; first: " + first_failure));

@@ -496,6 +496,20 @@ bool signal_carries(const Signal& signal, NavMessage message) {
   return false;
 }
 
+std::optional<ServedSpan> served_span(const NavigationData& nav) {
+  std::optional<ServedSpan> span;
+  const auto extend = [&](const GnssTime& toe, double half_window_s) {
+    const GnssTime a = toe - half_window_s, b = toe + half_window_s;
+    if (!span) span = ServedSpan{a, b};
+    if (a < span->first) span->first = a;
+    if (span->last < b) span->last = b;
+  };
+  for (const auto& e : nav.kepler) extend(e.toe, validity_half_window_s(e));
+  for (const auto& e : nav.glonass) extend(e.toe, glonass_validity_half_window_s());
+  for (const auto& e : nav.sbas) extend(e.toe, sbas_validity_half_window_s());
+  return span;
+}
+
 double validity_half_window_s(const KeplerEphemeris& eph) {
   // RTKLIB 2.4.3 MAXDTOE*: GPS 7200, QZSS 7200, Galileo 14400, BeiDou 21600, NavIC 7200 s; a
   // narrower window here only makes a satellite absent where RTKLIB would still accept it.

@@ -20,20 +20,6 @@
 namespace skytrace::sim {
 namespace {
 
-// The span the navigation data can serve, for a plain message when a scenario is outside it.
-std::pair<GnssTime, GnssTime> navigation_span(const orbits::NavigationData& nav) {
-  std::optional<GnssTime> first, last;
-  auto extend = [&](const GnssTime& toe, double half_window_s) {
-    const GnssTime a = toe - half_window_s, b = toe + half_window_s;
-    if (!first || a < *first) first = a;
-    if (!last || *last < b) last = b;
-  };
-  for (const auto& e : nav.kepler) extend(e.toe, orbits::validity_half_window_s(e));
-  for (const auto& e : nav.glonass) extend(e.toe, orbits::glonass_validity_half_window_s());
-  for (const auto& e : nav.sbas) extend(e.toe, orbits::sbas_validity_half_window_s());
-  return {first.value_or(GnssTime{}), last.value_or(GnssTime{})};
-}
-
 // "2021-04-28 19:30:00" (GPST, whole seconds).
 std::string gpst_text(const GnssTime& t) {
   std::string text = t.to_iso8601(TimeScale::kGpst, 0);
@@ -196,9 +182,9 @@ Result<SystemCoverage> check_coverage(const Scenario& s, const orbits::Broadcast
     for (const auto& signal : r.signals) wanted[signal.system].push_back(signal);
   }
   // Not a structured binding: clang 14 cannot capture those in the lambda below.
-  const auto span = navigation_span(eph.data());
+  const orbits::ServedSpan span = orbits::served_span(eph.data()).value_or(orbits::ServedSpan{});
   const GnssTime& first = span.first;
-  const GnssTime& last = span.second;
+  const GnssTime& last = span.last;
   const auto why = [&](GnssSystem system, const char* which, const GnssTime& t) {
     return fmt::format("the navigation data has no valid {} ephemeris at the scenario's {} ({} GPST); the "
                        "navigation files cover {} to {} GPST",

@@ -285,7 +285,7 @@ TEST_F(BadInputCatalogue, NavigationOfAnotherDayIsNamedWithBothSpans) {
   run_case(run_cmd(dir_ / "s.yaml", dir_ / "later") + " --set time.start=2026-03-20T12:00:00 --set time.duration_s=60 --no-truth",
            0, "");
   run_case(skytrace_cmd() + " position " + q(obs()) + " --nav " + q(dir_ / "later" / "nav.rnx"), 4,
-           "the navigation data does not cover .*obs.rnx: its records run from 2026-03-20.* the observations from "
+           "the navigation data does not cover .*obs.rnx: its records serve 2026-03-20.* the observations run from "
            "2026-03-01T12:00:00.0");
 }
 

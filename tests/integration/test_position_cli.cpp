@@ -188,8 +188,8 @@ TEST(PositionCli, BadInputsFailClearlyWithoutOutput) {
                                            test::shell_quote(csv.string()));
   EXPECT_EQ(uncovered.exit_code, 4) << uncovered.output;
   EXPECT_NE(uncovered.output.find("the navigation data does not cover"), std::string::npos) << uncovered.output;
-  EXPECT_NE(uncovered.output.find("its records run from 2022-06-07"), std::string::npos) << uncovered.output;
-  EXPECT_NE(uncovered.output.find("the observations from 2020-06-25T00:00:00.0"), std::string::npos) << uncovered.output;
+  EXPECT_NE(uncovered.output.find("its records serve 2022-06-07T23:53:44.0 to 2022-06-08"), std::string::npos) << uncovered.output;
+  EXPECT_NE(uncovered.output.find("the observations run from 2020-06-25T00:00:00.0"), std::string::npos) << uncovered.output;
   EXPECT_FALSE(std::filesystem::exists(csv));
   std::filesystem::remove_all(dir);
 }

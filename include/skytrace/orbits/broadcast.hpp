@@ -160,4 +160,12 @@ class BroadcastEphemerides final : public SatelliteStateSource {
 [[nodiscard]] constexpr double glonass_validity_half_window_s() { return 1800.0 + 60.0; }
 [[nodiscard]] constexpr double sbas_validity_half_window_s() { return 360.0; }
 
+// The span the records can serve: from the earliest reference time less its validity window to the
+// latest plus its window; none without records. For plain messages when a run or an observation
+// file lies outside it.
+struct ServedSpan {
+  GnssTime first, last;
+};
+[[nodiscard]] std::optional<ServedSpan> served_span(const NavigationData& nav);
+
 }  // namespace skytrace::orbits
